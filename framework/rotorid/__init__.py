@@ -1,0 +1,44 @@
+"""rotorid: time-domain system identification of helicopter flight dynamics.
+
+The public API is importable from the package top level::
+
+    import rotorid
+    structure = rotorid.ModelStructure.six_dof(rotorid.FlightCondition.from_airspeed(0.0))
+"""
+
+from importlib.metadata import PackageNotFoundError, version
+
+from .data import Maneuver, ManeuverSet
+from .derivatives import Delay, Derivative, Sign
+from .errors import (
+    ConvergenceWarning,
+    DataError,
+    DataFileError,
+    DerivativeError,
+    EstimationError,
+    IdentifiabilityWarning,
+    MissingFileError,
+    PluginError,
+    RotoridError,
+    RotoridWarning,
+    SimulationDivergedError,
+    StructureError,
+)
+from .hookspecs import PluginDescriptor, hookimpl
+from .plugins import create, get_plugin_manager, registry
+from .structure import CONTROLS, OUTPUTS, STATES, FlightCondition, ModelStructure
+from .units import FLIGHT_TEST, SI, UnitSystem, unit_system
+
+try:
+    __version__ = version("rotorid")
+except PackageNotFoundError:  # running from a source tree without installation
+    __version__ = "0.0.0+unknown"
+
+__all__ = [
+    "CONTROLS", "OUTPUTS", "STATES", "FLIGHT_TEST", "SI",
+    "ConvergenceWarning", "DataError", "DataFileError", "Delay", "Derivative", "DerivativeError",
+    "EstimationError", "FlightCondition", "IdentifiabilityWarning", "Maneuver", "ManeuverSet",
+    "MissingFileError", "ModelStructure", "PluginDescriptor", "PluginError", "RotoridError",
+    "RotoridWarning", "Sign", "SimulationDivergedError", "StructureError", "UnitSystem",
+    "create", "get_plugin_manager", "hookimpl", "registry", "unit_system",
+]

@@ -1,0 +1,191 @@
+"""Maneuver time histories.
+
+A :class:`Maneuver` is one record: uniformly sampled time, the four control inputs and the
+eight measured outputs, all perturbations from trim, plus metadata. A :class:`ManeuverSet`
+is what estimators, simulators and verification consume: several maneuvers (lengths and sample
+times may differ) and the hold of the inputs between samples.
+
+Channel order is fixed: inputs :data:`INPUT_CHANNELS`, outputs :data:`OUTPUT_CHANNELS`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+
+import attrs
+import numpy as np
+
+from .errors import DataError
+from .structure import CONTROLS, OUTPUTS
+
+INPUT_CHANNELS = CONTROLS
+OUTPUT_CHANNELS = OUTPUTS
+ALL_CHANNELS = ("time",) + INPUT_CHANNELS + OUTPUT_CHANNELS
+HOLDS = ("zoh", "foh")
+#: Relative tolerance on sample-interval uniformity.
+UNIFORM_TOLERANCE = 1e-6
+
+
+def _readonly(array) -> np.ndarray:
+    out = np.array(array, dtype=float, copy=True)
+    out.setflags(write=False)
+    return out
+
+
+def check_time(time: np.ndarray, where: str) -> float:
+    """Validate a time vector (finite, increasing, uniform); return the sample time in s."""
+    if time.ndim != 1 or time.size < 2:
+        raise DataError(f"{where}: time must be a 1-D array with at least 2 samples")
+    bad = np.flatnonzero(~np.isfinite(time))
+    if bad.size:
+        raise DataError(f"{where}: channel 'time' is not finite at row {bad[0]}")
+    steps = np.diff(time)
+    if np.any(steps <= 0):
+        row = int(np.flatnonzero(steps <= 0)[0]) + 1
+        raise DataError(f"{where}: channel 'time' does not increase at row {row} "
+                        f"({time[row - 1]} → {time[row]})")
+    dt = (time[-1] - time[0]) / (time.size - 1)
+    off = np.abs(steps - dt) > UNIFORM_TOLERANCE * max(dt, 1e-12) + 1e-9
+    if np.any(off):
+        row = int(np.flatnonzero(off)[0]) + 1
+        raise DataError(f"{where}: channel 'time' is not uniformly sampled at row {row} "
+                        f"(step {steps[row - 1]:.6g} s, expected {dt:.6g} s); resample first")
+    return float(dt)
+
+
+def _check_block(block: np.ndarray, channels, rows: int, where: str) -> None:
+    if block.shape != (rows, len(channels)):
+        raise DataError(f"{where}: expected shape ({rows}, {len(channels)}) for channels "
+                        f"{', '.join(channels)}, got {block.shape}")
+    bad = np.argwhere(~np.isfinite(block))
+    if bad.size:
+        row, col = bad[0]
+        raise DataError(f"{where}: channel '{channels[col]}' is NaN or infinite at row {row}")
+
+
+@attrs.frozen(eq=False)
+class Maneuver:
+    """One maneuver: time (N,), inputs (N, 4) and outputs (N, 8), perturbations from trim.
+
+    Units are those of ``units`` (flight-test by default: ft/s², deg/s, deg, % of travel).
+    ``metadata`` holds free-form descriptors such as ``condition`` (``"hover"``), ``kind``
+    (``"3211"``, ``"2311"``, ``"sweep"``), ``axis`` (``"long"``) and ``direction`` (+1/−1).
+    Arrays are copied and made read-only, so a maneuver never aliases the caller's data.
+    """
+
+    name: str
+    time: np.ndarray = attrs.field(converter=_readonly)
+    inputs: np.ndarray = attrs.field(converter=_readonly)
+    outputs: np.ndarray = attrs.field(converter=_readonly)
+    metadata: Mapping = attrs.field(factory=dict, converter=lambda m: dict(m))
+    units: str = "flight-test"
+    initial_state: np.ndarray | None = attrs.field(
+        default=None, converter=lambda x: None if x is None else _readonly(x))
+
+    def __attrs_post_init__(self):
+        where = f"maneuver {self.name!r}"
+        check_time(self.time, where)
+        _check_block(self.inputs, INPUT_CHANNELS, self.time.size, where)
+        _check_block(self.outputs, OUTPUT_CHANNELS, self.time.size, where)
+        if self.initial_state is not None and self.initial_state.shape != (8,):
+            raise DataError(f"{where}: initial_state must have shape (8,), "
+                            f"got {self.initial_state.shape}")
+
+    @property
+    def dt(self) -> float:
+        """Sample time in s."""
+        return float((self.time[-1] - self.time[0]) / (self.time.size - 1))
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.time.size)
+
+    @property
+    def duration(self) -> float:
+        return float(self.time[-1] - self.time[0])
+
+    def channel(self, name: str) -> np.ndarray:
+        """Time history of one channel by name (``time``, an input or an output)."""
+        if name == "time":
+            return self.time
+        if name in INPUT_CHANNELS:
+            return self.inputs[:, INPUT_CHANNELS.index(name)]
+        if name in OUTPUT_CHANNELS:
+            return self.outputs[:, OUTPUT_CHANNELS.index(name)]
+        raise DataError(f"unknown channel {name!r}; channels: {', '.join(ALL_CHANNELS)}")
+
+    def with_outputs(self, outputs, name: str | None = None) -> "Maneuver":
+        """A copy with other outputs (e.g. a simulation), same time and inputs."""
+        return attrs.evolve(self, outputs=outputs, name=name or self.name)
+
+    def head(self, duration: float) -> "Maneuver":
+        """The first ``duration`` seconds (at least two samples)."""
+        n = max(2, int(np.floor(duration / self.dt + 1e-9)) + 1)
+        return attrs.evolve(self, time=self.time[:n], inputs=self.inputs[:n],
+                            outputs=self.outputs[:n])
+
+
+def _check_hold(instance, attribute, value):
+    if value not in HOLDS:
+        raise DataError(f"unknown input hold {value!r}; use 'zoh' (zero-order, default) "
+                        f"or 'foh' (first-order, for continuously sampled sticks)")
+
+
+@attrs.frozen(eq=False)
+class ManeuverSet:
+    """Several maneuvers analysed together, and the hold of their inputs between samples."""
+
+    maneuvers: tuple[Maneuver, ...] = attrs.field(converter=tuple)
+    hold: str = attrs.field(default="zoh", validator=_check_hold)
+
+    def __attrs_post_init__(self):
+        if not self.maneuvers:
+            raise DataError("a maneuver set needs at least one maneuver")
+        names = [m.name for m in self.maneuvers]
+        dupes = sorted({n for n in names if names.count(n) > 1})
+        if dupes:
+            raise DataError(f"duplicate maneuver name(s) in the set: {', '.join(dupes)}")
+        units = {m.units for m in self.maneuvers}
+        if len(units) > 1:
+            raise DataError(f"maneuvers mix unit systems {sorted(units)}; convert them first")
+
+    def __len__(self) -> int:
+        return len(self.maneuvers)
+
+    def __iter__(self):
+        return iter(self.maneuvers)
+
+    def __getitem__(self, key):
+        if isinstance(key, str):
+            for m in self.maneuvers:
+                if m.name == key:
+                    return m
+            raise DataError(f"no maneuver named {key!r}; have: "
+                            f"{', '.join(m.name for m in self.maneuvers)}")
+        return self.maneuvers[key]
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(m.name for m in self.maneuvers)
+
+    @property
+    def units(self) -> str:
+        return self.maneuvers[0].units
+
+    @property
+    def n_samples(self) -> int:
+        """Total number of samples over all maneuvers."""
+        return sum(m.n_samples for m in self.maneuvers)
+
+    def select(self, predicate=None, **metadata) -> "ManeuverSet":
+        """Maneuvers whose metadata match every keyword (and ``predicate(m)`` if given)."""
+        chosen = [m for m in self.maneuvers
+                  if all(m.metadata.get(k) == v for k, v in metadata.items())
+                  and (predicate is None or predicate(m))]
+        if not chosen:
+            raise DataError(f"no maneuver matches {metadata or predicate}")
+        return attrs.evolve(self, maneuvers=chosen)
+
+    def merged(self, other: Iterable[Maneuver]) -> "ManeuverSet":
+        """This set plus more maneuvers."""
+        return attrs.evolve(self, maneuvers=[*self.maneuvers, *other])

@@ -1,0 +1,56 @@
+"""Exceptions and warning categories of rotorid.
+
+Every error rotorid raises on purpose derives from :class:`RotoridError`, so a caller can
+catch them all at once; the subclasses also derive from the matching built-in exception
+(``ValueError``, ``FileNotFoundError`` …) so generic handlers keep working.
+"""
+
+from __future__ import annotations
+
+
+class RotoridError(Exception):
+    """Base class of all rotorid errors."""
+
+
+class DerivativeError(RotoridError, ValueError):
+    """A derivative or delay declaration is invalid (unknown name, contradictory settings)."""
+
+
+class StructureError(RotoridError, ValueError):
+    """A model structure or flight condition is invalid or misused."""
+
+
+class DataError(RotoridError, ValueError):
+    """Maneuver data are malformed (shapes, channels, time base, NaN/inf)."""
+
+
+class DataFileError(DataError):
+    """A maneuver or model file cannot be read or written; the message names file, channel and row."""
+
+
+class MissingFileError(RotoridError, FileNotFoundError):
+    """A file the user named does not exist."""
+
+
+class PluginError(RotoridError, LookupError):
+    """A plugin is unknown, broken or registered twice."""
+
+
+class SimulationDivergedError(RotoridError, ArithmeticError):
+    """A simulated response grew without bound (an unstable candidate model)."""
+
+
+class EstimationError(RotoridError, RuntimeError):
+    """An estimation cannot proceed (for example a singular information matrix)."""
+
+
+class RotoridWarning(UserWarning):
+    """Base class of rotorid warnings."""
+
+
+class IdentifiabilityWarning(RotoridWarning):
+    """Parameters are nearly unidentifiable (ill-conditioned information matrix)."""
+
+
+class ConvergenceWarning(RotoridWarning):
+    """An iterative procedure stopped without meeting its convergence criteria."""

@@ -1,0 +1,131 @@
+"""Unit systems and the conversions between them.
+
+rotorid works in *flight-test units* by default, the units of the paper: velocities in ft/s,
+angular rates in deg/s, attitudes in deg, specific forces in ft/s², controls in % of travel.
+The *SI-rad* system (m/s, rad/s, rad, m/s²) is offered for comparison with the literature.
+Controls are never rescaled by a unit system: they stay in whatever unit the data carry
+(% of travel for stick data, rad for blade angles).
+
+Conversions happen here and nowhere else: :func:`channel_scale` gives, per channel, the factor
+that turns an SI-rad value into the target system.
+"""
+
+from __future__ import annotations
+
+import math
+
+import attrs
+import numpy as np
+
+from .errors import StructureError
+
+FOOT = 0.3048  #: metres per foot (exact)
+KNOT = 1852.0 / 3600.0  #: metres per second per knot (exact)
+G_SI = 9.80665  #: standard gravity, m/s²
+
+#: Physical kind of every named channel; decides how it scales between unit systems.
+CHANNEL_KINDS = {
+    "u": "velocity", "v": "velocity", "w": "velocity",
+    "p": "rate", "q": "rate", "r": "rate",
+    "theta": "angle", "phi": "angle",
+    "ax": "acceleration", "ay": "acceleration", "az": "acceleration",
+    "long": "control", "lat": "control", "coll": "control", "ped": "control",
+}
+
+
+@attrs.frozen
+class UnitSystem:
+    """A consistent set of units for states, outputs and derivatives.
+
+    Attributes:
+        name: ``"flight-test"`` or ``"si"``.
+        length_per_metre: length unit per metre (1/0.3048 for feet, 1 for metres).
+        angle_per_radian: angle unit per radian (180/π for degrees, 1 for radians).
+        length_label, angle_label: labels used in reports and plots.
+    """
+
+    name: str
+    length_per_metre: float
+    angle_per_radian: float
+    length_label: str
+    angle_label: str
+
+    @property
+    def g(self) -> float:
+        """Standard gravity in this system's length unit per s²."""
+        return G_SI * self.length_per_metre
+
+    @property
+    def radian_per_angle(self) -> float:
+        """Radians per angle unit: the factor the known gravity/kinematic terms need."""
+        return 1.0 / self.angle_per_radian
+
+    def factor(self, kind: str) -> float:
+        """Factor turning an SI-rad quantity of ``kind`` into this system."""
+        try:
+            return {
+                "velocity": self.length_per_metre,
+                "acceleration": self.length_per_metre,
+                "rate": self.angle_per_radian,
+                "angle": self.angle_per_radian,
+                "control": 1.0,
+            }[kind]
+        except KeyError:
+            raise StructureError(f"unknown physical kind {kind!r}") from None
+
+    def label(self, channel: str, control_label: str = "%") -> str:
+        """Unit label of a channel, e.g. ``'ft/s'`` for ``u``, ``'deg/s'`` for ``q``."""
+        kind = CHANNEL_KINDS.get(channel)
+        if kind is None:
+            raise StructureError(f"unknown channel {channel!r}; known: {', '.join(CHANNEL_KINDS)}")
+        return {
+            "velocity": f"{self.length_label}/s",
+            "acceleration": f"{self.length_label}/s²",
+            "rate": f"{self.angle_label}/s",
+            "angle": self.angle_label,
+            "control": control_label,
+        }[kind]
+
+
+FLIGHT_TEST = UnitSystem("flight-test", 1.0 / FOOT, 180.0 / math.pi, "ft", "deg")
+SI = UnitSystem("si", 1.0, 1.0, "m", "rad")
+
+_SYSTEMS = {"flight-test": FLIGHT_TEST, "si": SI, "si-rad": SI}
+
+
+def unit_system(name: str | UnitSystem) -> UnitSystem:
+    """Return the unit system called ``name`` (``"flight-test"``, ``"si"`` or ``"si-rad"``)."""
+    if isinstance(name, UnitSystem):
+        return name
+    try:
+        return _SYSTEMS[str(name).lower()]
+    except KeyError:
+        raise StructureError(
+            f"unknown unit system {name!r}; use 'flight-test' (ft, deg, %) or 'si' (m, rad)"
+        ) from None
+
+
+def channel_scale(channels, target: UnitSystem, source: UnitSystem = SI) -> np.ndarray:
+    """Per-channel factors that convert values in ``source`` units into ``target`` units.
+
+    Args:
+        channels: channel names such as ``("u", "w", "q", "theta")``.
+    Returns:
+        array of shape ``(len(channels),)``.
+    """
+    return np.array(
+        [target.factor(CHANNEL_KINDS[c]) / source.factor(CHANNEL_KINDS[c]) for c in channels]
+    )
+
+
+def convert_state_space(a, b, states, controls, target: UnitSystem, source: UnitSystem = SI):
+    """Convert ``ẋ = A x + B u`` from ``source`` to ``target`` units.
+
+    With x' = S_x x, A' = S_x A S_x⁻¹ and B' = S_x B (controls keep their unit).
+    Returns new arrays; the inputs are not modified.
+    """
+    sx = channel_scale(states, target, source)
+    su = channel_scale(controls, target, source)
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    return a * sx[:, None] / sx[None, :], b * sx[:, None] / su[None, :]
