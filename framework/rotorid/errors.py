@@ -44,6 +44,11 @@ class EstimationError(RotoridError, RuntimeError):
     """An estimation cannot proceed (for example a singular information matrix)."""
 
 
+class VerificationError(RotoridError, ValueError):
+    """A verification cannot proceed: unknown response pair, malformed envelope table,
+    no coherent frequency points, or spectra that cannot be formed from the records."""
+
+
 class RotoridWarning(UserWarning):
     """Base class of rotorid warnings."""
 
