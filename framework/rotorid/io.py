@@ -1,0 +1,51 @@
+"""Atomic file writing, shared by every writer in rotorid.
+
+A reader never sees a half-written file: the content goes to a temporary file in the target's
+directory, is flushed to disk, and only then replaces the target with :func:`os.replace`.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+import uuid
+from collections.abc import Callable
+from pathlib import Path
+from typing import BinaryIO
+
+from .errors import MissingFileError
+
+
+def atomic_write(path: str | os.PathLike, content: bytes | str | Callable[[BinaryIO], object]
+                 ) -> Path:
+    """Write ``content`` to ``path`` atomically and return the path.
+
+    Args:
+        path: target file; its directory must exist.
+        content: ``bytes``, ``str`` (written as UTF-8) or a callable that receives a binary
+            file object opened for writing and writes into it (e.g. ``lambda f: np.savez(f, **a)``).
+
+    The new file gets the permissions of the file it replaces, or the usual permissions for a
+    new file (0o666 less the umask). On any error the target is left untouched and the
+    temporary file is removed.
+    """
+    target = Path(path)
+    if not target.parent.is_dir():
+        raise MissingFileError(f"cannot write {target}: directory {target.parent} does not exist")
+    temporary = target.with_name(f".{target.name}.{uuid.uuid4().hex}.tmp")
+    descriptor = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+    try:
+        with os.fdopen(descriptor, "wb") as handle:
+            if callable(content):
+                content(handle)
+            else:
+                handle.write(content.encode("utf-8") if isinstance(content, str) else content)
+            handle.flush()
+            os.fsync(handle.fileno())
+        if target.exists():
+            os.chmod(temporary, stat.S_IMODE(target.stat().st_mode))
+        os.replace(temporary, target)
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
+    return target

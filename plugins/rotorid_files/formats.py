@@ -1,0 +1,146 @@
+"""The ``files`` data source: maneuver files in CSV, NumPy ``.npz`` and MATLAB ``.mat`` format.
+
+One file holds one maneuver; the format follows the suffix. Every writer is atomic. See
+:mod:`rotorid_files.csvfile` and :mod:`rotorid_files.arrays` for the layouts.
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+import re
+from collections.abc import Iterable
+from pathlib import Path
+
+import attrs
+
+from rotorid.data import HOLDS, OUTPUT_CHANNELS, Maneuver, ManeuverSet
+from rotorid.errors import DataError, DataFileError, MissingFileError
+from rotorid.io import atomic_write
+from rotorid.structure import STATES
+from rotorid.units import channel_scale, unit_system
+
+from . import arrays, csvfile
+
+#: Suffix → (reader(path), writer(maneuver, binary handle)).
+FORMATS = {
+    ".csv": (csvfile.read, csvfile.write),
+    ".npz": (arrays.read_npz, arrays.write_npz),
+    ".mat": (arrays.read_mat, arrays.write_mat),
+}
+_SAFE_NAME = re.compile(r"[A-Za-z0-9_+-][A-Za-z0-9_.+-]*")
+
+
+def _format(path: Path):
+    try:
+        return FORMATS[path.suffix.lower()]
+    except KeyError:
+        raise DataFileError(f"{path}: unknown maneuver file format {path.suffix!r}; "
+                            f"use {', '.join(FORMATS)}") from None
+
+
+def read_maneuver(path: str | os.PathLike) -> Maneuver:
+    """Read the maneuver stored in ``path`` (``.csv``, ``.npz`` or ``.mat``)."""
+    path = Path(path)
+    reader = _format(path)[0]
+    if not path.is_file():
+        raise MissingFileError(f"maneuver file {path} does not exist")
+    return reader(path)
+
+
+def write_maneuver(maneuver: Maneuver, path: str | os.PathLike) -> Path:
+    """Write ``maneuver`` to ``path`` atomically, in the format of the suffix; return the path."""
+    path = Path(path)
+    writer = _format(path)[1]
+    return atomic_write(path, lambda handle: writer(maneuver, handle))
+
+
+def convert_units(maneuver: Maneuver, units) -> Maneuver:
+    """``maneuver`` expressed in the unit system ``units`` (controls keep their unit)."""
+    source, target = unit_system(maneuver.units), unit_system(units)
+    if source == target:
+        return maneuver
+    state = None
+    if maneuver.initial_state is not None:
+        state = maneuver.initial_state * channel_scale(STATES, target, source)
+    return attrs.evolve(maneuver, outputs=maneuver.outputs * channel_scale(
+        OUTPUT_CHANNELS, target, source), units=target.name, initial_state=state)
+
+
+def _expand(location) -> list[Path]:
+    path = Path(location)
+    if path.is_file():
+        return [path]
+    if path.is_dir():
+        found = sorted(p for p in path.iterdir() if p.suffix.lower() in FORMATS and p.is_file())
+        if not found:
+            raise DataFileError(f"{path}: no maneuver files ({', '.join(FORMATS)}) in this "
+                                f"directory")
+        return found
+    if glob.has_magic(str(location)):
+        found = sorted(Path(p) for p in glob.glob(str(location)) if Path(p).is_file())
+        if not found:
+            raise MissingFileError(f"no file matches {location}")
+        return found
+    raise MissingFileError(f"{location}: no such file or directory")
+
+
+def _check_hold(instance, attribute, value):
+    if value not in HOLDS:
+        raise DataError(f"unknown input hold {value!r}; use one of {', '.join(HOLDS)}")
+
+
+def _optional_units(value):
+    return None if value is None else unit_system(value).name
+
+
+@attrs.frozen
+class FileSource:
+    """Loads and saves maneuver files.
+
+    Attributes:
+        hold: input hold of the loaded set, ``"zoh"`` or ``"foh"``.
+        units: convert loaded maneuvers to this unit system (``"flight-test"`` or ``"si"``);
+            ``None`` keeps the units the files declare (then they must all agree).
+    """
+
+    hold: str = attrs.field(default="zoh", validator=_check_hold)
+    units: str | None = attrs.field(default=None, converter=_optional_units)
+
+    def load(self, location: str | os.PathLike) -> ManeuverSet:
+        """Every maneuver in ``location``: one file, a directory (its ``.csv``, ``.npz`` and
+        ``.mat`` files, sorted by name) or a glob pattern such as ``"data/hover_*.csv"``."""
+        maneuvers, origin = [], {}
+        for path in _expand(location):
+            maneuver = read_maneuver(path)
+            if maneuver.name in origin:
+                raise DataFileError(f"maneuver name {maneuver.name!r} is used by both "
+                                    f"{origin[maneuver.name]} and {path}; rename one")
+            origin[maneuver.name] = path
+            maneuvers.append(maneuver if self.units is None
+                             else convert_units(maneuver, self.units))
+        units = {m.units for m in maneuvers}
+        if len(units) > 1:
+            raise DataFileError(f"{location}: files mix unit systems {sorted(units)}; load with "
+                                f"FileSource(units='flight-test') to convert them")
+        return ManeuverSet(maneuvers, hold=self.hold)
+
+    def save(self, maneuvers: ManeuverSet | Iterable[Maneuver], directory: str | os.PathLike,
+             format: str = "csv") -> tuple[Path, ...]:
+        """Write each maneuver to ``directory/<name>.<format>`` (created if needed); return
+        the paths. ``format`` is ``"csv"``, ``"npz"`` or ``"mat"``."""
+        suffix = f".{format.lower()}"
+        if suffix not in FORMATS:
+            raise DataFileError(f"unknown maneuver file format {format!r}; use "
+                                f"{', '.join(s[1:] for s in FORMATS)}")
+        maneuvers = list(maneuvers)
+        names = [m.name for m in maneuvers]
+        for name in names:
+            if not _SAFE_NAME.fullmatch(name):
+                raise DataFileError(f"maneuver name {name!r} cannot be a file name; use letters, "
+                                    f"digits and _ . + - only")
+            if names.count(name) > 1:
+                raise DataFileError(f"two maneuvers are named {name!r}; names must be unique")
+        directory = Path(directory)
+        directory.mkdir(parents=True, exist_ok=True)
+        return tuple(write_maneuver(m, directory / f"{m.name}{suffix}") for m in maneuvers)

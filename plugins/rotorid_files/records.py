@@ -1,0 +1,118 @@
+"""What every file format shares: the flat header and the checks that turn columns into a
+:class:`~rotorid.data.Maneuver`.
+
+A file holds one maneuver as named columns (``time``, the four controls, the eight outputs)
+plus a flat header: ``name``, ``units``, ``initial_state`` and any metadata key
+(``condition``, ``kind``, ``axis``, ``direction`` …). Header values are JSON values.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+
+from rotorid.data import ALL_CHANNELS, INPUT_CHANNELS, OUTPUT_CHANNELS, Maneuver
+from rotorid.errors import DataError, DataFileError, RotoridError
+from rotorid.units import unit_system
+
+#: Header keys that are not metadata.
+RESERVED = ("name", "units", "initial_state")
+#: Allowed metadata keys (also the ``# key: value`` syntax of CSV files).
+KEY_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_.-]*")
+
+
+def _json_default(value):
+    if isinstance(value, (np.generic, np.ndarray)):
+        return value.tolist()
+    raise TypeError(f"{type(value).__name__} is not a JSON value")
+
+
+def encode_value(value, where: str) -> str:
+    """One header value as compact JSON text."""
+    try:
+        return json.dumps(value, default=_json_default, ensure_ascii=False, allow_nan=False)
+    except (TypeError, ValueError) as error:
+        raise DataFileError(f"{where}: cannot store {value!r} in a file header ({error}); "
+                            f"use strings, numbers, booleans, lists or mappings") from None
+
+
+def header_of(maneuver: Maneuver, where: str) -> dict:
+    """The flat header of ``maneuver``: reserved keys first, then its metadata."""
+    header = {"name": maneuver.name, "units": maneuver.units}
+    if maneuver.initial_state is not None:
+        header["initial_state"] = maneuver.initial_state.tolist()
+    for key, value in maneuver.metadata.items():
+        if key in RESERVED or not isinstance(key, str) or not KEY_PATTERN.fullmatch(key):
+            raise DataFileError(
+                f"{where}: metadata key {key!r} cannot be stored; keys must match "
+                f"{KEY_PATTERN.pattern} and not be one of {', '.join(RESERVED)}")
+        header[key] = value
+    return header
+
+
+def columns_of(maneuver: Maneuver) -> dict[str, np.ndarray]:
+    """Channel name → 1-D array, in :data:`rotorid.data.ALL_CHANNELS` order."""
+    return {name: maneuver.channel(name) for name in ALL_CHANNELS}
+
+
+def vector(path: Path, channel: str, array) -> np.ndarray:
+    """A numeric channel as a 1-D float array (row and column vectors are flattened)."""
+    array = np.asarray(array)
+    if array.dtype.kind not in "fiu":
+        raise DataFileError(f"{path}: channel {channel!r} is not numeric (dtype {array.dtype})")
+    if array.ndim > 1 and sum(n > 1 for n in array.shape) <= 1:
+        array = array.reshape(-1)
+    if array.ndim != 1:
+        raise DataFileError(f"{path}: channel {channel!r} must be a vector, got shape "
+                            f"{array.shape}")
+    return array.astype(float)
+
+
+def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
+             row_note: str = "") -> Maneuver:
+    """Check columns and header read from ``path`` and build the maneuver.
+
+    Args:
+        columns: channel name → 1-D array; exactly the channels of
+            :data:`rotorid.data.ALL_CHANNELS`, all of the same length.
+        header: flat header (see module docstring); ``name`` defaults to the file stem,
+            ``units`` to ``"flight-test"``.
+        row_note: appended to data errors, to say how rows map to lines of the file.
+    """
+    missing = [c for c in ALL_CHANNELS if c not in columns]
+    if missing:
+        raise DataFileError(f"{path}: missing channel(s) {', '.join(missing)}; a maneuver file "
+                            f"needs {','.join(ALL_CHANNELS)}")
+    unknown = [c for c in columns if c not in ALL_CHANNELS]
+    if unknown:
+        raise DataFileError(f"{path}: unknown channel(s) {', '.join(map(repr, unknown))}; "
+                            f"channels are {','.join(ALL_CHANNELS)}")
+    rows = columns["time"].size
+    for channel in ALL_CHANNELS:
+        if columns[channel].size != rows:
+            raise DataFileError(f"{path}: channel {channel!r} has {columns[channel].size} "
+                                f"samples but 'time' has {rows}; all channels need the same "
+                                f"length")
+    metadata = {k: v for k, v in header.items() if k not in RESERVED}
+    name = header.get("name", path.stem)
+    if not isinstance(name, str) or not name:
+        raise DataFileError(f"{path}: header 'name' must be a non-empty string, got {name!r}")
+    try:
+        units = unit_system(header.get("units", "flight-test")).name
+        return Maneuver(
+            name,
+            columns["time"],
+            np.column_stack([columns[c] for c in INPUT_CHANNELS]),
+            np.column_stack([columns[c] for c in OUTPUT_CHANNELS]),
+            metadata=metadata,
+            units=units,
+            initial_state=header.get("initial_state"),
+        )
+    except DataError as error:
+        raise DataFileError(f"{path}: {error}{row_note}") from None
+    except (RotoridError, TypeError, ValueError) as error:
+        raise DataFileError(f"{path}: bad header: {error}") from None
