@@ -20,6 +20,8 @@ from collections.abc import Callable
 import attrs
 import pluggy
 
+from .errors import PluginError
+
 PROJECT = "rotorid"
 hookspec = pluggy.HookspecMarker(PROJECT)
 hookimpl = pluggy.HookimplMarker(PROJECT)
@@ -35,9 +37,26 @@ class PluginDescriptor:
         summary: one line shown by ``rotorid plugins``.
     """
 
-    name: str
-    factory: Callable
-    summary: str
+    name: str = attrs.field()
+    factory: Callable = attrs.field()
+    summary: str = attrs.field()
+
+    @name.validator
+    def _check_name(self, attribute, value):
+        if not isinstance(value, str) or not value.strip():
+            raise PluginError(f"a plugin descriptor needs a non-empty name, got {value!r}")
+
+    @factory.validator
+    def _check_factory(self, attribute, value):
+        if not callable(value):
+            raise PluginError(f"plugin descriptor {self.name!r}: factory must be callable, "
+                              f"got {value!r}")
+
+    @summary.validator
+    def _check_summary(self, attribute, value):
+        if not isinstance(value, str):
+            raise PluginError(f"plugin descriptor {self.name!r}: summary must be a string, "
+                              f"got {value!r}")
 
 
 # ----------------------------------------------------------------- registration hooks

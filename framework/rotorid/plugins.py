@@ -48,11 +48,18 @@ def new_plugin_manager(extra_plugins: Iterable[object] = (), load_entry_points: 
     """A fresh plugin manager with the hookspecs, entry-point plugins and ``extra_plugins``."""
     manager = pluggy.PluginManager(hookspecs.PROJECT)
     manager.add_hookspecs(hookspecs)
-    if load_entry_points:
-        manager.load_setuptools_entrypoints(hookspecs.PROJECT)
-    for plugin in extra_plugins:
-        manager.register(plugin)
-    manager.check_pending()
+    try:
+        if load_entry_points:
+            manager.load_setuptools_entrypoints(hookspecs.PROJECT)
+        for plugin in extra_plugins:
+            manager.register(plugin)
+        manager.check_pending()
+    except ImportError as error:
+        raise PluginError(f"a plugin of the {hookspecs.PROJECT!r} entry-point group cannot be "
+                          f"imported: {error}; fix or uninstall it") from error
+    except pluggy.PluginValidationError as error:
+        raise PluginError(f"plugin {error.plugin!r} is invalid: {error}; fix or uninstall it"
+                          ) from error
     return manager
 
 
@@ -62,10 +69,16 @@ def get_plugin_manager() -> pluggy.PluginManager:
     return new_plugin_manager()
 
 
-def _provider_names(manager: pluggy.PluginManager, hook_name: str) -> list[str]:
-    hook = getattr(manager.hook, hook_name)
-    # pluggy calls implementations in reverse registration order; keep them aligned.
-    return [impl.plugin_name for impl in reversed(hook.get_hookimpls())]
+def _descriptors(impl, hook_name: str) -> list:
+    """What one plugin's registration hook returned, as a list; errors name the plugin."""
+    try:
+        result = impl.function() or ()
+        if not isinstance(result, Iterable) or isinstance(result, (str, bytes)):
+            raise PluginError(f"{hook_name} must return an iterable of PluginDescriptor "
+                              f"objects, got {result!r}")
+        return list(result)
+    except PluginError as error:
+        raise PluginError(f"plugin {impl.plugin_name!r}: {error}") from error
 
 
 def registry(family: str, manager: pluggy.PluginManager | None = None) -> dict[str, Registered]:
@@ -81,7 +94,7 @@ def registry(family: str, manager: pluggy.PluginManager | None = None) -> dict[s
     hook = getattr(manager.hook, hook_name)
     found: dict[str, Registered] = {}
     for impl in hook.get_hookimpls():
-        for descriptor in impl.function() or ():
+        for descriptor in _descriptors(impl, hook_name):
             if not isinstance(descriptor, PluginDescriptor):
                 raise PluginError(f"plugin {impl.plugin_name!r}: {hook_name} must yield "
                                   f"PluginDescriptor objects, got {descriptor!r}")

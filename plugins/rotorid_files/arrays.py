@@ -51,9 +51,10 @@ def _encoded_header(maneuver) -> np.ndarray:
 def read_npz(path: Path):
     """The maneuver stored in the NumPy archive ``path``."""
     try:
-        with np.load(path, allow_pickle=False) as archive:
-            if not isinstance(archive, np.lib.npyio.NpzFile):
-                raise DataFileError(f"{path}: a .npy array, not a .npz archive of channels")
+        archive = np.load(path, allow_pickle=False)
+        if not isinstance(archive, np.lib.npyio.NpzFile):
+            raise DataFileError(f"{path}: a .npy array, not a .npz archive of channels")
+        with archive:
             names = archive.files
             twice = sorted({n for n in names if names.count(n) > 1})
             if twice:
@@ -78,7 +79,7 @@ def read_mat(path: Path):
         variables = scipy.io.loadmat(path, squeeze_me=False, chars_as_strings=True)
     except NotImplementedError as error:
         raise DataFileError(f"{path}: {error}; save it from MATLAB with -v7") from None
-    except (ValueError, TypeError, OSError) as error:
+    except (scipy.io.matlab.MatReadError, ValueError, TypeError, OSError) as error:
         raise DataFileError(f"{path}: cannot read as a MATLAB .mat file: {error}") from None
     return _split(path, {k: v for k, v in variables.items() if not k.startswith("__")})
 

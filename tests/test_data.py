@@ -1,0 +1,116 @@
+"""Maneuvers and maneuver sets: validation, immutability, selection."""
+
+import attrs
+import numpy as np
+import pytest
+
+from rotorid.data import ALL_CHANNELS, INPUT_CHANNELS, OUTPUT_CHANNELS, Maneuver, ManeuverSet
+from rotorid.errors import DataError
+
+
+def make(name="m", n=50, dt=0.02, units="flight-test", seed=0, **metadata):
+    rng = np.random.default_rng(seed)
+    return Maneuver(name, np.arange(n) * dt, rng.normal(size=(n, 4)), rng.normal(size=(n, 8)),
+                    metadata=metadata, units=units)
+
+
+def test_channel_order_is_the_papers():
+    assert ALL_CHANNELS == ("time", "long", "lat", "coll", "ped", "ax", "az", "q", "theta",
+                            "ay", "p", "phi", "r")
+
+
+def test_maneuver_copies_and_freezes_its_arrays():
+    time = np.arange(10) * 0.1
+    outputs = np.ones((10, 8))
+    maneuver = Maneuver("m", time, np.zeros((10, 4)), outputs)
+    outputs[0, 0] = 99.0
+    time[0] = -1.0
+    assert maneuver.outputs[0, 0] == 1.0 and maneuver.time[0] == 0.0
+    with pytest.raises(ValueError):
+        maneuver.outputs[0, 0] = 5.0
+    with pytest.raises(attrs.exceptions.FrozenInstanceError):
+        maneuver.name = "other"
+
+
+def test_channels_by_name_and_timing():
+    maneuver = make(n=51, dt=0.02)
+    assert maneuver.dt == pytest.approx(0.02) and maneuver.duration == pytest.approx(1.0)
+    assert maneuver.n_samples == 51
+    np.testing.assert_array_equal(maneuver.channel("lat"), maneuver.inputs[:, 1])
+    np.testing.assert_array_equal(maneuver.channel("theta"),
+                                  maneuver.outputs[:, OUTPUT_CHANNELS.index("theta")])
+    with pytest.raises(DataError, match="unknown channel 'psi'"):
+        maneuver.channel("psi")
+
+
+def test_head_and_with_outputs_return_new_maneuvers():
+    maneuver = make(n=100, dt=0.01)
+    head = maneuver.head(0.5)
+    assert head.n_samples == 51 and maneuver.n_samples == 100
+    other = maneuver.with_outputs(np.zeros((100, 8)), name="sim")
+    assert other.name == "sim" and np.all(other.outputs == 0) and np.any(maneuver.outputs != 0)
+
+
+@pytest.mark.parametrize("time, fragment", [
+    ([0.0, 0.1, 0.1, 0.3], r"channel 'time' does not increase at row 2"),
+    ([0.0, 0.1, 0.05, 0.3], r"does not increase at row 2"),
+    ([0.0, 0.1, 0.25, 0.3], r"not uniformly sampled at row 2"),
+    ([0.0, np.nan, 0.2, 0.3], r"channel 'time' is not finite at row 1"),
+])
+def test_bad_time_vectors_name_channel_and_row(time, fragment):
+    with pytest.raises(DataError, match=fragment):
+        Maneuver("bad", time, np.zeros((4, 4)), np.zeros((4, 8)))
+
+
+def test_a_single_sample_is_not_a_maneuver():
+    with pytest.raises(DataError, match="at least 2 samples"):
+        Maneuver("short", [0.0], np.zeros((1, 4)), np.zeros((1, 8)))
+
+
+@pytest.mark.parametrize("block, channel", [("inputs", "coll"), ("outputs", "phi")])
+def test_non_finite_values_name_channel_and_row(block, channel):
+    arrays = {"inputs": np.zeros((5, 4)), "outputs": np.zeros((5, 8))}
+    names = INPUT_CHANNELS if block == "inputs" else OUTPUT_CHANNELS
+    arrays[block][3, names.index(channel)] = np.inf
+    with pytest.raises(DataError, match=rf"maneuver 'bad': channel '{channel}' is NaN or "
+                                        rf"infinite at row 3"):
+        Maneuver("bad", np.arange(5.0), **arrays)
+
+
+def test_wrong_shapes_are_rejected():
+    with pytest.raises(DataError, match=r"expected shape \(5, 8\)"):
+        Maneuver("bad", np.arange(5.0), np.zeros((5, 4)), np.zeros((4, 8)))
+    with pytest.raises(DataError, match=r"expected shape \(5, 4\)"):
+        Maneuver("bad", np.arange(5.0), np.zeros((5, 3)), np.zeros((5, 8)))
+    with pytest.raises(DataError, match=r"initial_state must have shape \(8,\)"):
+        Maneuver("bad", np.arange(5.0), np.zeros((5, 4)), np.zeros((5, 8)),
+                 initial_state=np.zeros(4))
+
+
+def test_sets_index_select_and_merge():
+    a = make("a", kind="3211", axis="long")
+    b = make("b", kind="2311", axis="long")
+    c = make("c", kind="sweep", axis="lat")
+    maneuvers = ManeuverSet([a, b])
+    assert len(maneuvers) == 2 and maneuvers.names == ("a", "b")
+    assert maneuvers["b"] is b and maneuvers[0] is a and list(maneuvers) == [a, b]
+    assert maneuvers.n_samples == 100
+    assert maneuvers.select(kind="2311").names == ("b",)
+    assert maneuvers.merged([c]).select(axis="long").names == ("a", "b")
+    assert maneuvers.select(lambda m: m.name != "a").names == ("b",)
+    with pytest.raises(DataError, match="no maneuver matches"):
+        maneuvers.select(kind="doublet")
+    with pytest.raises(DataError, match="no maneuver named 'z'; have: a, b"):
+        maneuvers["z"]
+
+
+@pytest.mark.parametrize("build, fragment", [
+    (lambda: ManeuverSet([]), "at least one maneuver"),
+    (lambda: ManeuverSet([make("a"), make("a", seed=1)]), r"duplicate maneuver name\(s\) in the "
+                                                          r"set: a"),
+    (lambda: ManeuverSet([make("a"), make("b", units="si")]), "maneuvers mix unit systems"),
+    (lambda: ManeuverSet([make("a")], hold="linear"), "unknown input hold 'linear'"),
+])
+def test_bad_sets_are_rejected(build, fragment):
+    with pytest.raises(DataError, match=fragment):
+        build()
