@@ -107,6 +107,9 @@ def _structure(mapping: Mapping, source: str) -> ModelStructure:
     remove = settings.get("remove", [])
     if not isinstance(remove, list) or not all(isinstance(n, str) for n in remove):
         raise DataFileError(f"{source}: [structure] remove must be a list of derivative names")
+    twice = sorted({n for n in remove if remove.count(n) > 1})
+    if twice:
+        raise DataFileError(f"{source}: [structure] remove lists {', '.join(twice)} twice")
     declared = _require("table", mapping.get("derivatives", {}), f"{source}: [derivatives]")
     derivatives = [_derivative(name, value, f"{source}: [derivatives.{name}]")
                    for name, value in declared.items()]
