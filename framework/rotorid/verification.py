@@ -23,6 +23,15 @@ import attrs
 import numpy as np
 
 from .data import INPUT_CHANNELS, OUTPUT_CHANNELS
+from .frequency import (
+    FrequencyResponse,
+    default_windows,
+    log_grid,
+    lowest_frequency,
+    moving_inputs,
+    response_from_maneuvers,
+)
+from .metrics import TimeDomainMetrics, time_domain_metrics
 from .errors import VerificationError
 
 #: Default coherence threshold of the checks (the paper's and the project's strict value).
@@ -173,13 +182,15 @@ class EnvelopeCheck:
 
     def report(self) -> str:
         """One line: envelope, status, points, worst margins, source status."""
-        source = "verified source" if self.verified else "UNVERIFIED source"
+        first_sentence = self.provenance.split(". ")[0].rstrip(".")
+        source = ("verified source" if self.verified else "UNVERIFIED source") + (
+            f": {first_sentence}" if first_sentence else "")
         line = (f"{self.envelope}: {self.status}; {self.n_inside}/{self.n_used} points inside "
                 f"(γ² ≥ {self.threshold:g}); worst margin {self.worst_margin_db:+.2f} dB, "
                 f"{self.worst_margin_deg:+.1f}°")
         if self.cost is not None:
             line += f"; J = {self.cost:.1f}"
-        return f"{line} [{source}: {self.provenance}]"
+        return f"{line} [{source}]"
 
 
 def _worst(margin: np.ndarray, used: np.ndarray) -> float:
@@ -267,3 +278,210 @@ def envelopes_by_name(names: Sequence[str], **options) -> dict[str, ValidationEn
     from .plugins import create
 
     return {name: create("validation-envelopes", name, **options) for name in names}
+
+
+# ----------------------------------------------------------------- sweep comparison
+@attrs.frozen(eq=False)
+class PairVerification:
+    """Verification of one ``output/input`` pair on the sweeps of its input axis.
+
+    Attributes:
+        pair: ``"q/long"`` style name.
+        maneuvers: names of the sweeps pooled for this pair.
+        truth: response estimated from the recorded (truth) outputs.
+        model: response estimated from the model's simulation of the same inputs, processed
+            identically (same grid, windows, conditioning).
+        analytic: the model's analytic response (exact delays) on the grid, shape (M,), or
+            None when not evaluated.
+        checks: envelope name → check of ``ε = model/truth`` (the paper's eq. 19).
+        analytic_checks: envelope name → check of ``ε = analytic/truth``.
+    """
+
+    pair: str
+    maneuvers: tuple[str, ...]
+    truth: FrequencyResponse
+    model: FrequencyResponse
+    analytic: np.ndarray | None
+    checks: Mapping[str, EnvelopeCheck]
+    analytic_checks: Mapping[str, EnvelopeCheck]
+
+    @property
+    def omega(self) -> np.ndarray:
+        return self.truth.omega
+
+    @property
+    def coherence(self) -> np.ndarray:
+        """Coherence of the truth estimate (partial when conditioned), shape (M,)."""
+        return self.truth.coherence
+
+    @property
+    def error(self) -> np.ndarray:
+        """``ε = H_model/H_truth`` from the simulated sweeps, complex, shape (M,)."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return self.model.response / self.truth.response
+
+    @property
+    def analytic_error(self) -> np.ndarray | None:
+        """``ε = H_analytic/H_truth``, complex, shape (M,), or None."""
+        if self.analytic is None:
+            return None
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return self.analytic / self.truth.response
+
+    def summary(self) -> dict:
+        return {
+            "pair": self.pair, "maneuvers": list(self.maneuvers),
+            "conditioned_on": list(self.truth.conditioned_on),
+            "windows_s": list(self.truth.windows),
+            "omega_range_rad_s": [float(self.omega.min()), float(self.omega.max())],
+            "checks": {n: c.summary() for n, c in self.checks.items()},
+            "analytic_checks": {n: c.summary() for n, c in self.analytic_checks.items()},
+        }
+
+
+@attrs.frozen(eq=False)
+class VerificationResult:
+    """Frequency-domain verification of one model on a set of sweeps, plus time metrics."""
+
+    pairs: tuple[PairVerification, ...] = attrs.field(converter=tuple)
+    time_metrics: TimeDomainMetrics
+
+    def __getitem__(self, pair: str) -> PairVerification:
+        for item in self.pairs:
+            if item.pair == pair:
+                return item
+        raise VerificationError(f"pair {pair!r} was not verified; verified pairs: "
+                                f"{', '.join(p.pair for p in self.pairs)}")
+
+    def average_cost(self, envelope: str = "mismatch-cost", analytic: bool = False
+                     ) -> float | None:
+        """``J_ave`` over the pairs that have a cost for ``envelope``; None if none has."""
+        costs = [(p.analytic_checks if analytic else p.checks)[envelope].cost
+                 for p in self.pairs
+                 if envelope in (p.analytic_checks if analytic else p.checks)]
+        costs = [c for c in costs if c is not None]
+        return float(np.mean(costs)) if costs else None
+
+    def summary(self) -> dict:
+        """JSON-ready summary of every check and the time-domain metrics."""
+        return {"pairs": [p.summary() for p in self.pairs],
+                "average_cost": self.average_cost(),
+                "average_cost_analytic": self.average_cost(analytic=True),
+                "time_domain": self.time_metrics.summary()}
+
+    def report(self) -> str:
+        lines = []
+        for p in self.pairs:
+            lines.append(f"{p.pair} ({len(p.maneuvers)} sweep(s); conditioned on "
+                         f"{', '.join(p.truth.conditioned_on) or 'nothing'})")
+            for label, checks in (("simulated", p.checks), ("analytic", p.analytic_checks)):
+                for check in checks.values():
+                    lines.append(f"  [{label}] {check.report()}")
+        average = self.average_cost()
+        if average is not None:
+            lines.append(f"J_ave (simulated) = {average:.1f}")
+        lines.append(self.time_metrics.report())
+        return "\n".join(lines)
+
+
+def primary_axis(maneuver) -> str:
+    """The input axis a sweep excites: ``metadata['axis']``, else the input of largest RMS."""
+    axis = maneuver.metadata.get("axis")
+    if axis is not None:
+        if axis not in INPUT_CHANNELS:
+            raise VerificationError(f"maneuver {maneuver.name!r}: metadata axis {axis!r} is "
+                                    f"not an input ({', '.join(INPUT_CHANNELS)})")
+        return axis
+    centred = maneuver.inputs - maneuver.inputs.mean(axis=0)
+    return INPUT_CHANNELS[int(np.argmax(np.sqrt(np.mean(centred ** 2, axis=0))))]
+
+
+def default_omega(sweeps, n: int = 200, upper: float = 20.0) -> np.ndarray:
+    """Log grid from the longest default window's lowest frequency (4π/(T_rec/2)) to
+    ``upper`` rad/s or a fifth of the Nyquist frequency, whichever is lower."""
+    shortest = min(m.duration for m in sweeps)
+    dt = max(m.dt for m in sweeps)
+    low = lowest_frequency(default_windows(shortest)[0])
+    return log_grid(low, min(upper, 0.2 * np.pi / dt), n)
+
+
+def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray], pairs: Sequence[str] = PAPER_PAIRS,
+                   envelopes: Mapping[str, ValidationEnvelope] | None = None, *,
+                   analytic=None, omega=None, windows=None, conditioning: str | Sequence[str]
+                   = "auto") -> VerificationResult:
+    """Compare a model's simulated sweeps with the recorded ones, pair by pair.
+
+    Args:
+        sweeps: :class:`~rotorid.data.ManeuverSet` of verification sweeps (truth outputs).
+        model_outputs: the model's outputs for the same inputs, one (N_i, 8) array per sweep.
+        pairs: ``output/input`` names; each uses the sweeps whose axis is its input.
+        envelopes: name → envelope; default MUAD, AEE and mismatch cost from the plugins.
+        analytic: optional callable ``omega -> (M, 8, 4)`` complex model response.
+        omega: frequency grid in rad/s; default :func:`default_omega` of the sweeps.
+        windows: window lengths in s; default from the shortest sweep.
+        conditioning: ``"auto"`` (condition on every other input that moved, see
+            :func:`rotorid.frequency.moving_inputs`), ``"none"``, or explicit input names.
+    """
+    parsed = [(name, *parse_pair(name)) for name in pairs]
+    if not parsed:
+        raise VerificationError("no response pairs given; e.g. pairs=['q/long', 'p/long']")
+    if envelopes is None:
+        envelopes = envelopes_by_name(("muad", "aee", "mismatch-cost"))
+    if len(model_outputs) != len(sweeps):
+        raise VerificationError(f"{len(model_outputs)} model output arrays for {len(sweeps)} "
+                                f"sweeps; simulate every sweep")
+    axes = [primary_axis(m) for m in sweeps]
+    omega = default_omega(sweeps) if omega is None else np.asarray(omega, dtype=float)
+    full = None if analytic is None else analytic(omega)
+    results = []
+    for name, output, control in parsed:
+        chosen = [i for i, axis in enumerate(axes) if axis == control]
+        if not chosen:
+            raise VerificationError(f"pair {name}: no sweep excites {control!r}; the sweeps "
+                                    f"excite {', '.join(sorted(set(axes)))}")
+        subset = sweeps.select(lambda m, names={sweeps[i].name for i in chosen}:
+                               m.name in names)
+        if isinstance(conditioning, str) and conditioning == "auto":
+            others = moving_inputs(subset, control)
+        elif isinstance(conditioning, str) and conditioning == "none":
+            others = ()
+        else:
+            others = tuple(c for c in conditioning if c != control)
+        options = dict(conditioned_on=others, windows=windows)
+        truth = response_from_maneuvers(subset, control, output, omega, **options)
+        model = response_from_maneuvers(subset, control, output, omega,
+                                        outputs=[model_outputs[i] for i in chosen], **options)
+        analytic_pair = None if full is None else full[:, OUTPUT_CHANNELS.index(output),
+                                                          INPUT_CHANNELS.index(control)]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            error = model.response / truth.response
+            checks = {n: e.check(error, truth.coherence, omega) for n, e in envelopes.items()}
+            analytic_checks = {} if analytic_pair is None else {
+                n: e.check(analytic_pair / truth.response, truth.coherence, omega)
+                for n, e in envelopes.items()}
+        results.append(PairVerification(name, subset.names, truth, model, analytic_pair,
+                                        checks, analytic_checks))
+    return VerificationResult(results, time_domain_metrics(sweeps, model_outputs))
+
+
+def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
+                 envelopes: Mapping[str, ValidationEnvelope] | Sequence[str] | None = None,
+                 **options) -> VerificationResult:
+    """Verify an identified model on sweeps not used for identification.
+
+    Simulates ``structure`` at ``values`` (vector, name→value mapping or None) on the
+    recorded inputs of every sweep, estimates truth and model responses with identical
+    processing and holds ``ε = H_model/H_truth`` against the envelopes; also compares the
+    analytic response (exact delays) with the truth's conditioned response. ``envelopes``
+    may be envelope objects by name or registered envelope names. Other keyword options go
+    to :func:`compare_sweeps`.
+    """
+    from . import simulation
+
+    if envelopes is not None and not isinstance(envelopes, Mapping):
+        envelopes = envelopes_by_name(tuple(envelopes))
+    outputs = simulation.simulate(structure, values, sweeps)
+    return compare_sweeps(
+        sweeps, outputs, pairs, envelopes,
+        analytic=lambda omega: simulation.frequency_response(structure, values, omega),
+        **options)

@@ -1,0 +1,141 @@
+"""Time-domain verification metrics: RMSE (the paper's eq. 18), J_rms and Theil's U1.
+
+With ``z`` the measured and ``y`` the simulated outputs, ``N`` samples and ``n_o`` outputs:
+
+* RMSE (paper eq. 18) ``= sqrt( (1/(N n_o)) Σ_i (z_i − y_i)ᵀ (z_i − y_i) )``;
+* J_rms (Tischler) is the same sum with an output weighting ``W`` (diagonal, default the
+  identity) and, by Tischler's procedure, after removing per-output biases; guideline
+  ≤ 1.0–2.0 with outputs in deg, deg/s, ft/s, ft/s²;
+* TIC (Theil's inequality coefficient U1) per output
+  ``= RMS(z − y) / (RMS(z) + RMS(y))``, 0 perfect, 1 no agreement; guideline ≤ 0.25–0.3.
+  The stacked form replaces squares by ``yᵀy``.
+
+Every function takes arrays of shape (N, n_o) (or sequences of them, one per maneuver) in the
+data's units; the values returned are in those units (RMSE, J_rms) or dimensionless (TIC).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import attrs
+import numpy as np
+
+from .data import OUTPUT_CHANNELS, ManeuverSet
+from .errors import DataError
+
+
+def _pair(measured, simulated) -> tuple[np.ndarray, np.ndarray]:
+    z = np.asarray(measured, dtype=float)
+    y = np.asarray(simulated, dtype=float)
+    if z.ndim != 2 or z.shape != y.shape:
+        raise DataError(f"measured and simulated outputs must be 2-D arrays of one shape "
+                        f"(N, n_outputs); got {z.shape} and {y.shape}")
+    if not (np.all(np.isfinite(z)) and np.all(np.isfinite(y))):
+        raise DataError("measured or simulated outputs contain NaN or infinite values")
+    return z, y
+
+
+def _records(measured, simulated) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Accept one (N, n_o) array each or sequences of them (one per maneuver)."""
+    if isinstance(measured, np.ndarray) and measured.ndim == 2:
+        return [_pair(measured, simulated)]
+    if len(measured) != len(simulated) or not len(measured):
+        raise DataError(f"{len(measured)} measured and {len(simulated)} simulated records; "
+                        f"give one simulated array per maneuver")
+    return [_pair(z, y) for z, y in zip(measured, simulated)]
+
+
+def _stack(measured, simulated) -> tuple[np.ndarray, np.ndarray]:
+    pairs = _records(measured, simulated)
+    return np.concatenate([p[0] for p in pairs]), np.concatenate([p[1] for p in pairs])
+
+
+def rmse(measured, simulated) -> float:
+    """The paper's eq. 18 pooled over all samples (and maneuvers) and outputs."""
+    z, y = _stack(measured, simulated)
+    return float(np.sqrt(np.mean((z - y) ** 2)))
+
+
+def j_rms(measured, simulated, weights=None, remove_bias: bool = True) -> float:
+    """Tischler's J_rms; ``weights`` (n_o,) is the diagonal of W; with ``remove_bias`` each
+    record's mean residual per output is removed first (the bias fit of the procedure)."""
+    residuals = [z - y for z, y in _records(measured, simulated)]
+    if remove_bias:
+        residuals = [r - r.mean(axis=0) for r in residuals]
+    residual = np.concatenate(residuals)
+    w = np.ones(residual.shape[1]) if weights is None else np.asarray(weights, dtype=float)
+    if w.shape != (residual.shape[1],) or np.any(w < 0) or not np.all(np.isfinite(w)):
+        raise DataError(f"weights must be {residual.shape[1]} finite non-negative numbers, "
+                        f"one per output")
+    return float(np.sqrt(np.mean(residual ** 2 * w)))
+
+
+def tic(measured, simulated, per_output: bool = True):
+    """Theil's inequality coefficient U1: per output, shape (n_o,), or stacked (a float).
+
+    An output with zero RMS in both records has TIC 0 (perfect, trivially).
+    """
+    z, y = _stack(measured, simulated)
+
+    def rms(a):
+        return np.sqrt(np.mean(a ** 2, axis=0)) if per_output else np.sqrt(np.mean(
+            np.sum(a ** 2, axis=1)))
+
+    numerator, denominator = rms(z - y), rms(z) + rms(y)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        value = np.where(denominator > 0, numerator / denominator, 0.0)
+    return value if per_output else float(value)
+
+
+@attrs.frozen(eq=False)
+class ManeuverMetrics:
+    """Metrics of one maneuver: RMSE and J_rms (data units), TIC per output (n_o,)."""
+
+    name: str
+    rmse: float
+    j_rms: float
+    tic: np.ndarray
+    outputs: tuple[str, ...] = OUTPUT_CHANNELS
+
+    def summary(self) -> dict:
+        return {"maneuver": self.name, "rmse": self.rmse, "j_rms": self.j_rms,
+                "tic": dict(zip(self.outputs, map(float, self.tic)))}
+
+
+@attrs.frozen(eq=False)
+class TimeDomainMetrics:
+    """Metrics per maneuver and pooled over all of them."""
+
+    maneuvers: tuple[ManeuverMetrics, ...]
+    rmse: float
+    j_rms: float
+    tic: np.ndarray
+    outputs: tuple[str, ...] = OUTPUT_CHANNELS
+
+    def summary(self) -> dict:
+        return {"rmse": self.rmse, "j_rms": self.j_rms,
+                "tic": dict(zip(self.outputs, map(float, self.tic))),
+                "maneuvers": [m.summary() for m in self.maneuvers]}
+
+    def report(self) -> str:
+        lines = [f"{'maneuver':<20} {'RMSE':>8} {'J_rms':>8}  TIC "
+                 + " ".join(f"{o:>6}" for o in self.outputs)]
+        for m in (*self.maneuvers, ManeuverMetrics("all", self.rmse, self.j_rms, self.tic)):
+            lines.append(f"{m.name:<20} {m.rmse:8.3f} {m.j_rms:8.3f}      "
+                         + " ".join(f"{t:6.3f}" for t in m.tic))
+        return "\n".join(lines)
+
+
+def time_domain_metrics(maneuvers: ManeuverSet, simulated: Sequence[np.ndarray],
+                        weights=None) -> TimeDomainMetrics:
+    """RMSE, J_rms and TIC of simulated outputs (one (N_i, 8) array per maneuver)."""
+    if len(simulated) != len(maneuvers):
+        raise DataError(f"{len(simulated)} simulated records for {len(maneuvers)} maneuvers")
+    per = tuple(
+        ManeuverMetrics(m.name, rmse(m.outputs, y), j_rms(m.outputs, y, weights),
+                        tic(m.outputs, y))
+        for m, y in zip(maneuvers, simulated))
+    measured = [m.outputs for m in maneuvers]
+    return TimeDomainMetrics(per, rmse(measured, simulated),
+                             j_rms(measured, simulated, weights), tic(measured, simulated))
