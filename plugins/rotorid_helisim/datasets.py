@@ -1,0 +1,276 @@
+"""The paper's data sets (Table 1) per flight condition: which maneuvers, flown how.
+
+Per condition: 3211 and 2311 multisteps in both directions on each control (16 identification
+maneuvers) and one frequency sweep per control (4 verification maneuvers). Every maneuver
+starts in trim, applies its signal to one control and is kept near trim by the loops of
+:mod:`.loops`. Names follow ``<condition>_<kind>_<axis>[_pos|_neg]``, e.g.
+``hover_3211_long_pos`` and ``forward_sweep_ped``.
+
+Inputs (documented in docs/maneuvers.md):
+
+* multisteps: step width Δt and amplitude per axis (:data:`STEP_WIDTH`, :data:`AMPLITUDE`),
+  starting after 2 s of trim, records of :data:`MULTISTEP_RECORD` s;
+* sweeps: the validation.md §6.1 log sweep from :data:`SWEEP_OMEGA` with 2 cycles at ω_min,
+  3 s of trim before and 5 s after, sine amplitude :data:`SWEEP_AMPLITUDE` per axis.
+
+``duration_scale`` < 1 shortens every record (quick runs for tests): the multistep records and
+the sweep time shrink by the factor and the sweep's lowest frequency rises by its inverse.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from collections.abc import Mapping
+
+import attrs
+import numpy as np
+
+from rotorid.data import Maneuver, ManeuverSet
+from rotorid.errors import DataError
+from rotorid_signals.signals import Multistep, Sweep
+
+from .loops import AXES, LoopDesign, design_loops, quasi_steady_model
+from .sensors import SensorNoise, noise_generator, perturbations
+
+KINDS = ("3211", "2311", "sweep")
+#: Flight conditions by name: airspeed in kt.
+CONDITIONS = {"hover": 0.0, "forward": 70.0}
+#: Multistep basic time step Δt per axis, s (validation.md §6.2: Δt ≈ 1.6/ω_n).
+STEP_WIDTH = {"long": 0.4, "lat": 0.3, "coll": 1.0, "ped": 1.0}
+#: Multistep amplitude per axis, % of travel.
+AMPLITUDE = {"long": 5.0, "lat": 3.0, "coll": 8.0, "ped": 8.0}
+#: Sweep sine amplitude per axis, % of travel.
+SWEEP_AMPLITUDE = {"long": 2.5, "lat": 2.0, "coll": 5.0, "ped": 6.0}
+#: Sweep law: ω_min, ω_max (rad/s) and T_rec (s) at duration_scale 1.
+SWEEP_OMEGA = (0.4, 14.0)
+SWEEP_TIME = 50.0
+#: Sweep amplitude at ω_max over that at ω_min (the amplitude grows with frequency).
+SWEEP_AMPLITUDE_RATIO = 3.0
+MULTISTEP_START = 2.0  #: s of trim before the first pulse
+MULTISTEP_RECORD = 15.0  #: s, whole record at duration_scale 1
+
+
+def _choice(allowed):
+    def convert(value):
+        values = (value,) if isinstance(value, str) else tuple(value)
+        bad = [v for v in values if v not in allowed]
+        if bad or not values:
+            raise DataError(f"unknown or empty selection {list(values)}; choose from "
+                            f"{', '.join(allowed)}")
+        return tuple(v for v in allowed if v in values)
+    return convert
+
+
+def _per_axis(defaults):
+    def convert(value):
+        merged = dict(defaults)
+        merged.update({str(k): float(v) for k, v in dict(value or {}).items()})
+        if set(merged) != set(AXES) or not all(math.isfinite(v) and v > 0
+                                               for v in merged.values()):
+            raise DataError(f"per-axis values must be finite and > 0 for axes "
+                            f"{', '.join(AXES)}, got {merged}")
+        return merged
+    return convert
+
+
+def _in_range(low, high, what):
+    def check(instance, attribute, value):
+        if not (math.isfinite(value) and low < value <= high):
+            raise DataError(f"data set: {attribute.name} must be in ({low}, {high}] {what}, "
+                            f"got {value!r}")
+    return check
+
+
+@attrs.frozen
+class DataSetConfig:
+    """Everything that determines a generated data set (its hash keys the cache).
+
+    Attributes:
+        condition: name used in maneuver names and metadata (``"hover"``, ``"forward"``).
+        airspeed_kt: trim airspeed, level flight.
+        seed: seed of every random draw (sensor noise).
+        sample_rate: Hz; substeps: RK4 steps per sample.
+        kinds, axes: the maneuver selection (subsets of :data:`KINDS`, ``long lat coll ped``).
+        duration_scale: record-length factor in (0, 1]; 1 is the full data set.
+        amplitude, step_width, sweep_amplitude: per-axis overrides (%, s, %).
+        noise: sensor noise; loops: loop bandwidths.
+    """
+
+    condition: str = "hover"
+    airspeed_kt: float = attrs.field(default=0.0, converter=float,
+                                     validator=_in_range(-1e-9, 200.0, "kt"))
+    seed: int = attrs.field(default=0, converter=int)
+    sample_rate: float = attrs.field(default=50.0, converter=float,
+                                     validator=_in_range(0.0, 1000.0, "Hz"))
+    substeps: int = attrs.field(default=4, converter=int, validator=_in_range(0, 100, "steps"))
+    kinds: tuple = attrs.field(default=KINDS, converter=_choice(KINDS))
+    axes: tuple = attrs.field(default=AXES, converter=_choice(AXES))
+    duration_scale: float = attrs.field(default=1.0, converter=float,
+                                        validator=_in_range(0.0, 1.0, ""))
+    amplitude: dict = attrs.field(factory=dict, converter=_per_axis(AMPLITUDE))
+    step_width: dict = attrs.field(factory=dict, converter=_per_axis(STEP_WIDTH))
+    sweep_amplitude: dict = attrs.field(factory=dict, converter=_per_axis(SWEEP_AMPLITUDE))
+    noise: SensorNoise = attrs.field(factory=SensorNoise)
+    loops: LoopDesign = attrs.field(factory=LoopDesign)
+
+    @classmethod
+    def for_condition(cls, name: str, **options) -> "DataSetConfig":
+        """The configuration of a named condition (``"hover"`` or ``"forward"`` = 70 kt)."""
+        if name not in CONDITIONS:
+            raise DataError(f"unknown flight condition {name!r}; use one of "
+                            f"{', '.join(CONDITIONS)} or give airspeed_kt")
+        return cls(condition=name, airspeed_kt=CONDITIONS[name], **options)
+
+    @classmethod
+    def from_mapping(cls, settings: Mapping) -> "DataSetConfig":
+        """Build from plain settings; ``quick=True`` means ``duration_scale=0.3``; ``noise``
+        may be a mapping of σ values and ``loops`` a mapping of bandwidths."""
+        settings = dict(settings)
+        if settings.pop("quick", False):
+            settings.setdefault("duration_scale", 0.3)
+        if isinstance(settings.get("noise"), Mapping):
+            settings["noise"] = SensorNoise(settings["noise"])
+        if isinstance(settings.get("loops"), Mapping):
+            settings["loops"] = LoopDesign(**settings["loops"])
+        known = {a.name for a in attrs.fields(cls)}
+        unknown = set(settings) - known
+        if unknown:
+            raise DataError(f"unknown data-set setting(s) {sorted(unknown)}; known: "
+                            f"{', '.join(sorted(known | {'quick'}))}")
+        name = settings.get("condition", "hover")
+        if "airspeed_kt" not in settings and name in CONDITIONS:
+            settings["airspeed_kt"] = CONDITIONS[name]
+        return cls(**settings)
+
+    @property
+    def sample_time(self) -> float:
+        return 1.0 / self.sample_rate
+
+    def as_dict(self) -> dict:
+        """Plain JSON-able settings (also the content hashed by :meth:`digest`)."""
+        return attrs.asdict(self, value_serializer=lambda _, __, v: list(v)
+                            if isinstance(v, tuple) else v)
+
+    def digest(self, plant_id: str = "") -> str:
+        """SHA-256 of the settings and ``plant_id``: the cache key."""
+        text = json.dumps({"config": self.as_dict(), "plant": plant_id}, sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()
+
+
+@attrs.frozen
+class ManeuverSpec:
+    """One maneuver of a data set: its name, kind, axis, direction (+1/−1) and pilot signal."""
+
+    name: str
+    kind: str
+    axis: str
+    direction: int
+    signal: Multistep | Sweep
+
+
+def _on_grid(seconds: float, sample_time: float) -> float:
+    return max(1, round(seconds / sample_time)) * sample_time
+
+
+def maneuver_specs(config: DataSetConfig) -> tuple[ManeuverSpec, ...]:
+    """The Table-1 maneuvers selected by ``config`` (multisteps first, then sweeps)."""
+    dt, scale = config.sample_time, config.duration_scale
+    specs = []
+    for kind in config.kinds:
+        for axis in config.axes:
+            if kind == "sweep":
+                low, high = SWEEP_OMEGA
+                signal = Sweep(config.sweep_amplitude[axis], low / scale, high,
+                               SWEEP_TIME * scale, amplitude_ratio=SWEEP_AMPLITUDE_RATIO,
+                               sample_time=dt)
+                specs.append(ManeuverSpec(f"{config.condition}_sweep_{axis}", kind, axis, 1,
+                                          signal))
+                continue
+            width = _on_grid(config.step_width[axis], dt)
+            excitation = MULTISTEP_START + 7 * width
+            trailing = max(MULTISTEP_RECORD * scale - excitation, 2.0)
+            for direction, label in ((1, "pos"), (-1, "neg")):
+                signal = Multistep(kind, direction * config.amplitude[axis], width,
+                                   start=MULTISTEP_START, trailing=trailing, sample_time=dt)
+                specs.append(ManeuverSpec(f"{config.condition}_{kind}_{axis}_{label}", kind,
+                                          axis, direction, signal))
+    return tuple(specs)
+
+
+@attrs.frozen
+class Job:
+    """A condition to fly: plant trim (state, stick) and the data-set configuration."""
+
+    trim_state: np.ndarray
+    trim_stick: np.ndarray
+    config: DataSetConfig
+
+
+def _pilot_block(specs, dt):
+    counts = np.array([int(math.floor(s.signal.duration / dt + 1e-9)) + 1 for s in specs])
+    time = np.arange(counts.max()) * dt
+    pilot = np.zeros((len(specs), time.size, 4))
+    for row, spec in enumerate(specs):
+        pilot[row, :, AXES.index(spec.axis)] = spec.signal(time)
+    return counts, pilot
+
+
+def fly_jobs(plant, jobs, progress=None, plant_id: str = "") -> list[ManeuverSet]:
+    """Fly every maneuver of every job as one batch; one :class:`ManeuverSet` per job.
+
+    All jobs must share the sample rate and substeps (they share the time grid).
+    """
+    from .flight import fly
+
+    rates = {(job.config.sample_rate, job.config.substeps) for job in jobs}
+    if len(rates) != 1:
+        raise DataError(f"conditions flown together need the same sample rate and substeps, "
+                        f"got {sorted(rates)}")
+    dt = jobs[0].config.sample_time
+    rows, gains, trims, sticks = [], [], [], []
+    for job in jobs:
+        model = quasi_steady_model(plant, job.trim_state, job.trim_stick)
+        theta0 = job.trim_state[tuple(plant.state_names).index("theta")]
+        for spec in maneuver_specs(job.config):
+            rows.append((job, spec))
+            gains.append(design_loops(model, job.config.loops, spec.axis, theta0))
+            trims.append(job.trim_state)
+            sticks.append(job.trim_stick)
+    counts, pilot = _pilot_block([spec for _, spec in rows], dt)
+    record = fly(plant, np.array(trims), np.array(sticks), pilot, counts,
+                 np.array([g.matrix for g in gains]), dt, jobs[0].config.substeps, progress)
+    trim_outputs = {id(job): plant.measurements(job.trim_state[None], job.trim_stick[None])[0]
+                    for job in jobs}
+    by_job = {id(job): [] for job in jobs}
+    for row, ((job, spec), loop) in enumerate(zip(rows, gains)):
+        n = counts[row]
+        outputs = perturbations(record.measurements[row, :n], trim_outputs[id(job)])
+        outputs = outputs + job.config.noise.draw(n, noise_generator(job.config.seed,
+                                                                     spec.name))
+        metadata = _metadata(job, spec, loop, plant_id, plant.state_names)
+        by_job[id(job)].append(Maneuver(spec.name, record.time[:n],
+                                        record.stick[row, :n] - job.trim_stick, outputs,
+                                        metadata, initial_state=np.zeros(8)))
+    return [ManeuverSet(by_job[id(job)]) for job in jobs]
+
+
+def _metadata(job, spec, loop, plant_id, state_names) -> dict:
+    config = job.config
+    attitude = {name: math.degrees(job.trim_state[tuple(state_names).index(name)])
+                for name in ("theta", "phi")}
+    return {
+        "condition": config.condition, "kind": spec.kind,
+        "axis": spec.axis, "direction": spec.direction,
+        "role": "verification" if spec.kind == "sweep" else "identification",
+        "airspeed_kt": config.airspeed_kt, "seed": config.seed,
+        "sample_rate_hz": config.sample_rate,
+        "signal": {"type": type(spec.signal).__name__, **attrs.asdict(spec.signal)},
+        "loop_gains": loop.as_dict(),
+        "noise_sigma": dict(config.noise.sigma),
+        "trim_stick_percent": [float(v) for v in job.trim_stick],
+        "trim_theta_deg": attitude["theta"], "trim_phi_deg": attitude["phi"],
+        "config_hash": config.digest(plant_id),
+        "plant": plant_id,
+    }

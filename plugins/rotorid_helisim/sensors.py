@@ -1,0 +1,74 @@
+"""Sensor model: perturbations from trim in flight-test units plus white measurement noise.
+
+Outputs are ``[ax az q θ ay p φ r]``: specific force at the CG in body axes (accelerometers,
+ft/s²), body rates (rate gyros, deg/s) and Euler attitudes (deg). The noise is zero-mean,
+Gaussian, white at the sample rate and independent between channels, with the standard
+deviations of :data:`DEFAULT_SIGMA` unless given. Every draw comes from a generator seeded by
+the user's seed and the maneuver name (:func:`noise_generator`), so the same seed gives the
+same numbers whatever subset of maneuvers is generated.
+
+Default σ (engineering values for a flight-test instrumentation package, see
+docs/maneuvers.md): accelerometers 0.2 ft/s² (0.06 m/s², about 6 mg: residual rotor vibration
+after the usual N/rev filtering dominates the transducer noise); rate gyros 0.1 deg/s
+(tactical-grade gyro noise at 50 Hz); attitudes 0.1 deg (INS/AHRS attitude noise).
+"""
+
+from __future__ import annotations
+
+import math
+import zlib
+from collections.abc import Mapping
+
+import attrs
+import numpy as np
+
+from rotorid.data import OUTPUT_CHANNELS
+from rotorid.errors import DataError
+from rotorid.units import FLIGHT_TEST, channel_scale
+
+#: Default noise standard deviations in flight-test units (ft/s², deg/s, deg).
+DEFAULT_SIGMA = {"ax": 0.2, "az": 0.2, "ay": 0.2, "q": 0.1, "p": 0.1, "r": 0.1,
+                 "theta": 0.1, "phi": 0.1}
+
+
+def _sigma_mapping(value) -> dict:
+    merged = dict(DEFAULT_SIGMA)
+    merged.update({str(k): float(v) for k, v in dict(value).items()})
+    return merged
+
+
+@attrs.frozen
+class SensorNoise:
+    """White measurement noise with per-channel standard deviations ``sigma`` (flight-test
+    units). Channels not named keep their default; give 0 to switch a channel's noise off."""
+
+    sigma: Mapping = attrs.field(factory=dict, converter=_sigma_mapping)
+
+    def __attrs_post_init__(self):
+        unknown = set(self.sigma) - set(OUTPUT_CHANNELS)
+        if unknown:
+            raise DataError(f"sensor noise for unknown channel(s) {sorted(unknown)}; channels: "
+                            f"{', '.join(OUTPUT_CHANNELS)}")
+        bad = {k: v for k, v in self.sigma.items() if not (math.isfinite(v) and v >= 0)}
+        if bad:
+            raise DataError(f"sensor noise σ must be finite and ≥ 0, got {bad}")
+
+    @property
+    def vector(self) -> np.ndarray:
+        """σ per output channel (8,) in :data:`rotorid.data.OUTPUT_CHANNELS` order."""
+        return np.array([self.sigma[c] for c in OUTPUT_CHANNELS])
+
+    def draw(self, n_samples: int, rng: np.random.Generator) -> np.ndarray:
+        """Noise samples (n_samples, 8) in flight-test units."""
+        return rng.standard_normal((n_samples, 8)) * self.vector
+
+
+def noise_generator(seed: int, name: str) -> np.random.Generator:
+    """The generator for maneuver ``name`` under data-set ``seed`` (stable across subsets)."""
+    return np.random.default_rng(np.random.SeedSequence([int(seed), zlib.crc32(name.encode())]))
+
+
+def perturbations(measurements, trim_outputs) -> np.ndarray:
+    """Total SI outputs (N, 8) → perturbations from trim in flight-test units (N, 8)."""
+    scale = channel_scale(OUTPUT_CHANNELS, FLIGHT_TEST)
+    return (np.asarray(measurements) - np.asarray(trim_outputs)) * scale

@@ -1,0 +1,60 @@
+"""The data-set cache: maneuver files plus a manifest keyed by the configuration hash.
+
+A generated data set lives in one directory: one ``<maneuver>.npz`` file per maneuver (the
+``files`` plugin's NumPy layout: channels ``time long lat coll ped ax az q theta ay p phi r``
+and a JSON header with the metadata) and ``manifest.json`` holding the configuration, its
+SHA-256 digest and the file list. A later request with the same digest reads the files back
+instead of flying again; any change of configuration, seed or plant changes the digest and
+the set is regenerated (the old files of that set are replaced).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from rotorid.data import ManeuverSet
+from rotorid.errors import DataFileError
+from rotorid.io import atomic_write
+
+MANIFEST = "manifest.json"
+
+
+def load_cached(directory, digest: str) -> ManeuverSet | None:
+    """The set stored in ``directory`` if its manifest matches ``digest``, else ``None``."""
+    from rotorid_files.formats import read_maneuver
+
+    path = Path(directory) / MANIFEST
+    if not path.is_file():
+        return None
+    try:
+        manifest = json.loads(path.read_text(encoding="utf-8"))
+    except ValueError:
+        return None
+    if not isinstance(manifest, dict) or manifest.get("digest") != digest:
+        return None
+    files = [Path(directory) / name for name in manifest.get("files", [])]
+    if not files or not all(f.is_file() for f in files):
+        return None
+    return ManeuverSet([read_maneuver(f) for f in files])
+
+
+def save(maneuvers: ManeuverSet, directory, digest: str, settings: dict) -> Path:
+    """Write the maneuver files, then the manifest (last, so a crash leaves no stale match).
+
+    Returns the manifest path.
+    """
+    from rotorid_files.formats import FileSource
+
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    manifest = directory / MANIFEST
+    if manifest.exists():
+        manifest.unlink()
+    paths = FileSource().save(maneuvers, directory, format="npz")
+    text = json.dumps({"digest": digest, "settings": settings,
+                       "files": [p.name for p in paths]}, indent=2, sort_keys=True)
+    try:
+        return atomic_write(manifest, text)
+    except OSError as error:
+        raise DataFileError(f"cannot write the data-set manifest {manifest}: {error}") from None
