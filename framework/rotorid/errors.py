@@ -59,3 +59,8 @@ class IdentifiabilityWarning(RotoridWarning):
 
 class ConvergenceWarning(RotoridWarning):
     """An iterative procedure stopped without meeting its convergence criteria."""
+
+
+class TrimError(RotoridError, ValueError):
+    """A simulation model cannot be trimmed at the requested flight condition (outside the
+    flight envelope, beyond control travel or power, or the trim iteration failed)."""
