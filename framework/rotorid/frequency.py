@@ -93,7 +93,8 @@ class Spectra:
     Attributes:
         omega: frequencies in rad/s, shape (M,).
         matrix: one-sided spectral matrix, shape (M, C, C), ``G_ij ∝ E[X_i* X_j]`` in
-            (unit_i · unit_j)·s/rad; Hermitian at each frequency.
+            unit_i·unit_j per Hz (the scaling of ``scipy.signal.csd(..., scaling="density")``);
+            Hermitian at each frequency.
         window: window length in s.
         n_segments: number of averaged segments over all records.
         n_effective: number of statistically independent averages (Welch's formula).
