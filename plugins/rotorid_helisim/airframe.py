@@ -9,14 +9,23 @@ from __future__ import annotations
 import numpy as np
 
 
+def cross(a, b):
+    """Row-wise cross product a × b of (B, 3) arrays (either may be a (3,) vector)."""
+    a = np.asarray(a)
+    b = np.asarray(b)
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
 def point_velocity(vel, omega, position):
     """Velocity (B, 3) of the airframe point at ``position`` (3,) m: V + ω × r."""
-    return vel + np.cross(omega, np.asarray(position)[None, :])
+    return vel + cross(omega, position)
 
 
 def moment_about_cg(force, position):
     """Moment (B, 3) about the CG of ``force`` (B, 3) applied at ``position`` (3,)."""
-    return np.cross(np.broadcast_to(np.asarray(position), force.shape), force)
+    return cross(position, force)
 
 
 def _polynomial(coefficients, x):

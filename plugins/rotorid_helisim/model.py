@@ -135,8 +135,8 @@ class Bo105Model:
         g = c.gravity
         specific = force / c.mass
         accel = specific + np.stack([-g * sth, g * cth * sphi, g * cth * cphi], axis=1)
-        accel -= np.cross(rates, vel)
-        gyro = np.cross(rates, rates @ self._inertia.T)
+        accel -= airframe.cross(rates, vel)
+        gyro = airframe.cross(rates, rates @ self._inertia.T)
         rate_dot = (moment - gyro) @ self._inertia_inv.T
         phi_dot = p + (q * sphi + r * cphi) * sth / cth
         theta_dot = q * cphi - r * sphi
