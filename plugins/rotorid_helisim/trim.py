@@ -29,6 +29,26 @@ from .parameters import BLADE_ANGLES, STICKS
 _MAX_STEP_KT = 20.0
 _TOLERANCE = 1e-10
 
+#: The study's named flight conditions, airspeed in kt ("forward" is the 70 kt study point).
+NAMED_CONDITIONS = {"hover": 0.0, "forward": 70.0}
+
+
+def resolve_airspeed(condition: str | None, airspeed_kt: float | None) -> float:
+    """Airspeed in kt from a named condition (``hover``, ``forward``) or an explicit value.
+
+    Exactly one of the two must be given; raises TrimError otherwise.
+    """
+    if (condition is None) == (airspeed_kt is None):
+        raise TrimError("give a flight condition: 'hover', 'forward' (70 kt) or "
+                        "--airspeed-kt V, exactly one of them")
+    if condition is not None:
+        try:
+            return NAMED_CONDITIONS[condition]
+        except KeyError:
+            raise TrimError(f"unknown flight condition {condition!r}; use "
+                            f"{', '.join(NAMED_CONDITIONS)} or --airspeed-kt") from None
+    return float(airspeed_kt)
+
 
 @attrs.frozen(eq=False)
 class Trim:
