@@ -1,23 +1,36 @@
-"""README commands, the CI script that runs them, and the README's API example."""
+"""README commands, the CI script that runs them, and the examples of README and docs/."""
 
 import re
 import shutil
 import subprocess
+import tomllib
+import types
 from pathlib import Path
 
+import numpy as np
 import pytest
+
+from rotorid.modelfile import parse_model
+from rotorid.plugins import create, new_plugin_manager
+from rotorid_files.formats import read_maneuver
 
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text()
 CI = ROOT / ".ci" / "run"
 
 
-def block(marker: str) -> str:
-    """The fenced block between ``<!-- marker -->`` and ``<!-- /marker -->`` in README.md."""
-    match = re.search(rf"^<!-- {marker} -->\n```\w*\n(.*?)\n```\n<!-- /{marker} -->$", README,
+def block(marker: str, text: str = README) -> str:
+    """The fenced block between ``<!-- marker -->`` and ``<!-- /marker -->`` in ``text``."""
+    match = re.search(rf"^<!-- {marker} -->\n```\w*\n(.*?)\n```\n<!-- /{marker} -->$", text,
                       flags=re.MULTILINE | re.DOTALL)
-    assert match, f"README.md has no fenced block between <!-- {marker} --> markers"
+    assert match, f"no fenced block between <!-- {marker} --> markers"
     return match[1]
+
+
+def fenced(path: Path, language: str) -> list[str]:
+    """Every fenced ``language`` block of a Markdown file."""
+    return re.findall(rf"^```{language}\n(.*?)^```$", path.read_text(),
+                      flags=re.MULTILINE | re.DOTALL)
 
 
 def ci(*arguments, cwd=ROOT):
@@ -81,3 +94,31 @@ def test_readme_links_exist():
     for link in re.findall(r"\]\(([^)#]+)\)", README):
         if "://" not in link:
             assert (ROOT / link).is_file(), f"README.md links to missing {link}"
+
+
+def test_plugin_guide_example_registers_and_builds_its_signal():
+    module = types.ModuleType("rotorid_chirp_example")
+    exec(compile(block("plugin-example", (ROOT / "docs" / "plugins.md").read_text()),
+                 "docs/plugins.md", "exec"), module.__dict__)
+    manager = new_plugin_manager([module], load_entry_points=False)
+    chirp = create("input-signals", "linear-chirp", manager, amplitude=2.0, duration=10.0)
+    time = np.array([-1.0, 0.0, 1.25, 11.0])
+    expected_phase = 2 * np.pi * (0.1 * 1.25 + 1.9 * 1.25**2 / 20.0)
+    np.testing.assert_allclose(chirp(time), [0.0, 0.0, 2.0 * np.sin(expected_phase), 0.0])
+    assert chirp.duration == 10.0
+
+
+def test_conventions_csv_example_reads(tmp_path):
+    (example,) = [b for b in fenced(ROOT / "docs" / "conventions.md", "") if b.startswith("# name")]
+    path = tmp_path / "example.csv"
+    path.write_text(example)
+    maneuver = read_maneuver(path)
+    assert maneuver.metadata == {"condition": "hover", "kind": "3211", "axis": "long",
+                                 "direction": 1}
+    assert maneuver.n_samples == 2 and maneuver.channel("q")[1] == 0.3
+
+
+def test_conventions_model_file_example_parses():
+    (example,) = fenced(ROOT / "docs" / "conventions.md", "toml")
+    structure = parse_model(tomllib.loads(example), "docs/conventions.md")
+    assert len(structure.names) == 58 and structure.derivative("M_w").fixed
