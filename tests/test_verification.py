@@ -1,0 +1,135 @@
+"""Sweep verification: a missing 0.08 s delay fails the MUAD phase envelope, the delay passes."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from sweeps import DT, analytic, log_sweep, respond  # noqa: E402
+
+import rotorid_envelopes.plugin as envelope_plugin  # noqa: E402
+from rotorid.data import Maneuver, ManeuverSet  # noqa: E402
+from rotorid.errors import VerificationError  # noqa: E402
+from rotorid.frequency import log_grid  # noqa: E402
+from rotorid.plots_frequency import plot_bode, plot_error  # noqa: E402
+from rotorid.plugins import create, new_plugin_manager  # noqa: E402
+from rotorid.verification import compare_sweeps, parse_pair  # noqa: E402
+
+OMEGA = log_grid(0.3, 15.0, 100)
+PITCH = ([30.0], [1.0, 3.0])      # q/long
+COUPLING = ([-6.0], [1.0, 5.0])   # p/long
+DELAY = 0.08
+Q, P = 2, 5                       # output columns
+
+
+@pytest.fixture(scope="module")
+def envelopes():
+    manager = new_plugin_manager([envelope_plugin], load_entry_points=False)
+    return {name: create("validation-envelopes", name, manager)
+            for name in ("muad", "aee", "mismatch-cost")}
+
+
+def _outputs(x, delay):
+    out = np.zeros((x.size, 8))
+    out[:, Q] = respond(*PITCH, x, delay=delay)
+    out[:, P] = respond(*COUPLING, x, delay=delay)
+    return out
+
+
+@pytest.fixture(scope="module")
+def case():
+    """Two longitudinal sweeps of a truth with a 0.08 s control delay, noisy sensors, and a
+    lateral input moved by a 'stabilising loop'; model outputs without and with the delay."""
+    rng = np.random.default_rng(7)
+    u = log_sweep(duration=60.0, omega_max=18.0)
+    time = np.arange(u.size) * DT
+    maneuvers, without, with_delay = [], [], []
+    for k in range(2):
+        inputs = np.zeros((u.size, 4))
+        inputs[:, 0] = (-1) ** k * 5.0 * u
+        inputs[:, 1] = 0.5 * rng.standard_normal(u.size)
+        truth = _outputs(inputs[:, 0], DELAY)
+        noise = 0.05 * truth.std(axis=0) * rng.standard_normal(truth.shape)
+        maneuvers.append(Maneuver(f"long-sweep-{k}", time, inputs, truth + noise,
+                                  {"kind": "sweep", "axis": "long"}))
+        without.append(_outputs(inputs[:, 0], 0.0))
+        with_delay.append(_outputs(inputs[:, 0], DELAY))
+    return ManeuverSet(maneuvers), without, with_delay
+
+
+def _analytic(delay):
+    def response(omega):
+        full = np.zeros((len(omega), 8, 4), dtype=complex)
+        full[:, Q, 0] = analytic(*PITCH, omega, delay=delay)
+        full[:, P, 0] = analytic(*COUPLING, omega, delay=delay)
+        return full
+    return response
+
+
+def test_missing_delay_fails_phase_envelope_and_delay_passes(case, envelopes):
+    sweeps, without, with_delay = case
+    pairs = ["q/long", "p/long"]
+    no_delay = compare_sweeps(sweeps, without, pairs, envelopes, omega=OMEGA,
+                              analytic=_analytic(0.0))
+    delayed = compare_sweeps(sweeps, with_delay, pairs, envelopes, omega=OMEGA,
+                             analytic=_analytic(DELAY))
+    for pair in pairs:
+        bad, good = no_delay[pair], delayed[pair]
+        assert bad.truth.conditioned_on == ("lat",)
+        for checks in (bad.checks, bad.analytic_checks):
+            muad = checks["muad"]
+            assert muad.passed is False
+            outside = muad.omega[muad.used & ~muad.inside]
+            assert outside.min() > 3.0            # the failure is at high frequency …
+            assert muad.worst_margin_deg < 0      # … and in phase,
+            assert muad.worst_margin_db > 0       # not in magnitude
+            assert checks["mismatch-cost"].cost > 100
+        for checks in (good.checks, good.analytic_checks):
+            assert checks["muad"].passed is True and checks["muad"].n_used >= 60
+            assert checks["mismatch-cost"].cost < 50   # "nearly indistinguishable"
+            assert checks["aee"].status == "not available"
+    assert delayed.average_cost() < 50 < 100 < no_delay.average_cost()
+    summary = delayed.summary()
+    assert summary["pairs"][0]["checks"]["muad"]["passed"] is True
+    assert summary["time_domain"]["rmse"] < no_delay.summary()["time_domain"]["rmse"]
+    assert "q/long" in delayed.report() and "MUAD: pass" in delayed.report()
+
+
+def test_pairs_and_sweeps_are_matched_with_clear_errors(case, envelopes):
+    sweeps, without, _ = case
+    assert parse_pair("az/coll") == ("az", "coll")
+    with pytest.raises(VerificationError, match="unknown response pair 'q-long'"):
+        compare_sweeps(sweeps, without, ["q-long"], envelopes)
+    with pytest.raises(VerificationError, match="no sweep excites 'ped'"):
+        compare_sweeps(sweeps, without, ["r/ped"], envelopes)
+    with pytest.raises(VerificationError, match="simulate every sweep"):
+        compare_sweeps(sweeps, without[:1], ["q/long"], envelopes)
+    result = compare_sweeps(sweeps, without, ["q/long"], envelopes, omega=OMEGA,
+                            conditioning="none")
+    assert result["q/long"].truth.conditioned_on == ()
+    with pytest.raises(VerificationError, match="was not verified"):
+        result["p/lat"]
+
+
+def test_figures_are_built_and_saved(case, envelopes, tmp_path):
+    sweeps, without, with_delay = case
+    pairs = ["p/long"]
+    a = compare_sweeps(sweeps, without, pairs, envelopes, omega=OMEGA,
+                       analytic=_analytic(0.0))["p/long"]
+    b = compare_sweeps(sweeps, with_delay, pairs, envelopes, omega=OMEGA,
+                       analytic=_analytic(DELAY))["p/long"]
+    figure = plot_error({"no delays": a, "with delays": b},
+                        [envelopes["muad"], envelopes["aee"]])
+    mag, phase, coherence = figure.axes
+    assert "p/long" in figure.get_suptitle()
+    assert mag.get_ylabel() == "|ε| [dB]" and coherence.get_xlabel() == "frequency ω [rad/s]"
+    labels = [t.get_text() for t in mag.get_legend().get_texts()]
+    assert labels == ["MUAD bounds", "no delays", "with delays"]
+    figure.savefig(tmp_path / "error.png")
+    bode = plot_bode(b, "deg/s")
+    assert len(bode.axes) == 3 and "magnitude" in bode.axes[0].get_ylabel()
+    bode.savefig(tmp_path / "bode.png")
+    assert (tmp_path / "error.png").stat().st_size > 0 and (tmp_path / "bode.png").exists()
+    analytic_figure = plot_error(b, [envelopes["muad"]], analytic=True)
+    assert "analytic" in analytic_figure.get_suptitle()
