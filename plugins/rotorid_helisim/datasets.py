@@ -29,6 +29,7 @@ import numpy as np
 
 from rotorid.data import Maneuver, ManeuverSet
 from rotorid.errors import DataError
+from rotorid.units import KNOT
 from rotorid_signals.signals import Multistep, Sweep
 
 from .loops import AXES, LoopDesign, design_loops, quasi_steady_model
@@ -40,12 +41,12 @@ CONDITIONS = {"hover": 0.0, "forward": 70.0}
 #: Multistep basic time step Δt per axis, s (validation.md §6.2: Δt ≈ 1.6/ω_n).
 STEP_WIDTH = {"long": 0.4, "lat": 0.3, "coll": 1.0, "ped": 1.0}
 #: Multistep amplitude per axis, % of travel.
-AMPLITUDE = {"long": 5.0, "lat": 3.0, "coll": 8.0, "ped": 8.0}
+AMPLITUDE = {"long": 5.0, "lat": 3.0, "coll": 6.0, "ped": 6.0}
 #: Sweep sine amplitude per axis, % of travel.
-SWEEP_AMPLITUDE = {"long": 2.5, "lat": 2.0, "coll": 5.0, "ped": 6.0}
+SWEEP_AMPLITUDE = {"long": 1.2, "lat": 1.6, "coll": 4.0, "ped": 5.0}
 #: Sweep law: ω_min, ω_max (rad/s) and T_rec (s) at duration_scale 1.
-SWEEP_OMEGA = (0.4, 14.0)
-SWEEP_TIME = 50.0
+SWEEP_OMEGA = (0.45, 14.0)
+SWEEP_TIME = 40.0
 #: Sweep amplitude at ω_max over that at ω_min (the amplitude grows with frequency).
 SWEEP_AMPLITUDE_RATIO = 3.0
 MULTISTEP_START = 2.0  #: s of trim before the first pulse
@@ -95,7 +96,8 @@ class DataSetConfig:
         kinds, axes: the maneuver selection (subsets of :data:`KINDS`, ``long lat coll ped``).
         duration_scale: record-length factor in (0, 1]; 1 is the full data set.
         amplitude, step_width, sweep_amplitude: per-axis overrides (%, s, %).
-        noise: sensor noise; loops: loop bandwidths.
+        noise: sensor noise (or a mapping of σ per channel);
+        loops: loop bandwidths (or a mapping of :class:`~.loops.LoopDesign` fields).
     """
 
     condition: str = "hover"
@@ -104,7 +106,7 @@ class DataSetConfig:
     seed: int = attrs.field(default=0, converter=int)
     sample_rate: float = attrs.field(default=50.0, converter=float,
                                      validator=_in_range(0.0, 1000.0, "Hz"))
-    substeps: int = attrs.field(default=4, converter=int, validator=_in_range(0, 100, "steps"))
+    substeps: int = attrs.field(default=2, converter=int, validator=_in_range(0, 100, "steps"))
     kinds: tuple = attrs.field(default=KINDS, converter=_choice(KINDS))
     axes: tuple = attrs.field(default=AXES, converter=_choice(AXES))
     duration_scale: float = attrs.field(default=1.0, converter=float,
@@ -112,8 +114,10 @@ class DataSetConfig:
     amplitude: dict = attrs.field(factory=dict, converter=_per_axis(AMPLITUDE))
     step_width: dict = attrs.field(factory=dict, converter=_per_axis(STEP_WIDTH))
     sweep_amplitude: dict = attrs.field(factory=dict, converter=_per_axis(SWEEP_AMPLITUDE))
-    noise: SensorNoise = attrs.field(factory=SensorNoise)
-    loops: LoopDesign = attrs.field(factory=LoopDesign)
+    noise: SensorNoise = attrs.field(factory=SensorNoise, converter=lambda v: v if isinstance(
+        v, SensorNoise) else SensorNoise(v))
+    loops: LoopDesign = attrs.field(factory=LoopDesign, converter=lambda v: v if isinstance(
+        v, LoopDesign) else LoopDesign(**v))
 
     @classmethod
     def for_condition(cls, name: str, **options) -> "DataSetConfig":
@@ -125,15 +129,10 @@ class DataSetConfig:
 
     @classmethod
     def from_mapping(cls, settings: Mapping) -> "DataSetConfig":
-        """Build from plain settings; ``quick=True`` means ``duration_scale=0.3``; ``noise``
-        may be a mapping of σ values and ``loops`` a mapping of bandwidths."""
+        """Build from plain settings; ``quick=True`` means ``duration_scale=0.3``."""
         settings = dict(settings)
         if settings.pop("quick", False):
             settings.setdefault("duration_scale", 0.3)
-        if isinstance(settings.get("noise"), Mapping):
-            settings["noise"] = SensorNoise(settings["noise"])
-        if isinstance(settings.get("loops"), Mapping):
-            settings["loops"] = LoopDesign(**settings["loops"])
         known = {a.name for a in attrs.fields(cls)}
         unknown = set(settings) - known
         if unknown:
@@ -217,10 +216,12 @@ def _pilot_block(specs, dt):
     return counts, pilot
 
 
-def fly_jobs(plant, jobs, progress=None, plant_id: str = "") -> list[ManeuverSet]:
+def fly_jobs(plant, jobs, progress=None, plant_id: str = "", with_record: bool = False):
     """Fly every maneuver of every job as one batch; one :class:`ManeuverSet` per job.
 
-    All jobs must share the sample rate and substeps (they share the time grid).
+    All jobs must share the sample rate and substeps (they share the time grid). With
+    ``with_record`` the result is ``(sets, record, names)``: also the
+    :class:`~.flight.FlightRecord` (plant states included) and the maneuver name of each row.
     """
     from .flight import fly
 
@@ -250,10 +251,32 @@ def fly_jobs(plant, jobs, progress=None, plant_id: str = "") -> list[ManeuverSet
         outputs = outputs + job.config.noise.draw(n, noise_generator(job.config.seed,
                                                                      spec.name))
         metadata = _metadata(job, spec, loop, plant_id, plant.state_names)
+        metadata["excursion"] = excursion(record.states[row, :n], job.trim_state,
+                                          plant.state_names)
         by_job[id(job)].append(Maneuver(spec.name, record.time[:n],
                                         record.stick[row, :n] - job.trim_stick, outputs,
                                         metadata, initial_state=np.zeros(8)))
-    return [ManeuverSet(by_job[id(job)]) for job in jobs]
+    sets = [ManeuverSet(by_job[id(job)]) for job in jobs]
+    if with_record:
+        return sets, record, [spec.name for _, spec in rows]
+    return sets
+
+
+def excursion(states, trim_state, state_names) -> dict:
+    """Largest departures from trim over a record: attitudes in deg, speeds in kt.
+
+    ``states`` (N, n_states) SI. ``airspeed_kt`` is the change of the total velocity's
+    magnitude (no wind), ``u_kt v_kt w_kt`` the body components' changes.
+    """
+    index = {name: tuple(state_names).index(name) for name in ("u", "v", "w", "theta", "phi")}
+    delta = np.abs(states - trim_state)
+    velocity = states[:, [index["u"], index["v"], index["w"]]]
+    trim_speed = np.linalg.norm(trim_state[[index["u"], index["v"], index["w"]]])
+    result = {f"{k}_deg": math.degrees(delta[:, index[k]].max()) for k in ("theta", "phi")}
+    result["airspeed_kt"] = float(np.abs(np.linalg.norm(velocity, axis=1) - trim_speed).max()
+                                  / KNOT)
+    result.update({f"{k}_kt": float(delta[:, index[k]].max() / KNOT) for k in ("u", "v", "w")})
+    return result
 
 
 def _metadata(job, spec, loop, plant_id, state_names) -> dict:
