@@ -405,10 +405,11 @@ def default_omega(sweeps, n: int = 200, upper: float = 20.0) -> np.ndarray:
     return log_grid(low, min(upper, 0.2 * np.pi / dt), n)
 
 
-def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray], pairs: Sequence[str] = PAPER_PAIRS,
+def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
+                   pairs: Sequence[str] = PAPER_PAIRS,
                    envelopes: Mapping[str, ValidationEnvelope] | None = None, *,
-                   analytic=None, omega=None, windows=None, conditioning: str | Sequence[str]
-                   = "auto") -> VerificationResult:
+                   analytic=None, omega=None, windows=None,
+                   conditioning: str | Sequence[str] = "auto") -> VerificationResult:
     """Compare a model's simulated sweeps with the recorded ones, pair by pair.
 
     Args:
