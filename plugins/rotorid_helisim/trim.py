@@ -6,8 +6,9 @@ follows from the flight condition:
 
 * ``airspeed_kt``: horizontal true airspeed (kt); ``climb_rate_mps``: vertical speed (m/s, up
   positive); ``sideslip_deg``: aerodynamic sideslip, v = V·sin β (V the total airspeed);
-* u and w then satisfy u² + w² = V² − v² and the vertical earth velocity equals −climb rate
-  (for level flight with zero sideslip: v = 0, w = u·tanθ/cosφ, reference §2.0).
+* the body velocity is the earth-axis velocity (V_h, 0, −climb) seen from the trimmed attitude,
+  the heading relative to the track giving the sideslip (for level flight with zero sideslip:
+  v = 0, w = u·tanθ/cosφ, reference §2.0). No wind: air and ground velocities agree.
 
 The solver is a damped Newton iteration with a finite-difference Jacobian evaluated in one
 batched model call, continued in airspeed from hover in steps of at most 20 kt.
@@ -109,29 +110,39 @@ class Trim:
 def body_velocity(airspeed_kt, climb_rate_mps, sideslip_deg, theta, phi):
     """Body velocities (u, v, w) in m/s for the flight condition at attitude (theta, phi), rad.
 
-    Vectorised over theta and phi (same shape). Raises TrimError if the climb rate cannot be
-    flown at this airspeed and attitude.
+    The earth-axis velocity (V_h, 0, −climb) is turned into body axes through (φ, θ, ψ), with
+    the heading ψ relative to the track chosen so that v = V·sin β (the root nearer zero).
+    In a purely vertical climb or descent (V_h = 0) ψ = 0 and the sideslip is undefined.
+    Vectorised over theta and phi (same shape). Raises TrimError if no heading gives the
+    requested sideslip.
     """
     horizontal = airspeed_kt * KNOT
     total = math.hypot(horizontal, climb_rate_mps)
-    v = total * math.sin(math.radians(sideslip_deg))
-    in_plane = math.sqrt(max(total**2 - v**2, 0.0))
     theta = np.asarray(theta, dtype=float)
     phi = np.asarray(phi, dtype=float)
-    if in_plane == 0.0:
-        zero = np.zeros_like(theta)
-        return zero, zero + v, zero
-    # vertical earth velocity: −u·sinθ + v·sinφ·cosθ + w·cosφ·cosθ = −climb
-    a = -np.sin(theta)
-    b = np.cos(phi) * np.cos(theta)
-    rhs = -climb_rate_mps - v * np.sin(phi) * np.cos(theta)
-    norm = np.hypot(a, b)
-    ratio = rhs / (in_plane * norm)
-    if np.any(np.abs(ratio) > 1.0):
-        raise TrimError("the climb rate exceeds the airspeed geometry; check climb_rate_mps "
-                        "against airspeed_kt and sideslip_deg")
-    gamma = np.arctan2(b, a) - np.arccos(ratio)
-    return in_plane * np.cos(gamma), np.zeros_like(theta) + v, in_plane * np.sin(gamma)
+    sth, cth, sph, cph = np.sin(theta), np.cos(theta), np.sin(phi), np.cos(phi)
+    if horizontal > 0.0:
+        # v = (sφ sθ cψ − cφ sψ)·V_h − sφ cθ·climb = V sin β  →  A cosψ + B sinψ = C
+        a = sph * sth * horizontal
+        b = -cph * horizontal
+        c = total * math.sin(math.radians(sideslip_deg)) + sph * cth * climb_rate_mps
+        ratio = c / np.hypot(a, b)
+        if np.any(np.abs(ratio) > 1.0):
+            raise TrimError(f"no heading gives {sideslip_deg:g} deg of sideslip at this "
+                            f"attitude; reduce sideslip_deg")
+        delta = np.arctan2(b, a)
+        half = np.arccos(ratio)
+        wrap = lambda angle: np.angle(np.exp(1j * angle))  # noqa: E731
+        first, second = wrap(delta - half), wrap(delta + half)
+        psi = np.where(np.abs(first) <= np.abs(second), first, second)
+    else:
+        psi = np.zeros_like(theta)
+    sps, cps = np.sin(psi), np.cos(psi)
+    vx, vz = horizontal, -climb_rate_mps
+    u = cth * cps * vx - sth * vz
+    v = (sph * sth * cps - cph * sps) * vx + sph * cth * vz
+    w = (cph * sth * cps + sph * sps) * vx + cph * cth * vz
+    return u, v, w
 
 
 class _Problem:
