@@ -133,3 +133,12 @@ def test_figures_are_built_and_saved(case, envelopes, tmp_path):
     assert (tmp_path / "error.png").stat().st_size > 0 and (tmp_path / "bode.png").exists()
     analytic_figure = plot_error(b, [envelopes["muad"]], analytic=True)
     assert "analytic" in analytic_figure.get_suptitle()
+
+
+def test_documented_example_runs():
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "verification.md").read_text(
+        encoding="utf-8")
+    (example,) = [block.split("```", 1)[0] for block in text.split("```python\n")[1:]]
+    exec(compile(example, "docs/verification.md", "exec"), {})

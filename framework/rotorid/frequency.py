@@ -289,7 +289,7 @@ def composite(estimates: Sequence[MisoEstimate], windows: Sequence[float], omega
     return MisoEstimate(
         response=merge([e.response for e in estimates]),
         coherence=merge([e.coherence for e in estimates]),
-        multiple_coherence=np.nanmean(merge(np.broadcast_to(multiple, share.shape)), axis=1),
+        multiple_coherence=merge(np.broadcast_to(multiple, share.shape))[:, 0],
         random_error=merge([e.random_error for e in estimates]),
     )
 
