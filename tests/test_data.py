@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from rotorid.data import ALL_CHANNELS, INPUT_CHANNELS, OUTPUT_CHANNELS, Maneuver, ManeuverSet
-from rotorid.errors import DataError
+from rotorid.errors import DataError, StructureError
 
 
 def make(name="m", n=50, dt=0.02, units="flight-test", seed=0, **metadata):
@@ -114,3 +114,9 @@ def test_sets_index_select_and_merge():
 def test_bad_sets_are_rejected(build, fragment):
     with pytest.raises(DataError, match=fragment):
         build()
+
+
+def test_units_are_a_known_unit_system():
+    assert make(units="si-rad").units == "si"
+    with pytest.raises(StructureError, match="unknown unit system 'feet'"):
+        make(units="feet")

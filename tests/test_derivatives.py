@@ -141,3 +141,11 @@ def test_derivative_errors_are_rotorid_value_errors():
         Derivative("A_u")
     with pytest.raises(ValueError):
         Derivative("A_u")
+
+
+@pytest.mark.parametrize("value", ["1.0", True, None, [1.0]])
+def test_values_that_are_not_numbers_are_rejected(value):
+    with pytest.raises(DerivativeError, match="must be real numbers"):
+        Derivative("L_p", initial=value)
+    with pytest.raises(DerivativeError, match="must be real numbers"):
+        Delay(initial=value)

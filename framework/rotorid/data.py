@@ -17,6 +17,7 @@ import numpy as np
 
 from .errors import DataError
 from .structure import CONTROLS, OUTPUTS
+from .units import unit_system
 
 INPUT_CHANNELS = CONTROLS
 OUTPUT_CHANNELS = OUTPUTS
@@ -78,7 +79,7 @@ class Maneuver:
     inputs: np.ndarray = attrs.field(converter=_readonly)
     outputs: np.ndarray = attrs.field(converter=_readonly)
     metadata: Mapping = attrs.field(factory=dict, converter=lambda m: dict(m))
-    units: str = "flight-test"
+    units: str = attrs.field(default="flight-test", converter=lambda u: unit_system(u).name)
     initial_state: np.ndarray | None = attrs.field(
         default=None, converter=lambda x: None if x is None else _readonly(x))
 

@@ -62,8 +62,18 @@ def _finite(name):
     return check
 
 
+def _real(value) -> float:
+    try:
+        if isinstance(value, (str, bytes, bool)):
+            raise TypeError
+        return float(value)
+    except (TypeError, ValueError):
+        raise DerivativeError(
+            f"derivative and delay values must be real numbers, got {value!r}") from None
+
+
 def _optional_float(value):
-    return None if value is None else float(value)
+    return None if value is None else _real(value)
 
 
 @attrs.frozen
@@ -74,7 +84,7 @@ class Delay:
     keeps the delay at ``initial`` during estimation.
     """
 
-    initial: float = attrs.field(default=0.0, converter=float, validator=_finite("delay"))
+    initial: float = attrs.field(default=0.0, converter=_real, validator=_finite("delay"))
     upper: float | None = attrs.field(
         default=None, converter=_optional_float, validator=_finite("delay")
     )
@@ -149,7 +159,7 @@ class Derivative:
     """
 
     name: str = attrs.field()
-    initial: float = attrs.field(default=0.0, converter=float)
+    initial: float = attrs.field(default=0.0, converter=_real)
     sign: Sign = attrs.field(default=Sign.NONE, converter=_to_sign)
     delay: Delay | None = attrs.field(default=None, converter=Delay.coerce)
     fixed: bool = False
