@@ -19,7 +19,7 @@ from rotorid_files.formats import FileSource, convert_units, read_maneuver, writ
 
 FORMATS = ("csv", "npz", "mat")
 METADATA = {"condition": "hover", "kind": "3211", "axis": "long", "direction": -1,
-            "amplitude": 0.5, "tags": ["id", "pilot-a"], "note": "true"}
+            "amplitude": 0.5, "tags": ["id", "pilot-a"], "note": "true", "trim": "Θ0 = 5°"}
 
 
 def make(name="long_3211_neg", n=40, dt=0.04, seed=0, units="flight-test", **kwargs):
@@ -63,8 +63,8 @@ def test_csv_layout_is_readable(tmp_path):
     lines = path.read_text().splitlines()
     assert lines[:4] == ["# name: long_3211_neg", "# units: flight-test", "# condition: hover",
                          '# kind: "3211"']
-    assert lines[9] == ",".join(ALL_CHANNELS)
-    assert len(lines) == 10 + 40
+    assert lines[10] == ",".join(ALL_CHANNELS)
+    assert len(lines) == 11 + 40
 
 
 def test_csv_written_by_hand_defaults_to_flight_test_and_file_name(tmp_path):

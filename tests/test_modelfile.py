@@ -168,6 +168,11 @@ def test_bad_model_files_name_the_file_and_the_key(text, fragment):
     assert str(caught.value).startswith("model.toml: ")
 
 
+def test_a_mapping_is_required():
+    with pytest.raises(DataFileError, match="<string>: a model file must be a table"):
+        parse_model(["units"])
+
+
 def test_file_errors(tmp_path):
     with pytest.raises(MissingFileError, match="model file .*absent.toml does not exist"):
         load_model(tmp_path / "absent.toml")

@@ -90,6 +90,7 @@ def _derivative(name: str, settings, where: str) -> Derivative:
 
 
 def _structure(mapping: Mapping, source: str) -> ModelStructure:
+    _require("table", mapping, f"{source}: a model file")
     _check_keys(mapping, _TOP_KEYS, source)
     units = _require("string", mapping.get("units", "flight-test"), f"{source}: units")
     if "condition" not in mapping:
