@@ -16,6 +16,7 @@ runs the whole comparison for an identified model.
 
 from __future__ import annotations
 
+import types
 from collections.abc import Mapping, Sequence
 from typing import Protocol, runtime_checkable
 
@@ -281,6 +282,10 @@ def envelopes_by_name(names: Sequence[str], **options) -> dict[str, ValidationEn
 
 
 # ----------------------------------------------------------------- sweep comparison
+def _frozen_mapping(mapping) -> Mapping:
+    return types.MappingProxyType(dict(mapping))
+
+
 @attrs.frozen(eq=False)
 class PairVerification:
     """Verification of one ``output/input`` pair on the sweeps of its input axis.
@@ -301,9 +306,10 @@ class PairVerification:
     maneuvers: tuple[str, ...]
     truth: FrequencyResponse
     model: FrequencyResponse
-    analytic: np.ndarray | None
-    checks: Mapping[str, EnvelopeCheck]
-    analytic_checks: Mapping[str, EnvelopeCheck]
+    analytic: np.ndarray | None = attrs.field(
+        converter=lambda a: None if a is None else _readonly(a, complex))
+    checks: Mapping[str, EnvelopeCheck] = attrs.field(converter=_frozen_mapping)
+    analytic_checks: Mapping[str, EnvelopeCheck] = attrs.field(converter=_frozen_mapping)
 
     @property
     def omega(self) -> np.ndarray:

@@ -22,6 +22,12 @@ from .tomlfile import PACKAGE_DIR, load_definition, omega_range, require
 BOUND_KEYS = ("mag_upper", "mag_lower", "phase_upper", "phase_lower")
 
 
+def _readonly(points: np.ndarray) -> np.ndarray:
+    out = np.array(points, dtype=float, copy=True).reshape(-1, 2)
+    out.setflags(write=False)
+    return out
+
+
 def _breakpoints(value, key: str, where: str) -> np.ndarray:
     """Breakpoints as an array of shape (K, 2), checked."""
     if not isinstance(value, list):
@@ -50,10 +56,10 @@ class TableEnvelope:
     provenance: str
     verified: bool
     omega_range: tuple[float, float]
-    mag_upper: np.ndarray
-    mag_lower: np.ndarray
-    phase_upper: np.ndarray
-    phase_lower: np.ndarray
+    mag_upper: np.ndarray = attrs.field(converter=_readonly)
+    mag_lower: np.ndarray = attrs.field(converter=_readonly)
+    phase_upper: np.ndarray = attrs.field(converter=_readonly)
+    phase_lower: np.ndarray = attrs.field(converter=_readonly)
     threshold: float = COHERENCE_THRESHOLD
 
     @classmethod
