@@ -10,22 +10,28 @@ import numpy as np
 
 
 def cross(a, b):
-    """Row-wise cross product a × b of (B, 3) arrays (either may be a (3,) vector)."""
-    a = np.asarray(a)
-    b = np.asarray(b)
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+    """Row-wise cross product a × b of two (B, 3) arrays."""
+    out = np.empty(np.broadcast_shapes(np.shape(a), np.shape(b)))
+    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return out
+
+
+def skew(position):
+    """(3, 3) matrix K with K·a = position × a."""
+    x, y, z = position
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
 def point_velocity(vel, omega, position):
-    """Velocity (B, 3) of the airframe point at ``position`` (3,) m: V + ω × r."""
-    return vel + cross(omega, position)
+    """Velocity (B, 3) of the airframe point at ``position`` (3,) m: V + ω × r = V − r × ω."""
+    return vel - omega @ skew(position).T
 
 
 def moment_about_cg(force, position):
     """Moment (B, 3) about the CG of ``force`` (B, 3) applied at ``position`` (3,)."""
-    return cross(position, force)
+    return force @ skew(position).T
 
 
 def _polynomial(coefficients, x):
@@ -46,16 +52,13 @@ def fuselage_loads(vel, config):
     alpha = limit * np.tanh(np.arctan2(w, u) / limit)
     beta = limit * np.tanh(np.arctan2(v, np.sqrt(u * u + w * w)) / limit)
     scale = speed2 / config.fuselage_reference_speed**2
-    force = scale[:, None] * np.stack([
-        _polynomial(config.fuselage_x, alpha),
-        _polynomial(config.fuselage_y, beta),
-        _polynomial(config.fuselage_z, alpha),
-    ], axis=1)
-    moment = scale[:, None] * np.stack([
-        np.zeros_like(u),
-        config.fuselage_pitch_scale * _polynomial(config.fuselage_m, alpha),
-        config.fuselage_yaw_scale * _polynomial(config.fuselage_n, beta),
-    ], axis=1)
+    force = np.empty_like(vel)
+    force[:, 0] = scale * _polynomial(config.fuselage_x, alpha)
+    force[:, 1] = scale * _polynomial(config.fuselage_y, beta)
+    force[:, 2] = scale * _polynomial(config.fuselage_z, alpha)
+    moment = np.zeros_like(vel)
+    moment[:, 1] = scale * config.fuselage_pitch_scale * _polynomial(config.fuselage_m, alpha)
+    moment[:, 2] = scale * config.fuselage_yaw_scale * _polynomial(config.fuselage_n, beta)
     return force, moment
 
 
@@ -70,21 +73,19 @@ def tailplane_loads(vel, omega, config):
     Lift ½ρV²(S/2)C_L normal to the local flow in the x–z plane, C_L = a(α + i) capped.
     """
     x, y, z = config.tailplane_position
-    force_total = np.zeros_like(vel)
-    moment_total = np.zeros_like(vel)
-    for side in (y, -y):
-        position = (x, side, z)
-        local = point_velocity(vel, omega, position)
-        u, w = local[:, 0], local[:, 2]
-        alpha = np.arctan2(w, u)
-        cl = _surface_coefficient(alpha + config.tailplane_incidence,
-                                  config.tailplane_lift_slope, config.surface_lift_limit)
-        # lift = ½ρ V² S C_L along (w, 0, −u)/V
-        k = 0.5 * config.air_density * 0.5 * config.tailplane_area * cl * np.hypot(u, w)
-        force = np.stack([k * w, np.zeros_like(u), -k * u], axis=1)
-        force_total += force
-        moment_total += moment_about_cg(force, position)
-    return force_total, moment_total
+    sides = np.array([[x, y, z], [x, -y, z]])
+    # local velocities of both halves, (2, B, 3)
+    local = vel[None] - np.einsum("bj,kij->kbi", omega, np.stack([skew(r) for r in sides]))
+    u, w = local[..., 0], local[..., 2]
+    cl = _surface_coefficient(np.arctan2(w, u) + config.tailplane_incidence,
+                              config.tailplane_lift_slope, config.surface_lift_limit)
+    # lift = ½ρ V² S C_L along (w, 0, −u)/V
+    k = 0.5 * config.air_density * 0.5 * config.tailplane_area * cl * np.hypot(u, w)
+    force = np.zeros_like(local)
+    force[..., 0] = k * w
+    force[..., 2] = -k * u
+    moment = moment_about_cg(force[0], sides[0]) + moment_about_cg(force[1], sides[1])
+    return force[0] + force[1], moment
 
 
 def fin_loads(vel, omega, config):
@@ -99,7 +100,9 @@ def fin_loads(vel, omega, config):
                               config.surface_lift_limit)
     # side force = ½ρ V² S C along (v, −u, 0)/V
     k = 0.5 * config.air_density * config.fin_area * cy * np.hypot(u, v)
-    force = np.stack([k * v, -k * u, np.zeros_like(u)], axis=1)
+    force = np.zeros_like(vel)
+    force[:, 0] = k * v
+    force[:, 1] = -k * u
     return force, moment_about_cg(force, config.fin_position)
 
 
