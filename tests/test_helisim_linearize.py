@@ -80,9 +80,10 @@ def test_hover_dominant_derivatives_within_30_percent(hover, name):
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "documented difference (docs/truth-model.md, 'Comparison'; reference §2.0 expects "
-    "≈ 60 % larger): N'_r is −0.51 against Helisim's −0.32; the tail rotor alone gives "
-    "x_T²·∂Y_T/∂v_T / I_zz ≈ −0.7 with the Y_v that matches Helisim"))
+    "documented difference (docs/truth-model.md, 'Comparison'; reference §2.0 expects a "
+    "larger N'_r): primed N'_r is −0.43 against Helisim's −0.32 because of the I_xz coupling "
+    "with L_r, whose sign differs (shaft-tilt projection of the yaw rate on the hub roll "
+    "rate); the unprimed yaw damping agrees within 10 %, see the next test"))
 def test_hover_yaw_damping_within_30_percent(hover):
     assert _entry(hover.A, hover.B, "N_r") == pytest.approx(REFERENCE_A[7, 7], rel=0.30)
 
@@ -90,8 +91,15 @@ def test_hover_yaw_damping_within_30_percent(hover):
 def test_hover_documented_differences(hover):
     """Differences stated in docs/truth-model.md with their expected size (reference §2.0)."""
     ratio = lambda name: _entry(hover.A, hover.B, name) / _entry(REFERENCE_A, REFERENCE_B, name)  # noqa: E731
-    # N'_r about 60 % larger (same sign)
-    assert 1.3 < ratio("N_r") < 1.9
+    # N'_r about 35 % larger (same sign); unprimed N_r/I_zz = N'_r − (I_xz/I_zz)·L'_r agrees
+    assert 1.2 < ratio("N_r") < 1.6
+    k = 660.0 / 4099.0
+    unprimed = lambda a: a[STATE["r"], STATE["r"]] - k * a[STATE["p"], STATE["r"]]  # noqa: E731
+    assert unprimed(hover.A) == pytest.approx(unprimed(REFERENCE_A), rel=0.10)
+    # unprimed L_r/I_xx: same magnitude as Helisim, opposite sign (shaft-tilt rate projection)
+    kx = 660.0 / 1433.0
+    roll_yaw = lambda a: a[STATE["p"], STATE["r"]] - kx * a[STATE["r"], STATE["r"]]  # noqa: E731
+    assert -roll_yaw(hover.A) == pytest.approx(roll_yaw(REFERENCE_A), rel=0.30)
     # blade-element in-plane force: X_q and Y_p about half of Helisim
     assert 0.35 < ratio("X_q") < 0.75
     assert 0.35 < ratio("Y_p") < 0.75

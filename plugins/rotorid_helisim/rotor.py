@@ -5,7 +5,8 @@ the shaft; rotor anticlockwise seen from above; azimuth ψ = 0 over the tail; bl
 direction (−cosψ, sinψ, 0); flap β = β0 + β1c·cosψ + β1s·sinψ (β1c > 0 tilts the disc forward,
 β1s > 0 to the left); pitch θ = θ0 + θ_tw·r + θ1s·sinψ + θ1c·cosψ; inflow (positive down)
 λ_i = λ0 + r·(λ1s·sinψ + λ1c·cosψ). Everything is non-dimensional: velocities over ΩR, rates
-over Ω, r over R, ( )' = d/dψ.
+over Ω, r over R, ( )' = d/dψ. As in Padfield's formulation, the hub yaw rate does not change
+the blade section speed (the flap equations carry no yaw-rate terms either).
 
 Section aerodynamics are linear in incidence (lift ∝ θU_T² − U_P·U_T); the profile drag
 c_d(α) = d0 + d1·α + d2·α² acts on U_T², i.e. d0·U_T² + d1·U_T·(αU_T) + d2·(αU_T)² with
@@ -82,7 +83,7 @@ def rotor_loads(mu, rates, flap, flap_rate, inflow, pitch, *, solidity, lift_slo
     theta = col(pitch, 0) + twist * _R + col(pitch, 1) * _S + col(pitch, 2) * _C
     lam = col(inflow, 0) + _R * (col(inflow, 1) * _S + col(inflow, 2) * _C)
 
-    ut = mux * _S + muy * _C + _R * (1.0 - rb) + _R * beta * (pb * _C - qb * _S)
+    ut = mux * _S + muy * _C + _R + _R * beta * (pb * _C - qb * _S)
     up = lam - muz + _R * (dbeta - pb * _S - qb * _C) + beta * (mux * _C - muy * _S)
     lift = theta * ut * ut - up * ut  # normal force per (½ρ(ΩR)²c·a0·R dr)
 
