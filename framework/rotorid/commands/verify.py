@@ -39,6 +39,8 @@ def add_arguments(parser) -> None:
                         help=f"comma-separated envelope names ({DEFAULT_ENVELOPES})")
     parser.add_argument("--out", default="verification", metavar="DIR",
                         help="output directory (created if needed; default ./verification)")
+    parser.add_argument("--no-figures", action="store_true",
+                        help="write only verification.json (faster)")
     parser.add_argument("--strict", action="store_true",
                         help="exit with status 1 when a verified envelope check fails")
 
@@ -146,7 +148,7 @@ def run(args) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     shown = [e for name, e in envelopes.items() if name != "mismatch-cost"]
-    for item in verification.pairs:
+    for item in () if args.no_figures else verification.pairs:
         stem = item.pair.replace("/", "_")
         _save_figure(plot_error(item, shown), out / f"error_{stem}.png")
         _save_figure(plot_bode(item, structure.units.label(item.truth.output)),
@@ -156,7 +158,8 @@ def run(args) -> int:
     summary["sweeps"] = list(sweeps.names)
     atomic_write(out / "verification.json", json.dumps(summary, indent=2, allow_nan=False))
     print(verification.report())
-    print(f"figures and verification.json written to {out}")
+    print(f"{'verification.json' if args.no_figures else 'figures and verification.json'} "
+          f"written to {out}")
     failed = [c for p in verification.pairs for c in p.checks.values()
               if c.verified and c.passed is False]
     return 1 if args.strict and failed else 0
