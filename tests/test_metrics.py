@@ -43,8 +43,11 @@ def test_metrics_per_maneuver_and_pooled():
                  for i, m in enumerate(maneuvers)]
     metrics = time_domain_metrics(maneuvers, simulated)
     assert [m.rmse for m in metrics.maneuvers] == pytest.approx([0.5, 1.0])
+    assert metrics.maneuvers[1].rmse_per_output == pytest.approx(np.ones(8))
     assert metrics.rmse == pytest.approx(np.sqrt((0.25 + 1.0) / 2))
+    assert metrics.overall.rmse_per_output == pytest.approx(np.full(8, np.sqrt(0.625)))
     assert metrics.tic.shape == (8,)
+    assert metrics.tic == pytest.approx(tic([m.outputs for m in maneuvers], simulated))
     assert "m0" in metrics.report() and metrics.summary()["maneuvers"][1]["rmse"] == 1.0
     with pytest.raises(DataError, match="one simulated array per maneuver"):
         rmse([maneuvers[0].outputs], [])

@@ -184,10 +184,10 @@ def cross_spectra(records: Sequence[np.ndarray], dt: float, omega: np.ndarray, w
         n_segments += segments.shape[0]
         n_effective += effective_averages(segments.shape[0], taper, hop)
     if total is None:
-        shortest = min((np.asarray(r).shape[0] for r in records), default=0) * dt
-        raise VerificationError(f"no record is as long as the {window:.3g} s window (longest "
-                                f"record needed; shortest given {shortest:.3g} s); use shorter "
-                                f"windows")
+        longest = max((np.asarray(r).shape[0] for r in records), default=0) * dt
+        raise VerificationError(f"no record is as long as the {window:.3g} s window (the "
+                                f"longest is {longest:.3g} s); use windows of at most half "
+                                f"the record length")
     scale = 2.0 / (float(np.mean(taper ** 2)) * length * dt) / n_segments
     return Spectra(omega, total * scale, float(length * dt), n_segments, n_effective)
 

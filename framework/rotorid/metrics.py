@@ -51,9 +51,12 @@ def _stack(measured, simulated) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate([p[0] for p in pairs]), np.concatenate([p[1] for p in pairs])
 
 
-def rmse(measured, simulated) -> float:
-    """The paper's eq. 18 pooled over all samples (and maneuvers) and outputs."""
+def rmse(measured, simulated, per_output: bool = False):
+    """The paper's eq. 18 pooled over all samples (and maneuvers) and outputs; with
+    ``per_output`` the same per output channel, shape (n_o,)."""
     z, y = _stack(measured, simulated)
+    if per_output:
+        return np.sqrt(np.mean((z - y) ** 2, axis=0))
     return float(np.sqrt(np.mean((z - y) ** 2)))
 
 
@@ -90,52 +93,76 @@ def tic(measured, simulated, per_output: bool = True):
 
 @attrs.frozen(eq=False)
 class ManeuverMetrics:
-    """Metrics of one maneuver: RMSE and J_rms (data units), TIC per output (n_o,)."""
+    """Metrics of one maneuver (or of all pooled, ``name="all"``).
+
+    Attributes:
+        rmse, j_rms: over all outputs, data units.
+        rmse_per_output: RMSE of each output, shape (n_o,), data units.
+        tic: Theil's U1 of each output, shape (n_o,).
+    """
 
     name: str
     rmse: float
     j_rms: float
+    rmse_per_output: np.ndarray
     tic: np.ndarray
     outputs: tuple[str, ...] = OUTPUT_CHANNELS
 
+    @classmethod
+    def of(cls, name: str, measured, simulated, weights=None) -> "ManeuverMetrics":
+        return cls(name, rmse(measured, simulated), j_rms(measured, simulated, weights),
+                   rmse(measured, simulated, per_output=True), tic(measured, simulated))
+
     def summary(self) -> dict:
         return {"maneuver": self.name, "rmse": self.rmse, "j_rms": self.j_rms,
+                "rmse_per_output": dict(zip(self.outputs, map(float, self.rmse_per_output))),
                 "tic": dict(zip(self.outputs, map(float, self.tic)))}
+
+    def rows(self) -> list[str]:
+        return [f"{self.name:<20} {self.rmse:8.3f} {self.j_rms:8.3f}  RMSE "
+                + " ".join(f"{v:7.3f}" for v in self.rmse_per_output),
+                f"{'':<38}  TIC  " + " ".join(f"{v:7.3f}" for v in self.tic)]
 
 
 @attrs.frozen(eq=False)
 class TimeDomainMetrics:
-    """Metrics per maneuver and pooled over all of them."""
+    """Metrics per maneuver and pooled over all of them (``overall``)."""
 
     maneuvers: tuple[ManeuverMetrics, ...]
-    rmse: float
-    j_rms: float
-    tic: np.ndarray
-    outputs: tuple[str, ...] = OUTPUT_CHANNELS
+    overall: ManeuverMetrics
+
+    @property
+    def rmse(self) -> float:
+        return self.overall.rmse
+
+    @property
+    def j_rms(self) -> float:
+        return self.overall.j_rms
+
+    @property
+    def tic(self) -> np.ndarray:
+        return self.overall.tic
 
     def summary(self) -> dict:
-        return {"rmse": self.rmse, "j_rms": self.j_rms,
-                "tic": dict(zip(self.outputs, map(float, self.tic))),
-                "maneuvers": [m.summary() for m in self.maneuvers]}
+        return {**self.overall.summary(), "maneuvers": [m.summary() for m in self.maneuvers]}
 
     def report(self) -> str:
-        lines = [f"{'maneuver':<20} {'RMSE':>8} {'J_rms':>8}  TIC "
-                 + " ".join(f"{o:>6}" for o in self.outputs)]
-        for m in (*self.maneuvers, ManeuverMetrics("all", self.rmse, self.j_rms, self.tic)):
-            lines.append(f"{m.name:<20} {m.rmse:8.3f} {m.j_rms:8.3f}      "
-                         + " ".join(f"{t:6.3f}" for t in m.tic))
+        outputs = self.overall.outputs
+        lines = [f"{'maneuver':<20} {'RMSE':>8} {'J_rms':>8}       "
+                 + " ".join(f"{o:>7}" for o in outputs)]
+        for m in (*self.maneuvers, self.overall):
+            lines.extend(m.rows())
         return "\n".join(lines)
 
 
 def time_domain_metrics(maneuvers: ManeuverSet, simulated: Sequence[np.ndarray],
                         weights=None) -> TimeDomainMetrics:
-    """RMSE, J_rms and TIC of simulated outputs (one (N_i, 8) array per maneuver)."""
+    """RMSE, J_rms and TIC of simulated outputs (one (N_i, 8) array per maneuver), per
+    maneuver and pooled; ``weights`` (8,) is J_rms's output weighting."""
     if len(simulated) != len(maneuvers):
         raise DataError(f"{len(simulated)} simulated records for {len(maneuvers)} maneuvers")
-    per = tuple(
-        ManeuverMetrics(m.name, rmse(m.outputs, y), j_rms(m.outputs, y, weights),
-                        tic(m.outputs, y))
-        for m, y in zip(maneuvers, simulated))
-    measured = [m.outputs for m in maneuvers]
-    return TimeDomainMetrics(per, rmse(measured, simulated),
-                             j_rms(measured, simulated, weights), tic(measured, simulated))
+    per = tuple(ManeuverMetrics.of(m.name, m.outputs, y, weights)
+                for m, y in zip(maneuvers, simulated))
+    overall = ManeuverMetrics.of("all", [m.outputs for m in maneuvers], list(simulated),
+                                 weights)
+    return TimeDomainMetrics(per, overall)
