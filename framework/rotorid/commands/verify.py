@@ -111,6 +111,21 @@ def model_from_result(structure, result: Mapping, path: Path):
     return structure, structure.as_mapping(values)
 
 
+def _check_units(structure, result: Mapping, sweeps, path: Path) -> None:
+    from ..errors import DataFileError
+    from ..units import unit_system
+
+    expected = structure.units.name
+    declared = result.get("units")
+    if declared is not None and unit_system(declared).name != expected:
+        raise DataFileError(f"{path}: the estimate is in {declared!r} units but the model "
+                            f"structure in {expected!r}; use the model file it was estimated "
+                            f"with")
+    if unit_system(sweeps.units).name != expected:
+        raise DataFileError(f"the sweeps are in {sweeps.units!r} units but the model in "
+                            f"{expected!r}; convert the sweep files first")
+
+
 def _save_figure(figure, path: Path) -> None:
     from ..io import atomic_write
 
@@ -137,6 +152,7 @@ def run(args) -> int:
         sweeps = sweeps.merged(source.load(location))
     if any("kind" in m.metadata for m in sweeps):
         sweeps = sweeps.select(kind="sweep")
+    _check_units(structure, result, sweeps, result_path)
     if args.pairs:
         pairs = [p.strip() for p in args.pairs.split(",") if p.strip()]
     else:
