@@ -76,7 +76,7 @@ def rotor_loads(mu, rates, flap, flap_rate, inflow, pitch, *, solidity, lift_slo
     """
     col = lambda a, i: a[:, i, None, None]  # noqa: E731 - (B,) column broadcast over (ψ, r)
     mux, muy, muz = col(mu, 0), col(mu, 1), col(mu, 2)
-    pb, qb, rb = col(rates, 0), col(rates, 1), col(rates, 2)
+    pb, qb = col(rates, 0), col(rates, 1)
     beta = col(flap, 0) + col(flap, 1) * _C + col(flap, 2) * _S
     dbeta = (col(flap_rate, 0) + (col(flap_rate, 1) + col(flap, 2)) * _C
              + (col(flap_rate, 2) - col(flap, 1)) * _S)
