@@ -55,7 +55,7 @@ MULTISTEP_RECORD = 15.0  #: s, whole record at duration_scale 1
 
 def _choice(allowed):
     def convert(value):
-        values = (value,) if isinstance(value, str) else tuple(value)
+        values = (value,) if isinstance(value, (str, int)) else tuple(value)
         bad = [v for v in values if v not in allowed]
         if bad or not values:
             raise DataError(f"unknown or empty selection {list(values)}; choose from "
@@ -93,7 +93,8 @@ class DataSetConfig:
         airspeed_kt: trim airspeed, level flight.
         seed: seed of every random draw (sensor noise).
         sample_rate: Hz; substeps: RK4 steps per sample.
-        kinds, axes: the maneuver selection (subsets of :data:`KINDS`, ``long lat coll ped``).
+        kinds, axes, directions: the maneuver selection (subsets of :data:`KINDS`,
+            ``long lat coll ped`` and the multistep directions ``1, -1``).
         duration_scale: record-length factor in (0, 1]; 1 is the full data set.
         amplitude, step_width, sweep_amplitude: per-axis overrides (%, s, %).
         noise: sensor noise (or a mapping of σ per channel);
@@ -109,6 +110,7 @@ class DataSetConfig:
     substeps: int = attrs.field(default=2, converter=int, validator=_in_range(0, 100, "steps"))
     kinds: tuple = attrs.field(default=KINDS, converter=_choice(KINDS))
     axes: tuple = attrs.field(default=AXES, converter=_choice(AXES))
+    directions: tuple = attrs.field(default=(1, -1), converter=_choice((1, -1)))
     duration_scale: float = attrs.field(default=1.0, converter=float,
                                         validator=_in_range(0.0, 1.0, ""))
     amplitude: dict = attrs.field(factory=dict, converter=_per_axis(AMPLITUDE))
@@ -190,7 +192,8 @@ def maneuver_specs(config: DataSetConfig) -> tuple[ManeuverSpec, ...]:
             width = _on_grid(config.step_width[axis], dt)
             excitation = MULTISTEP_START + 7 * width
             trailing = max(MULTISTEP_RECORD * scale - excitation, 2.0)
-            for direction, label in ((1, "pos"), (-1, "neg")):
+            for direction in config.directions:
+                label = "pos" if direction > 0 else "neg"
                 signal = Multistep(kind, direction * config.amplitude[axis], width,
                                    start=MULTISTEP_START, trailing=trailing, sample_time=dt)
                 specs.append(ManeuverSpec(f"{config.condition}_{kind}_{axis}_{label}", kind,
@@ -198,7 +201,7 @@ def maneuver_specs(config: DataSetConfig) -> tuple[ManeuverSpec, ...]:
     return tuple(specs)
 
 
-@attrs.frozen
+@attrs.frozen(eq=False)
 class Job:
     """A condition to fly: plant trim (state, stick) and the data-set configuration."""
 
