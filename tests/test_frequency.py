@@ -113,7 +113,11 @@ def test_conditioned_estimate_separates_correlated_inputs():
     conditioned = estimate_responses(records, DT, ["lat", "long"], "p", omega)
     for estimate, system in zip(conditioned, (h1, h2)):
         _assert_within_random_error(estimate, analytic(*system, omega), 15)
+    # the loop makes the inputs strongly correlated at low frequency, weakly at high
+    input_coherence = conditioned[0].input_coherence
+    assert np.nanmax(input_coherence) > 0.9 and np.nanmin(input_coherence) < 0.1
     siso = estimate_responses([r[:, [0, 2]] for r in records], DT, ["lat"], "p", omega)[0]
+    assert np.all(siso.input_coherence == 0)
     normalised, _ = _normalised_errors(siso, analytic(*h1, omega))
     # the SISO estimate is biased by the correlated second input far beyond its error
     assert np.mean(normalised > 3.0) > 0.3 and normalised.max() > 10.0
@@ -126,6 +130,7 @@ def test_partial_coherence_matches_two_input_formula():
     result = miso_response(Spectra(np.array([1.0]), g, 10.0, 5, 5.0))
     g11, g22, gyy = g[0, 0, 0].real, g[0, 1, 1].real, g[0, 2, 2].real
     g12, g1y, g2y = g[0, 0, 1], g[0, 0, 2], g[0, 1, 2]
+    assert result.input_coherence[0] == pytest.approx([abs(g12) ** 2 / (g11 * g22)] * 2)
     g11_2 = g11 - abs(g12) ** 2 / g22
     g1y_2 = g1y - g12 * g2y / g22
     gyy_2 = gyy - abs(g2y) ** 2 / g22

@@ -202,12 +202,16 @@ class MisoEstimate:
         coherence: partial coherence of each input with the output, shape (M, n).
         multiple_coherence: coherence of the output with all inputs together, shape (M,).
         random_error: normalised random error of each response, shape (M, n).
+        input_coherence: multiple coherence of each input with the other inputs, shape
+            (M, n); zero for a single input. Above about 0.5 the inputs are too correlated
+            for reliable conditioned responses (Tischler & Remple, ch. 9).
     """
 
     response: np.ndarray
     coherence: np.ndarray
     multiple_coherence: np.ndarray
     random_error: np.ndarray
+    input_coherence: np.ndarray
 
 
 def random_error(coherence: np.ndarray, n_effective: float, n_conditioning: int = 0
@@ -258,7 +262,12 @@ def miso_response(spectra: Spectra) -> MisoEstimate:
     partial = np.clip(partial, 0.0, 1.0)
     multiple = np.clip(multiple, 0.0, 1.0)
     error = random_error(partial, spectra.n_effective, n - 1)
-    return MisoEstimate(response, partial, multiple, error)
+    if n == 1:
+        inputs = np.zeros_like(partial)
+    else:
+        inputs = np.clip(1.0 - 1.0 / np.einsum("mii->mi", np.linalg.inv(unit[:, :n, :n])).real,
+                         0.0, 1.0)
+    return MisoEstimate(response, partial, multiple, error, inputs)
 
 
 def composite(estimates: Sequence[MisoEstimate], windows: Sequence[float], omega: np.ndarray
@@ -291,6 +300,7 @@ def composite(estimates: Sequence[MisoEstimate], windows: Sequence[float], omega
         coherence=merge([e.coherence for e in estimates]),
         multiple_coherence=merge(np.broadcast_to(multiple, share.shape))[:, 0],
         random_error=merge([e.random_error for e in estimates]),
+        input_coherence=merge([e.input_coherence for e in estimates]),
     )
 
 
@@ -308,6 +318,8 @@ class FrequencyResponse:
         conditioned_on: the other inputs removed by conditioning.
         windows: window lengths in s that formed the composite.
         n_effective: independent averages per window, same order as ``windows``.
+        input_coherence: multiple coherence of ``input`` with the conditioning inputs,
+            shape (M,), or None; conditioned responses are unreliable where it exceeds ~0.5.
     """
 
     input: str
@@ -319,6 +331,8 @@ class FrequencyResponse:
     conditioned_on: tuple[str, ...] = attrs.field(default=(), converter=tuple)
     windows: tuple[float, ...] = attrs.field(default=(), converter=tuple)
     n_effective: tuple[float, ...] = attrs.field(default=(), converter=tuple)
+    input_coherence: np.ndarray | None = attrs.field(
+        default=None, converter=lambda c: None if c is None else _readonly(c))
 
     @property
     def pair(self) -> str:
@@ -381,7 +395,8 @@ def estimate_responses(records: Sequence[np.ndarray], dt: float, input_names: Se
             input=name, output=output_name, omega=omega, response=merged.response[:, i],
             coherence=merged.coherence[:, i], random_error=merged.random_error[:, i],
             conditioned_on=[o for o in input_names if o != name],
-            windows=[s.window for s in spectra], n_effective=[s.n_effective for s in spectra])
+            windows=[s.window for s in spectra], n_effective=[s.n_effective for s in spectra],
+            input_coherence=merged.input_coherence[:, i])
         for i, name in enumerate(input_names))
 
 

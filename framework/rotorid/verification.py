@@ -334,10 +334,26 @@ class PairVerification:
         with np.errstate(divide="ignore", invalid="ignore"):
             return self.analytic / self.truth.response
 
+    def input_coherence(self, threshold: float = COHERENCE_THRESHOLD) -> float | None:
+        """Median coherence of the pair's input with the conditioning inputs over the points
+        where the truth's coherence reaches ``threshold``; None if not conditioned.
+
+        Above about 0.5 the conditioned responses are unreliable (Tischler & Remple). The
+        median is used because coherence estimated from few averages is biased upwards
+        (about 1/n_d for independent inputs), so single points overstate the correlation."""
+        values = self.truth.input_coherence
+        if not self.truth.conditioned_on or values is None:
+            return None
+        with np.errstate(invalid="ignore"):
+            used = values[self.coherence >= threshold]
+        used = used[np.isfinite(used)]
+        return float(np.median(used)) if used.size else None
+
     def summary(self) -> dict:
         return {
             "pair": self.pair, "maneuvers": list(self.maneuvers),
             "conditioned_on": list(self.truth.conditioned_on),
+            "input_coherence": self.input_coherence(),
             "windows_s": list(self.truth.windows),
             "omega_range_rad_s": [float(self.omega.min()), float(self.omega.max())],
             "checks": {n: c.summary() for n, c in self.checks.items()},
@@ -378,8 +394,13 @@ class VerificationResult:
     def report(self) -> str:
         lines = []
         for p in self.pairs:
+            correlation = p.input_coherence()
+            note = "" if correlation is None else (
+                f", median input coherence with them {correlation:.2f}"
+                + (" — too correlated, conditioned responses unreliable"
+                   if correlation > 0.5 else ""))
             lines.append(f"{p.pair} ({len(p.maneuvers)} sweep(s); conditioned on "
-                         f"{', '.join(p.truth.conditioned_on) or 'nothing'})")
+                         f"{', '.join(p.truth.conditioned_on) or 'nothing'}{note})")
             for label, checks in (("simulated", p.checks), ("analytic", p.analytic_checks)):
                 for check in checks.values():
                     lines.append(f"  [{label}] {check.report()}")
