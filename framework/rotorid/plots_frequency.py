@@ -52,7 +52,8 @@ def plot_error(errors: Mapping[str, PairVerification] | PairVerification,
     Args:
         errors: one :class:`PairVerification`, or label → verification of the same pair for
             several models drawn side by side (e.g. ``{"no delays": a, "with delays": b}``).
-        envelopes: envelopes whose bounds are drawn dashed (unavailable ones are skipped).
+        envelopes: envelopes whose bounds are drawn dashed (unavailable ones are only named
+            in the legend; unverified ones are labelled so).
         analytic: draw ``ε`` of the analytic model response instead of the simulated one.
     """
     if isinstance(errors, PairVerification):
@@ -71,12 +72,13 @@ def plot_error(errors: Mapping[str, PairVerification] | PairVerification,
     for envelope, style in zip(envelopes, styles * 3):
         bounds = envelope.bounds(dense)
         if not bounds.available:
+            mag_axis.plot([], [], " ", label=f"{envelope.name}: not available")
             continue
         shown = np.where(bounds.extrapolated, np.nan, 1.0)
+        label = f"{envelope.name} bounds" + ("" if envelope.verified else " (unverified)")
         for axis, low, high in ((mag_axis, bounds.mag_lower_db, bounds.mag_upper_db),
                                 (phase_axis, bounds.phase_lower_deg, bounds.phase_upper_deg)):
-            axis.semilogx(dense, high * shown, style, color="k", linewidth=1.0,
-                          label=f"{envelope.name} bounds")
+            axis.semilogx(dense, high * shown, style, color="k", linewidth=1.0, label=label)
             axis.semilogx(dense, low * shown, style, color="k", linewidth=1.0)
     for index, (label, item) in enumerate(errors.items()):
         error = item.analytic_error if analytic else item.error
