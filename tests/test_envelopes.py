@@ -94,6 +94,7 @@ def test_muad_check_flags_missing_delay(manager):
     assert muad.check(np.exp(0.08j * omega), weak, omega).passed is True
     nothing = muad.check(np.ones(3), np.full(3, 0.2), np.array([1.0, 2.0, 3.0]))
     assert nothing.passed is None and nothing.status == "no coherent points"
+    assert "lower the envelope's threshold" in nothing.report()
     with pytest.raises(VerificationError, match="one length"):
         muad.check(np.ones(3), np.ones(4), np.ones(3))
 

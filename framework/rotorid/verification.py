@@ -191,6 +191,10 @@ class EnvelopeCheck:
                 f"{self.worst_margin_deg:+.1f}°")
         if self.cost is not None:
             line += f"; J = {self.cost:.1f}"
+        if self.passed is None and self.status == "no coherent points":
+            line += (f" — the truth's coherence never reaches {self.threshold:g}: check that "
+                     f"the sweeps excite this input and the output responds, or lower the "
+                     f"envelope's threshold")
         return f"{line} [{source}]"
 
 
