@@ -105,8 +105,9 @@ class Bo105Model:
         mu = hub_vel @ hub.T / c.tip_speed
         hub_rates = rates @ hub.T / omega_r
         if c.inflow == "baseline":
-            l1s, l1c = inflow.baseline_harmonics(lam[:, 0], mu)
-            lam3 = np.stack([lam[:, 0], l1s, l1c], axis=1)
+            lam3 = np.empty_like(flap)
+            lam3[:, 0] = lam[:, 0]
+            lam3[:, 1], lam3[:, 2] = inflow.baseline_harmonics(lam[:, 0], mu)
         else:
             lam3 = lam
         loads = rotor.rotor_loads(
@@ -115,7 +116,10 @@ class Bo105Model:
             lock_number=c.lock_number, profile_drag=c.profile_drag)
         spring = 0.5 * c.n_blades * c.flap_spring
         torque = loads.torque * self._disc * c.radius
-        hub_moment = np.stack([-spring * flap[:, 2], -spring * flap[:, 1], torque], axis=1)
+        hub_moment = np.empty_like(flap)
+        hub_moment[:, 0] = -spring * flap[:, 2]
+        hub_moment[:, 1] = -spring * flap[:, 1]
+        hub_moment[:, 2] = torque
         mr_force = (loads.force * self._disc) @ hub
         mr_moment = hub_moment @ hub + airframe.moment_about_cg(mr_force, c.hub_position)
 
@@ -128,40 +132,46 @@ class Bo105Model:
         force = mr_force + tr_force + fus_force + tp_force + fin_force
         moment = mr_moment + tr_moment + fus_moment + tp_moment + fin_moment
 
-        # --- rigid body (reference §2.1)
+        # --- rigid body (reference §2.1), written into dx in state order
+        n = self.index
+        dx = np.empty_like(x)
         p, q, r = rates.T
         sphi, cphi = np.sin(phi), np.cos(phi)
         sth, cth = np.sin(theta), np.cos(theta)
         g = c.gravity
         specific = force / c.mass
-        accel = specific + np.stack([-g * sth, g * cth * sphi, g * cth * cphi], axis=1)
-        accel -= airframe.cross(rates, vel)
+        accel = specific - airframe.cross(rates, vel)
+        accel[:, 0] -= g * sth
+        accel[:, 1] += g * cth * sphi
+        accel[:, 2] += g * cth * cphi
+        dx[:, 0:3] = accel
         gyro = airframe.cross(rates, rates @ self._inertia.T)
         rate_dot = (moment - gyro) @ self._inertia_inv.T
-        phi_dot = p + (q * sphi + r * cphi) * sth / cth
-        theta_dot = q * cphi - r * sphi
-        psi_dot = (q * sphi + r * cphi) / cth
+        dx[:, 3:6] = rate_dot
+        turn = (q * sphi + r * cphi) / cth
+        dx[:, n["phi"]] = p + turn * sth
+        dx[:, n["theta"]] = q * cphi - r * sphi
+        dx[:, n["psi"]] = turn
 
         # --- flap dynamics (body accelerations first: with e = 0 they do not depend on β̈)
-        flap_acc = rotor.flap_accelerations(
+        dx[:, 9:12] = flap_dot
+        dx[:, 12:15] = rotor.flap_accelerations(
             flap, flap_dot / omega_r, loads.flap_forcing, hub_rates,
             rate_dot @ hub.T / omega_r**2, c.flap_frequency_squared) * omega_r**2
 
         # --- inflow
         if c.inflow == "baseline":
-            lam_rate = inflow.uniform_inflow_rate(lam[:, 0], mu, loads.thrust)[:, None]
+            dx[:, self._inflow_slice] = omega_r * inflow.uniform_inflow_rate(
+                lam[:, 0], mu, loads.thrust)[:, None]
         else:
             forcing = np.stack([loads.thrust, loads.roll_moment, loads.pitch_moment], axis=1)
-            lam_rate = inflow.pitt_peters_rate(lam, mu, forcing)
-        lam_rate = lam_rate * omega_r
+            dx[:, self._inflow_slice] = omega_r * inflow.pitt_peters_rate(lam, mu, forcing)
+        dx[:, n["lambda0T"]] = lambda0t_rate
 
         # --- actuators
         command = self._mixing_centre + stick @ self._mixing.T
-        blade_rate = (command - blades) / c.actuator_time_constant
+        dx[:, -4:] = (command - blades) / c.actuator_time_constant
 
-        dx = np.concatenate([
-            accel, rate_dot, np.stack([phi_dot, theta_dot, psi_dot], axis=1),
-            flap_dot, flap_acc, lam_rate, lambda0t_rate[:, None], blade_rate], axis=1)
         rotor_power = torque * omega_r
         info = {"specific_force": specific, "thrust": loads.thrust * self._disc,
                 "rotor_power": rotor_power, "tail_power": tr_power,

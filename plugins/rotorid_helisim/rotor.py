@@ -28,10 +28,13 @@ RADII = 0.5 * (_R_NODES + 1.0)
 WEIGHTS = 0.5 * _R_WEIGHTS
 AZIMUTHS = 2.0 * np.pi * np.arange(N_AZIMUTH) / N_AZIMUTH
 
-_S = np.sin(AZIMUTHS)[None, :, None]
-_C = np.cos(AZIMUTHS)[None, :, None]
+#: harmonic basis (1, cosψ, sinψ) on the azimuth grid, (3, N_AZIMUTH)
+_BASIS = np.stack([np.ones(N_AZIMUTH), np.cos(AZIMUTHS), np.sin(AZIMUTHS)])
+#: projection of a (…, N_AZIMUTH) array on (mean, mean·cosψ, mean·sinψ)
+_PROJECT = _BASIS.T / N_AZIMUTH
+#: β' = Σ(dβ_k/dψ)·basis_k + (β1s·cosψ − β1c·sinψ): the second part is flap @ _TURN @ basis
+_TURN = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 _R = RADII[None, None, :]
-_W = WEIGHTS[None, None, :]
 
 
 @attrs.frozen(eq=False)
@@ -56,11 +59,6 @@ class RotorLoads:
     flap_forcing: np.ndarray
 
 
-def _mean(a):
-    """Azimuth mean and radial integral of a (B, N_AZIMUTH, 3) array → (B,)."""
-    return np.einsum("bij,j->b", a, WEIGHTS) / N_AZIMUTH
-
-
 def rotor_loads(mu, rates, flap, flap_rate, inflow, pitch, *, solidity, lift_slope, twist,
                 lock_number, profile_drag) -> RotorLoads:
     """Blade-element loads of the main rotor.
@@ -74,43 +72,45 @@ def rotor_loads(mu, rates, flap, flap_rate, inflow, pitch, *, solidity, lift_slo
         pitch: (B, 3) θ0, θ1s, θ1c in rad.
         solidity, lift_slope, twist, lock_number: rotor data; profile_drag: (d0, d1, d2).
     """
-    col = lambda a, i: a[:, i, None, None]  # noqa: E731 - (B,) column broadcast over (ψ, r)
-    mux, muy, muz = col(mu, 0), col(mu, 1), col(mu, 2)
-    pb, qb = col(rates, 0), col(rates, 1)
-    beta = col(flap, 0) + col(flap, 1) * _C + col(flap, 2) * _S
-    dbeta = (col(flap_rate, 0) + (col(flap_rate, 1) + col(flap, 2)) * _C
-             + (col(flap_rate, 2) - col(flap, 1)) * _S)
-    theta = col(pitch, 0) + twist * _R + col(pitch, 1) * _S + col(pitch, 2) * _C
-    lam = col(inflow, 0) + _R * (col(inflow, 1) * _S + col(inflow, 2) * _C)
-
-    ut = mux * _S + muy * _C + _R + _R * beta * (pb * _C - qb * _S)
-    up = lam - muz + _R * (dbeta - pb * _S - qb * _C) + beta * (mux * _C - muy * _S)
+    harmonic = _BASIS[1:]  # (cosψ, sinψ)
+    mux, muy = mu[:, 0:1], mu[:, 1:2]
+    pb, qb = rates[:, 0:1], rates[:, 1:2]
+    # azimuth functions, (B, N_AZIMUTH)
+    beta = flap @ _BASIS
+    dbeta = (flap_rate + flap @ _TURN) @ _BASIS
+    theta_az = pitch[:, [0, 2, 1]] @ _BASIS
+    lam_harm = inflow[:, [2, 1]] @ harmonic
+    ut_az = np.hstack([muy, mux]) @ harmonic  # μx·sinψ + μy·cosψ
+    rate_az = np.hstack([qb, pb]) @ harmonic  # p̄·sinψ + q̄·cosψ
+    tilt = np.hstack([pb, -qb]) @ harmonic  # p̄·cosψ − q̄·sinψ
+    skew = np.hstack([mux, -muy]) @ harmonic  # μx·cosψ − μy·sinψ
+    # section quantities on the (B, N_AZIMUTH, radius) grid
+    ut = ut_az[:, :, None] + _R * (1.0 + beta * tilt)[:, :, None]
+    up = ((inflow[:, 0] - mu[:, 2])[:, None, None]
+          + _R * (lam_harm + dbeta - rate_az)[:, :, None] + (beta * skew)[:, :, None])
+    theta = theta_az[:, :, None] + twist * _R
     lift = theta * ut * ut - up * ut  # normal force per (½ρ(ΩR)²c·a0·R dr)
-
-    half_sigma = 0.5 * solidity
-    thrust = half_sigma * lift_slope * _mean(lift)
     # profile drag c_d(α)·U_T² with α·U_T = θ·U_T − U_P: polynomial, no division by U_T
     d0, d1, d2 = profile_drag
     incidence = theta * ut - up
-    drag = d0 * ut * ut + d1 * ut * incidence + d2 * incidence * incidence
-    inplane = drag + lift_slope * (theta * up * ut - up * up)  # opposes rotation
+    inplane = (d0 * ut * ut + d1 * ut * incidence + d2 * incidence * incidence
+               + lift_slope * (theta * up * ut - up * up))  # opposes the rotation
 
-    normal = lift_slope * lift
-    force = half_sigma * np.stack([
-        _mean(normal * beta * _C - inplane * _S),
-        _mean(-normal * beta * _S - inplane * _C),
-        -_mean(normal),
-    ], axis=1)
-    torque = half_sigma * _mean(_R * inplane)
-    roll_moment = half_sigma * lift_slope * _mean(_R * lift * _S)
-    pitch_moment = half_sigma * lift_slope * _mean(_R * lift * _C)
+    # radial integrals (lift, r·lift, in-plane, r·in-plane), then azimuth harmonics
+    radial = np.stack([lift, _R * lift, inplane, _R * inplane]) @ WEIGHTS  # (4, B, N)
+    harm = radial @ _PROJECT  # (4, B, 3): mean, mean·cosψ, mean·sinψ
+    tilt_lift = (radial[0] * beta) @ _PROJECT
 
-    f = 0.5 * lock_number * np.einsum("bij,j->bi", _R * lift, WEIGHTS)  # (B, N_AZIMUTH)
-    flap_forcing = np.stack([
-        f.mean(axis=1),
-        2.0 * (f * _C[:, :, 0]).mean(axis=1),
-        2.0 * (f * _S[:, :, 0]).mean(axis=1),
-    ], axis=1)
+    half_sigma = 0.5 * solidity
+    thrust = half_sigma * lift_slope * harm[0, :, 0]
+    force = np.empty(np.shape(mu))
+    force[:, 0] = half_sigma * (lift_slope * tilt_lift[:, 1] - harm[2, :, 2])
+    force[:, 1] = half_sigma * (-lift_slope * tilt_lift[:, 2] - harm[2, :, 1])
+    force[:, 2] = -thrust
+    torque = half_sigma * harm[3, :, 0]
+    roll_moment = half_sigma * lift_slope * harm[1, :, 2]
+    pitch_moment = half_sigma * lift_slope * harm[1, :, 1]
+    flap_forcing = (0.5 * lock_number) * harm[1] * np.array([1.0, 2.0, 2.0])
     return RotorLoads(force, torque, thrust, roll_moment, pitch_moment, flap_forcing)
 
 
@@ -133,8 +133,8 @@ def flap_accelerations(flap, flap_rate, forcing, rates, accelerations, flap_freq
     d1c, d1s = flap_rate[:, 1], flap_rate[:, 2]
     pb, qb = rates[:, 0], rates[:, 1]
     dp, dq = accelerations[:, 0], accelerations[:, 1]
-    return np.stack([
-        forcing[:, 0] - k * b0,
-        forcing[:, 1] + 2.0 * pb + dq - k * b1c - 2.0 * d1s + b1c,
-        forcing[:, 2] - 2.0 * qb + dp - k * b1s + 2.0 * d1c + b1s,
-    ], axis=1)
+    out = np.empty(np.shape(flap))
+    out[:, 0] = forcing[:, 0] - k * b0
+    out[:, 1] = forcing[:, 1] + 2.0 * pb + dq - k * b1c - 2.0 * d1s + b1c
+    out[:, 2] = forcing[:, 2] - 2.0 * qb + dp - k * b1s + 2.0 * d1c + b1s
+    return out
