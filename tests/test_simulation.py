@@ -1,0 +1,226 @@
+"""The simulation engine against independent references.
+
+* no delays: the exact zero-order-hold solution built here from one matrix exponential;
+* delays: a fine-step trapezoidal integration of the delay differential equation whose grid
+  contains the delays exactly (so its history needs no interpolation);
+* sensitivities: central finite differences of the simulator;
+* frequency response: the DFT of a simulated pulse response at a fine sample time.
+"""
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+from rotorid import Maneuver, ManeuverSet, ModelStructure, FlightCondition
+from rotorid.errors import DataError, SimulationDivergedError, StructureError
+from rotorid.simulation import Simulator, simulate, sensitivities
+from rotorid.transfer import frequency_response, pair_response
+
+DAMPING = {"X_u": -0.5, "Z_w": -0.8, "M_q": -2.0, "L_p": -4.0, "N_r": -1.0, "Y_v": -0.3,
+           "L_lat": 1.0, "M_long": 0.5, "N_ped": 0.8, "Z_coll": -1.2}
+
+
+def stable_values(structure, seed=1, delays=None):
+    rng = np.random.default_rng(seed)
+    names = structure.parameter_names
+    values = structure.initial_values()
+    free = [i for i, n in enumerate(names) if not n.startswith("tau_")]
+    values[free] = rng.normal(size=len(free)) * 0.05
+    for name, value in {**DAMPING, **(delays or {})}.items():
+        if name in names:
+            values[names.index(name)] = value
+    return values
+
+
+def multistep_inputs(n, dt, seed, hold):
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * dt
+    knots = np.arange(0.0, t[-1] + 0.5, 0.5)
+    levels = rng.normal(size=(knots.size, 4))
+    levels[0] = 0.0  # records start in trim (the FOH history ramps from trim at t = −dt)
+    if hold == "zoh":
+        return t, levels[np.minimum((t / 0.5 + 1e-9).astype(int), knots.size - 1)]
+    return t, np.column_stack([np.interp(t, knots, levels[:, i]) for i in range(4)])
+
+
+def one_maneuver(t, u, name="m"):
+    return Maneuver(name, t, u, np.zeros((t.size, 8)))
+
+
+CONDITION = FlightCondition.from_airspeed(60.0, theta0_deg=3.0, phi0_deg=-2.0)
+
+
+@pytest.mark.parametrize("units", ["flight-test", "si"])
+def test_no_delay_matches_exact_zoh_solution(units):
+    structure = ModelStructure.six_dof(CONDITION, units=units)
+    values = stable_values(structure)
+    t, u = multistep_inputs(400, 0.02, 3, "zoh")
+    m = Maneuver("m", t, u, np.zeros((t.size, 8)), units=units)
+    y = simulate(structure, values, ManeuverSet([m]))[0]
+
+    a, b, c, d = structure.matrices(values)
+    block = np.zeros((12, 12))
+    block[:8, :8], block[:8, 8:] = a, b
+    ex = scipy.linalg.expm(block * 0.02)
+    x, expected = np.zeros(8), []
+    for k in range(t.size):
+        expected.append(c @ x + d @ u[k])
+        x = ex[:8, :8] @ x + ex[:8, 8:] @ u[k]
+    expected = np.array(expected)
+    assert np.max(np.abs(y - expected)) <= 1e-9 * np.max(np.abs(expected))
+
+
+def dde_reference(structure, values, t, u, dt, hold, fine):
+    """Trapezoidal integration on a grid of step ``fine`` that contains every delay."""
+    table = structure.terms(values)
+    a0 = structure.known_state_matrix()
+    sub = int(round(dt / fine))
+    steps = (t.size - 1) * sub
+    grid = np.arange(steps + 1) * fine
+    if hold == "zoh":
+        u_fine = u[np.minimum(np.floor(grid / dt + 1e-9).astype(int), t.size - 1)]
+    else:
+        u_fine = np.column_stack([np.interp(grid, t, u[:, i]) for i in range(4)])
+    lags = np.rint(table.delay / fine).astype(int)
+    assert np.allclose(lags * fine, table.delay), "delays must lie on the fine grid"
+    x = np.zeros((steps + 1, 8))
+
+    def rhs(i, xi, interval):
+        """ẋ at grid point i; held inputs take the value of the step's own interval."""
+        dx = a0 @ xi
+        for eq, src, g, lag in zip(table.equation, table.source, table.gain, lags):
+            if src < 8:
+                j = i - lag
+                z = xi[src] if lag == 0 else (x[j, src] if j >= 0 else 0.0)
+            else:
+                j = (interval if hold == "zoh" else i) - lag
+                z = u_fine[j, src - 8] if j >= 0 else 0.0
+            dx[eq] += g * z
+        return dx
+
+    for i in range(steps):
+        k1 = rhs(i, x[i], i)
+        predictor = x[i] + fine * k1
+        x[i + 1] = predictor
+        x[i + 1] = x[i] + 0.5 * fine * (k1 + rhs(i + 1, predictor, i))
+    return x[::sub]
+
+
+@pytest.mark.parametrize("dt", [0.02, 0.01])
+@pytest.mark.parametrize("hold", ["zoh", "foh"])
+def test_fractional_delays_match_fine_dde_solution(dt, hold):
+    delays = {"tau_L_p": 0.037, "tau_L_lat": 0.037, "tau_M_long": 0.061, "tau_M_q": 0.013,
+              "tau_L_q": 0.005}
+    structure = ModelStructure.six_dof(CONDITION).with_delays(
+        [name[4:] for name in delays])
+    values = stable_values(structure, delays=delays)
+    t, u = multistep_inputs(int(4.0 / dt), dt, 5, hold)
+    y = simulate(structure, values, ManeuverSet([one_maneuver(t, u)], hold=hold))[0]
+    x = dde_reference(structure, values, t, u, dt, hold, fine=0.0005)
+    _, _, c, _ = structure.matrices(values)
+    for channel in ("q", "theta", "p", "phi", "r"):
+        k = structure.outputs.index(channel)
+        ref = (x @ c.T)[:, k]
+        rel_rms = np.sqrt(np.mean((y[:, k] - ref) ** 2) / np.mean(ref**2))
+        assert rel_rms < 1e-3, (channel, rel_rms)
+
+
+def test_treating_held_inputs_as_interpolated_would_be_wrong():
+    """The hold matters: a ZOH record simulated as FOH departs from the exact solution."""
+    structure = ModelStructure.six_dof(CONDITION).with_delays(["L_lat"])
+    values = stable_values(structure, delays={"tau_L_lat": 0.037})
+    t, u = multistep_inputs(200, 0.02, 7, "zoh")
+    zoh = simulate(structure, values, ManeuverSet([one_maneuver(t, u)], hold="zoh"))[0]
+    foh = simulate(structure, values, ManeuverSet([one_maneuver(t, u)], hold="foh"))[0]
+    p = structure.outputs.index("p")
+    assert np.sqrt(np.mean((zoh[:, p] - foh[:, p]) ** 2)) > 1e-3 * np.sqrt(np.mean(zoh[:, p] ** 2))
+
+
+@pytest.mark.parametrize("hold", ["zoh", "foh"])
+def test_sensitivities_match_central_differences(hold):
+    delays = {"tau_L_p": 0.037, "tau_L_lat": 0.061, "tau_M_q": 0.013, "tau_X_long": 0.005}
+    structure = ModelStructure.six_dof(CONDITION).with_delays([n[4:] for n in delays])
+    values = stable_values(structure, delays=delays)
+    t, u = multistep_inputs(150, 0.02, 9, hold)
+    t2, u2 = multistep_inputs(90, 0.025, 10, hold)
+    maneuvers = ManeuverSet([one_maneuver(t, u, "a"), one_maneuver(t2, u2, "b")], hold=hold)
+    _, sens = sensitivities(structure, values, maneuvers)
+    simulator = Simulator(structure, maneuvers)
+    for k, name in enumerate(structure.parameter_names):
+        h = 1e-7 if name.startswith("tau_") else 1e-6
+        up, down = values.copy(), values.copy()
+        up[k] += h
+        down[k] -= h
+        for i, (yp, ym) in enumerate(zip(simulator.outputs(up), simulator.outputs(down))):
+            fd = (yp - ym) / (2 * h)
+            scale = np.max(np.abs(fd))
+            if scale == 0:
+                assert np.max(np.abs(sens[i][:, k, :])) == 0
+                continue
+            assert np.max(np.abs(sens[i][:, k, :] - fd)) <= 1e-5 * scale, (name, i)
+
+
+def test_batched_maneuvers_equal_single_runs_and_initial_state():
+    structure = ModelStructure.six_dof(CONDITION).with_delays(["M_long"])
+    values = stable_values(structure, delays={"tau_M_long": 0.05})
+    t, u = multistep_inputs(120, 0.02, 11, "zoh")
+    short = one_maneuver(t[:60], u[:60] * 2, "short")
+    x0 = np.linspace(-1, 1, 8)
+    long = Maneuver("long", t, u, np.zeros((t.size, 8)), initial_state=x0)
+    together = simulate(structure, values, ManeuverSet([long, short]))
+    alone = [simulate(structure, values, ManeuverSet([m]))[0] for m in (long, short)]
+    for batched, single in zip(together, alone):
+        assert np.allclose(batched, single, rtol=1e-12, atol=1e-12 * np.abs(single).max())
+    _, _, c, _ = structure.matrices(values)
+    assert np.allclose(together[0][0], c @ x0 + 0.0)
+
+
+def test_frequency_response_matches_pulse_response_dft():
+    structure = ModelStructure.six_dof(CONDITION).with_delays(["L_lat", "M_long", "L_p"])
+    values = structure.as_vector({**DAMPING, "M_u": 0.2, "M_w": -0.05, "L_v": -0.2,
+                                  "tau_L_lat": 0.06, "tau_M_long": 0.04, "tau_L_p": 0.02})
+    slowest = np.linalg.eigvals(structure.matrices(values)[0]).real.max()
+    assert slowest < -0.1, "the pulse response must decay within the record"
+    dt, n = 0.002, 40000
+    t = np.arange(n) * dt
+    omega = np.array([0.5, 1.0, 2.0, 5.0, 10.0])
+    analytic = frequency_response(structure, values, omega)
+    for j in (0, 1):
+        u = np.zeros((n, 4))
+        u[0, j] = 1.0
+        y = simulate(structure, values, ManeuverSet([one_maneuver(t, u)]))[0]
+        # DFT of the response to a pulse of width dt, corrected for the pulse's own spectrum.
+        phase = np.exp(-1j * np.outer(omega, t))
+        pulse = (1 - np.exp(-1j * omega * dt)) / (1j * omega)
+        estimate = (phase @ y) * dt / pulse[:, None]
+        for k in (2, 5, 6):  # q, p, phi
+            ref = analytic[:, k, j]
+            assert np.all(np.abs(estimate[:, k] - ref) <= 2e-3 * np.abs(ref) + 1e-9), (j, k)
+    single = pair_response(structure, values, omega, "p", "lat")
+    assert np.allclose(single, analytic[:, 5, 1])
+
+
+def test_divergence_is_reported_not_crashed():
+    structure = ModelStructure.six_dof(CONDITION)
+    values = stable_values(structure)
+    values[structure.parameter_names.index("L_p")] = 50.0   # violently unstable roll
+    t, u = multistep_inputs(1500, 0.02, 3, "zoh")
+    with pytest.raises(SimulationDivergedError, match="diverged"):
+        simulate(structure, values, ManeuverSet([one_maneuver(t, u)]))
+
+
+def test_bad_inputs_are_rejected_clearly():
+    structure = ModelStructure.six_dof(CONDITION)
+    t, u = multistep_inputs(50, 0.02, 3, "zoh")
+    maneuvers = ManeuverSet([one_maneuver(t, u)])
+    with pytest.raises(StructureError, match="60 free parameters"):
+        simulate(structure, np.zeros(3), maneuvers)
+    with pytest.raises(StructureError, match="non-finite"):
+        simulate(structure, np.full(60, np.nan), maneuvers)
+    with pytest.raises(DataError, match="initial_states"):
+        simulate(structure, None, maneuvers, initial_states=np.zeros((2, 8)))
+    si = ManeuverSet([Maneuver("m", t, u, np.zeros((t.size, 8)), units="si")])
+    with pytest.raises(DataError, match="units"):
+        simulate(structure, None, si)
+    with pytest.raises(StructureError, match="unknown output"):
+        pair_response(structure, None, [1.0], "x", "lat")
