@@ -182,6 +182,18 @@ def test_flight_test_units_per_percent_stick(model, hover_trim, hover):
                                rtol=1e-9, atol=1e-12)
 
 
+def test_bad_options_are_named(model, hover_trim):
+    from rotorid.errors import StructureError
+
+    with pytest.raises(StructureError, match="unknown unit system"):
+        linearize(model, hover_trim, units="imperial")
+    other = Bo105Model(Bo105Config(inflow="pitt-peters"))
+    with pytest.raises(StructureError, match="other states"):
+        linearize(other, hover_trim)
+    with pytest.raises(ValueError):
+        hover_trim.state[0] = 1.0  # results are read-only values
+
+
 def test_as_dict_and_cli_json(capsys, hover):
     data = json.loads(json.dumps(hover.as_dict()))
     assert data["states"] == list(PADFIELD_STATES)

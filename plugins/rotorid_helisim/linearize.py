@@ -151,6 +151,9 @@ def linearize(model: Bo105Model, trim: Trim, full: bool = False, units: str = "s
             b = b * s[:, None]
         else:
             a, b = convert_state_space(a, b, names, controls, system, SI)
+    eigenvalues = _sorted_eigenvalues(a)
+    for array in (a, b, eigenvalues):
+        array.setflags(write=False)
     return LinearModel(states=tuple(names), controls=tuple(controls), A=a, B=b,
-                       eigenvalues=_sorted_eigenvalues(a), units=system.name,
+                       eigenvalues=eigenvalues, units=system.name,
                        airspeed_kt=trim.airspeed_kt, full=bool(full))

@@ -254,11 +254,14 @@ def trim(model: Bo105Model, airspeed_kt: float, climb_rate_mps: float = 0.0,
                 f"is probably outside the flight envelope")
     x, stick = problem.states(z[None, :])
     info = model.loads(x, stick)
+    state, stick, blades = x[0], stick[0], np.degrees(z[0:4])
+    for array in (state, stick, blades):
+        array.setflags(write=False)
     power_kw = float(info["power"][0]) / 1000.0
     result = Trim(
         airspeed_kt=float(airspeed_kt), climb_rate_mps=float(climb_rate_mps),
-        sideslip_deg=float(sideslip_deg), state=x[0], state_names=model.state_names,
-        stick=stick[0], blade_angles_deg=np.degrees(z[0:4]), theta_deg=math.degrees(z[4]),
+        sideslip_deg=float(sideslip_deg), state=state, state_names=model.state_names,
+        stick=stick, blade_angles_deg=blades, theta_deg=math.degrees(z[4]),
         phi_deg=math.degrees(z[5]), power_kw=power_kw, iterations=iterations)
     _check_limits(result, model)
     return result
