@@ -92,6 +92,29 @@ def test_thrust_matches_padfield_closed_form(mu_x):
                                                                                         rel=1e-12)
 
 
+def test_quadrature_is_exact(monkeypatch):
+    """The 12 × 3 grid integrates the polynomial integrands exactly: a 29 × 6 grid shifted in
+    azimuth gives the same loads for a general forward-flight rotor state."""
+    rng = np.random.default_rng(7)
+    args = [rng.uniform(-0.05, 0.05, (4, 3)) + base for base in (
+        np.array([0.25, 0.03, 0.01]), np.zeros(3), np.array([0.03, 0.0, 0.0]), np.zeros(3),
+        np.array([0.03, 0.0, 0.0]), np.array([0.2, 0.0, 0.0]))]
+    options = dict(solidity=CONFIG.solidity, lift_slope=CONFIG.lift_slope, twist=CONFIG.twist,
+                   lock_number=CONFIG.lock_number, profile_drag=CONFIG.profile_drag)
+    coarse = rotor.rotor_loads(*args, **options)
+    n, nodes = 29, np.polynomial.legendre.leggauss(6)
+    psi = 0.37 + 2 * np.pi * np.arange(n) / n
+    basis = np.stack([np.ones(n), np.cos(psi), np.sin(psi)])
+    monkeypatch.setattr(rotor, "_BASIS", basis)
+    monkeypatch.setattr(rotor, "_PROJECT", basis.T / n)
+    monkeypatch.setattr(rotor, "WEIGHTS", 0.5 * nodes[1])
+    monkeypatch.setattr(rotor, "_R", (0.5 * (nodes[0] + 1))[None, None, :])
+    fine = rotor.rotor_loads(*args, **options)
+    for name in ("force", "torque", "thrust", "roll_moment", "pitch_moment", "flap_forcing"):
+        np.testing.assert_allclose(getattr(coarse, name), getattr(fine, name), rtol=1e-11,
+                                   atol=1e-15, err_msg=name)
+
+
 def test_hover_thrust_check_value():
     """Reference §2.4: with W = mg and λ0 = √(C_T/2), hover θ0 ≈ 14.2°."""
     ct = CONFIG.mass * CONFIG.gravity / (CONFIG.air_density * math.pi * CONFIG.radius**2
