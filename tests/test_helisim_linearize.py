@@ -299,3 +299,16 @@ def test_pitt_peters_option_moves_the_rotor_modes():
     assert -roll.real / abs(roll) == pytest.approx(0.34, abs=0.05)
     reduced = linearize(model, hover_trim)
     assert reduced.derivative("p", "q") > 1.5 * REFERENCE_A[5, 2]
+
+
+def test_documented_example_runs():
+    """The Python example of docs/truth-model.md runs as written."""
+    import pathlib
+    import re
+
+    text = (pathlib.Path(__file__).parent.parent / "docs" / "truth-model.md").read_text()
+    code = re.search(r"```python\n(.*?)```", text, re.S).group(1)
+    namespace = {}
+    exec(compile(code, "docs/truth-model.md", "exec"), namespace)
+    assert namespace["lin"].controls == ("long", "lat", "coll", "ped")
+    assert namespace["hover"].airspeed_kt == 0.0
