@@ -1,0 +1,186 @@
+"""Time of one outputs-plus-sensitivities evaluation on the paper-size problem.
+
+The problem: 16 maneuvers of 15 s at 50 Hz (3211/2311 multisteps on each axis with a doublet on
+a second axis, zero-order hold), 8 outputs, the fully populated 60-parameter six-DoF structure
+at 70 kt, once without delays and once with the paper's 8 delays (``PAPER_DELAYED``, 68
+parameters).
+
+For each case, in the same run:
+
+* rotorid: ``Simulator.outputs_and_sensitivities`` (outputs and ∂y/∂θ for every parameter);
+* reference without delays: ``scipy.signal.dlsim`` of the ZOH-discretised system
+  (``scipy.signal.cont2discrete``) per maneuver, with central finite differences per parameter
+  (2·60 + 1 discretisations, 16 simulations each);
+* reference with delays: scipy has no delayed simulation, so the reference is central finite
+  differences over rotorid's own outputs-only path (2·68 + 1 batched ``Simulator.outputs``
+  calls). It measures what the sensitivity recursion saves over re-simulating, not scipy.
+
+Every figure is the median wall time of several repeats (the machine may be shared). BLAS runs
+on one thread unless ``--threads`` says otherwise. Targets (2 cores): ≤ 30 ms without delays,
+≤ 60 ms with the 8 delays, ≥ 50× faster than the reference. The largest difference between
+rotorid's sensitivities and the reference's finite differences is printed as a sanity check.
+
+    .venv/bin/python benchmarks/bench_simulation.py [--repeats 9] [--reference-repeats 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+
+def _threads_from_argv(default: str = "1") -> str:
+    """The --threads value, read before numpy is imported (BLAS fixes its pool at load)."""
+    for k, arg in enumerate(sys.argv):
+        if arg == "--threads" and k + 1 < len(sys.argv):
+            return sys.argv[k + 1]
+        if arg.startswith("--threads="):
+            return arg.split("=", 1)[1]
+    return default
+
+
+for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_variable] = _threads_from_argv()
+
+import platform  # noqa: E402
+import statistics  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+import scipy.signal  # noqa: E402
+from rotorid_signals.signals import Multistep  # noqa: E402
+
+from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure  # noqa: E402
+from rotorid.simulation import Simulator  # noqa: E402
+from rotorid.structure import PAPER_DELAYED  # noqa: E402
+
+DT = 0.02
+DURATION = 15.0
+N_MANEUVERS = 16
+TARGET_MS = {False: 30.0, True: 60.0}
+TARGET_RATIO = 50.0
+#: Dominant damping and control terms of a stable 70 kt model (flight-test units).
+DAMPING = {"X_u": -0.03, "Z_w": -0.8, "M_q": -1.6, "L_p": -6.0, "N_r": -0.8, "Y_v": -0.15,
+           "M_long": 0.6, "L_lat": 1.8, "Z_coll": -1.0, "N_ped": 0.9, "N_v": 0.02}
+#: The paper's delays τ1 … τ8 in s, fractions of the 20 ms sample time included.
+DELAYS = {"L_p": 0.013, "L_q": 0.047, "L_long": 0.061, "L_lat": 0.037, "M_p": 0.024,
+          "M_q": 0.008, "M_long": 0.052, "M_lat": 0.071}
+
+
+def problem(delayed: bool) -> tuple[ModelStructure, np.ndarray, ManeuverSet]:
+    """Structure, parameter vector and maneuvers of the paper-size problem."""
+    condition = FlightCondition.from_airspeed(70.0, theta0_deg=1.2, phi0_deg=-1.5)
+    structure = ModelStructure.six_dof(condition)
+    if delayed:
+        structure = structure.with_delays(PAPER_DELAYED)
+    rng = np.random.default_rng(2024)
+    names = structure.parameter_names
+    values = np.array([0.0 if n.startswith("tau_") else rng.normal(scale=0.02) for n in names])
+    for name, value in DAMPING.items():
+        values[names.index(name)] = value
+    if delayed:
+        for name, tau in DELAYS.items():
+            values[names.index(f"tau_{name}")] = tau
+    time_axis = np.arange(int(round(DURATION / DT)) + 1) * DT
+    maneuvers = []
+    for i in range(N_MANEUVERS):
+        axis, second = i % 4, (i + 1 + i // 4) % 4
+        inputs = np.zeros((time_axis.size, 4))
+        kind = "3211" if i % 8 < 4 else "2311"
+        sign = 1.0 if i % 2 == 0 else -1.0
+        inputs[:, axis] = Multistep(kind, 3.0 * sign, 0.4 + 0.1 * (i // 4), start=1.0,
+                                    sample_time=DT)(time_axis)
+        inputs[:, second] += Multistep("doublet", 1.0, 0.6, start=7.0, sample_time=DT)(time_axis)
+        maneuvers.append(Maneuver(f"m{i:02d}", time_axis, inputs,
+                                  np.zeros((time_axis.size, 8))))
+    return structure, values, ManeuverSet(maneuvers)
+
+
+def median_time(function, repeats: int) -> tuple[float, object]:
+    """Median wall time in s over ``repeats`` calls, and the last result."""
+    times, result = [], None
+    for _ in range(repeats):
+        start = time.perf_counter()
+        result = function()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times), result
+
+
+def _dlsim_outputs(structure, values, maneuvers) -> list[np.ndarray]:
+    a, b, c, d = structure.matrices(values)
+    system = scipy.signal.cont2discrete((a, b, c, d), DT, method="zoh")
+    return [scipy.signal.dlsim(system[:4] + (DT,), m.inputs, m.time)[1] for m in maneuvers]
+
+
+def central_differences(outputs, values: np.ndarray, steps: np.ndarray):
+    """Outputs and (N_i, P, 8) central-difference sensitivities of ``outputs(values)``."""
+    base = outputs(values)
+    columns = []
+    for k, h in enumerate(steps):
+        up, down = values.copy(), values.copy()
+        up[k] += h
+        down[k] -= h
+        columns.append([(yp - ym) / (2 * h) for yp, ym in zip(outputs(up), outputs(down))])
+    return base, [np.stack([col[i] for col in columns], axis=1) for i in range(len(base))]
+
+
+def worst_difference(sens, reference) -> float:
+    """Largest |rotorid − reference| over all samples, relative to each parameter's scale."""
+    worst = 0.0
+    for fast, ref in zip(sens, reference):
+        scale = np.maximum(np.abs(ref).max(axis=(0, 2)), 1e-300)
+        worst = max(worst, float((np.abs(fast - ref).max(axis=(0, 2)) / scale).max()))
+    return worst
+
+
+def run_case(delayed: bool, repeats: int, reference_repeats: int) -> None:
+    structure, values, maneuvers = problem(delayed)
+    simulator = Simulator(structure, maneuvers)
+    simulator.outputs_and_sensitivities(values)  # warm-up
+    fast, (_, sens) = median_time(lambda: simulator.outputs_and_sensitivities(values), repeats)
+    steps = np.where(structure.is_delay(), 1e-6, 1e-6 * np.maximum(1.0, np.abs(values)))
+    if delayed:
+        label = "central differences over rotorid's outputs-only path"
+        outputs = simulator.outputs
+    else:
+        label = "scipy.signal.dlsim (ZOH-discretised) per maneuver, central differences"
+        outputs = lambda v: _dlsim_outputs(structure, v, maneuvers)  # noqa: E731
+    slow, (_, reference) = median_time(lambda: central_differences(outputs, values, steps),
+                                       reference_repeats)
+    target = TARGET_MS[delayed]
+    ratio = slow / fast
+    title = f"with the 8 paper delays ({structure.n_parameters} parameters)" if delayed else \
+        f"without delays ({structure.n_parameters} parameters)"
+    print(f"\n{title}")
+    print(f"  rotorid outputs + sensitivities : {fast * 1e3:9.1f} ms (median of {repeats}; "
+          f"target ≤ {target:g} ms: {'met' if fast * 1e3 <= target else 'NOT met'})")
+    print(f"  reference                       : {slow * 1e3:9.1f} ms (median of "
+          f"{reference_repeats}) — {label}")
+    print(f"  ratio reference / rotorid       : {ratio:9.1f}× (target ≥ {TARGET_RATIO:g}×: "
+          f"{'met' if ratio >= TARGET_RATIO else 'NOT met'})")
+    print(f"  max |rotorid − reference| / scale per parameter: "
+          f"{worst_difference(sens, reference):.1e} (finite-difference truncation and rounding)")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=9,
+                        help="repeats of the rotorid evaluation (median reported)")
+    parser.add_argument("--reference-repeats", type=int, default=3,
+                        help="repeats of the reference (median reported)")
+    parser.add_argument("--threads", default="1",
+                        help="BLAS threads (set before numpy loads; default 1)")
+    args = parser.parse_args()
+    samples = int(round(DURATION / DT)) + 1
+    print(f"paper-size problem: {N_MANEUVERS} maneuvers × {samples} samples at {1 / DT:g} Hz, "
+          f"8 outputs")
+    print(f"python {platform.python_version()}, numpy {np.__version__}, scipy "
+          f"{scipy.__version__}, {os.cpu_count()} CPUs, BLAS threads "
+          f"{os.environ['OPENBLAS_NUM_THREADS']}")
+    for delayed in (False, True):
+        run_case(delayed, args.repeats, args.reference_repeats)
+
+
+if __name__ == "__main__":
+    main()
