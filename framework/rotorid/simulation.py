@@ -18,6 +18,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from . import blas
 from .data import ManeuverSet
 from .discretisation import DiscreteMaps, discrete_maps
 from .errors import DataError, SimulationDivergedError
@@ -141,6 +142,10 @@ class Simulator:
 
     # ----------------------------------------------------------------- engine
     def _run(self, values, with_sensitivities: bool):
+        with blas.single_threaded():
+            return self._run_single_threaded(values, with_sensitivities)
+
+    def _run_single_threaded(self, values, with_sensitivities: bool):
         vector = (self.structure.initial_values() if values is None
                   else self.structure.as_vector(values))
         outputs: list = [None] * len(self.maneuvers)

@@ -1,0 +1,125 @@
+"""The small model protocol estimators work on, and its adapter for linear structures.
+
+An estimator never needs to know what it identifies. Any object with
+
+* ``parameter_names`` (tuple of str) and ``output_names`` (tuple of str),
+* ``initial_values() -> (P,)`` and ``bounds() -> ((P,), (P,))``,
+* ``simulate(values, maneuvers) -> list of (N_i, n_o) arrays``,
+
+is identifiable; ``sensitivities(values, maneuvers) -> (outputs, list of (N_i, P, n_o))`` is
+optional (central finite differences are used otherwise, see
+:func:`finite_difference_sensitivities`). Outputs are compared with the maneuvers' measured
+outputs picked by ``output_names``.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from .data import OUTPUT_CHANNELS, ManeuverSet
+from .errors import StructureError
+from .simulation import Simulator
+from .structure import ModelStructure
+
+
+@runtime_checkable
+class IdentifiableModel(Protocol):
+    """The protocol of :mod:`rotorid.models` (see the module docstring)."""
+
+    parameter_names: tuple[str, ...]
+    output_names: tuple[str, ...]
+
+    def initial_values(self) -> np.ndarray: ...
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def simulate(self, values, maneuvers: ManeuverSet) -> list[np.ndarray]: ...
+
+
+def measured_outputs(model, maneuvers: ManeuverSet) -> list[np.ndarray]:
+    """The measured outputs the model's ``output_names`` select, (N_i, n_o) per maneuver."""
+    unknown = [n for n in model.output_names if n not in OUTPUT_CHANNELS]
+    if unknown:
+        raise StructureError(f"model outputs {unknown} are not maneuver channels "
+                             f"({', '.join(OUTPUT_CHANNELS)})")
+    columns = [OUTPUT_CHANNELS.index(n) for n in model.output_names]
+    return [m.outputs[:, columns] for m in maneuvers]
+
+
+def finite_difference_sensitivities(model, values, maneuvers: ManeuverSet,
+                                    relative_step: float = 1e-6):
+    """Outputs and central-difference sensitivities, per maneuver (N_i, P, n_o)."""
+    values = np.asarray(values, dtype=float)
+    outputs = model.simulate(values, maneuvers)
+    lower, upper = model.bounds()
+    sens = [np.zeros((y.shape[0], values.size, y.shape[1])) for y in outputs]
+    for k in range(values.size):
+        h = relative_step * max(abs(values[k]), 1.0)
+        up, down = values.copy(), values.copy()
+        up[k] = min(values[k] + h, upper[k])
+        down[k] = max(values[k] - h, lower[k])
+        width = up[k] - down[k]
+        for s, yp, ym in zip(sens, model.simulate(up, maneuvers), model.simulate(down, maneuvers)):
+            s[:, k, :] = (yp - ym) / width
+    return outputs, sens
+
+
+class LinearModel:
+    """A :class:`ModelStructure` seen through the model protocol.
+
+    Simulators are cached per maneuver set, so repeated evaluations reuse their setup.
+    ``enforce_signs`` turns the derivatives' sign priors into bounds.
+    """
+
+    def __init__(self, structure: ModelStructure, enforce_signs: bool = False):
+        self.structure = structure
+        self.enforce_signs = enforce_signs
+        self.parameter_names = structure.parameter_names
+        self.output_names = structure.outputs
+        self._simulators: dict[int, tuple[ManeuverSet, Simulator]] = {}
+
+    def initial_values(self) -> np.ndarray:
+        return self.structure.initial_values()
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.structure.bounds(enforce_signs=self.enforce_signs)
+
+    def _simulator(self, maneuvers: ManeuverSet) -> Simulator:
+        cached = self._simulators.get(id(maneuvers))
+        if cached is None or cached[0] is not maneuvers:
+            cached = (maneuvers, Simulator(self.structure, maneuvers))
+            self._simulators[id(maneuvers)] = cached
+        return cached[1]
+
+    def simulate(self, values, maneuvers: ManeuverSet) -> list[np.ndarray]:
+        return self._simulator(maneuvers).outputs(values)
+
+    def sensitivities(self, values, maneuvers: ManeuverSet):
+        return self._simulator(maneuvers).outputs_and_sensitivities(values)
+
+    @property
+    def signs(self) -> dict[str, str]:
+        return {d.name: d.sign.value for d in self.structure.free_derivatives}
+
+    @property
+    def fixed(self) -> dict[str, float]:
+        return {d.name: d.initial for d in self.structure.derivatives if d.fixed}
+
+    def start_values(self, maneuvers: ManeuverSet) -> np.ndarray:
+        """Equation-error start values (see :mod:`rotorid.equation_error`)."""
+        from .equation_error import equation_error_start
+
+        return equation_error_start(self.structure, maneuvers)
+
+
+def as_model(model_or_structure):
+    """Wrap a :class:`ModelStructure` in :class:`LinearModel`; pass other models through."""
+    if isinstance(model_or_structure, ModelStructure):
+        return LinearModel(model_or_structure)
+    if not isinstance(model_or_structure, IdentifiableModel):
+        raise StructureError(
+            f"{type(model_or_structure).__name__} is not an identifiable model: it needs "
+            "parameter_names, output_names, initial_values(), bounds() and simulate()")
+    return model_or_structure

@@ -1,0 +1,1 @@
+"""Built-in estimator: maximum-likelihood output error with Levenberg-Marquardt steps."""

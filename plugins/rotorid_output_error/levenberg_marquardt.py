@@ -1,0 +1,200 @@
+"""One Levenberg-Marquardt run of the maximum-likelihood output-error method.
+
+Cost J(Θ) = det R with R = (1/N) Σ (z − y)(z − y)ᵀ re-estimated at every evaluation
+(relaxation). With R held at its current value the Gauss-Newton information matrix and
+gradient are (paper eqs. 8-9)
+
+    F = Σ (∂y/∂Θ)ᵀ R⁻¹ (∂y/∂Θ)        G = −Σ (∂y/∂Θ)ᵀ R⁻¹ (z − y)
+
+and the step solves (F + λ·D) ΔΘ = −G with D = diag(F) (Marquardt's scaling, so that parameters
+of very different magnitudes converge together). A step that raises the cost is never taken:
+λ grows by ``factor`` and the step is recomputed and re-simulated; after an accepted step λ
+shrinks by ``factor``. Bounds (delays ≥ 0, optional sign priors) are respected by the step
+itself: parameters at a bound whose step points outward are frozen for that step, and the step
+is shortened so that no parameter crosses its bound.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import attrs
+import numpy as np
+
+from rotorid.errors import SimulationDivergedError
+
+_MAX_LAMBDA = 1e12
+#: Floor of R relative to each output's mean square (keeps det R > 0 on noise-free data).
+NOISE_FLOOR = 1e-16
+
+
+@attrs.frozen
+class Settings:
+    """Stopping rules and LM constants of one run."""
+
+    max_iterations: int = 50
+    cost_tolerance: float = 1e-7     # relative change of det R between accepted steps
+    step_tolerance: float = 1e-9     # relative parameter change
+    initial_lambda: float = 1e-3
+    factor: float = 10.0
+    noise: str = "full"              # "full" or "diagonal" R
+    max_tries: int = 12              # λ increases per iteration before giving up
+
+
+@attrs.frozen
+class Progress:
+    """Reported after every accepted iteration."""
+
+    iteration: int
+    cost: float
+    rmse: float
+    lm_lambda: float
+    values: np.ndarray
+
+
+@attrs.frozen(eq=False)
+class RunResult:
+    """Outcome of one run; ``information`` is F at the final values."""
+
+    values: np.ndarray
+    cost: float
+    rmse: float
+    noise_covariance: np.ndarray
+    information: np.ndarray
+    cost_history: tuple
+    rmse_history: tuple
+    iterations: int
+    converged: bool
+    stop_reason: str
+
+
+class Problem:
+    """Residuals, cost and derivatives of one model on one maneuver set."""
+
+    def __init__(self, model, maneuvers, measured, weights, settings: Settings):
+        self.model = model
+        self.maneuvers = maneuvers
+        self.measured = measured
+        self.weights = weights
+        self.settings = settings
+        self.n_samples = sum(z.shape[0] for z in measured)
+        power = sum(np.sum((z * weights) ** 2, axis=0) for z in measured) / self.n_samples
+        # R is floored at a tiny fraction of each output's power, so that an output reproduced
+        # exactly (noise-free data, an unexcited channel) keeps det R and R⁻¹ finite.
+        self.noise_floor = np.diag(np.maximum(NOISE_FLOOR * power, 1e-300))
+
+    def residuals(self, outputs) -> list[np.ndarray]:
+        return [(z - y) * self.weights for z, y in zip(self.measured, outputs)]
+
+    def noise(self, residuals) -> np.ndarray:
+        r = sum(e.T @ e for e in residuals) / self.n_samples
+        r = np.diag(np.diag(r)) if self.settings.noise == "diagonal" else r
+        return r + self.noise_floor
+
+    def evaluate(self, values):
+        """(cost, R, residuals, rmse) at ``values``; cost = inf when the simulation diverges."""
+        try:
+            outputs = self.model.simulate(values, self.maneuvers)
+        except SimulationDivergedError:
+            return np.inf, None, None, np.inf
+        residuals = self.residuals(outputs)
+        r = self.noise(residuals)
+        cost = float(np.linalg.det(r))
+        stacked_rmse = float(np.sqrt(sum(np.sum(e**2) for e in residuals)
+                                     / (self.n_samples * residuals[0].shape[1])))
+        return (cost if np.isfinite(cost) else np.inf), r, residuals, stacked_rmse
+
+    def gauss_newton(self, values, r: np.ndarray):
+        """F (P×P) and G (P,) at ``values`` with R held fixed, plus the residuals."""
+        if hasattr(self.model, "sensitivities"):
+            outputs, sens = self.model.sensitivities(values, self.maneuvers)
+        else:
+            from rotorid.models import finite_difference_sensitivities
+
+            outputs, sens = finite_difference_sensitivities(self.model, values, self.maneuvers)
+        residuals = self.residuals(outputs)
+        r_inv = np.linalg.inv(r)
+        p = len(values)
+        f = np.zeros((p, p))
+        g = np.zeros(p)
+        for e, s in zip(residuals, sens):
+            s = s * self.weights                     # (N, P, n_o)
+            weighted = s @ r_inv                     # (N, P, n_o)
+            f += np.tensordot(weighted, s, axes=([0, 2], [0, 2]))
+            g -= np.tensordot(weighted, e, axes=([0, 2], [0, 1]))
+        return f, g
+
+
+def _bounded_step(f, g, lam, values, lower, upper):
+    """Solve (F + λ·diag F) Δ = −G with bound handling; returns Δ (P,)."""
+    p = values.size
+    scale = np.sqrt(np.maximum(np.diag(f), 1e-12 * max(np.max(np.diag(f)), 1e-300)))
+    free = np.ones(p, dtype=bool)
+    for _ in range(p + 1):
+        step = np.zeros(p)
+        idx = np.flatnonzero(free)
+        if idx.size == 0:
+            return step
+        fs = f[np.ix_(idx, idx)] / np.outer(scale[idx], scale[idx])
+        fs[np.diag_indices_from(fs)] *= 1.0 + lam
+        fs[np.diag_indices_from(fs)] += 1e-12
+        step[idx] = np.linalg.solve(fs, -g[idx] / scale[idx]) / scale[idx]
+        blocked = free & (((values <= lower) & (step < 0)) | ((values >= upper) & (step > 0)))
+        if not np.any(blocked):
+            break
+        free &= ~blocked
+    with np.errstate(divide="ignore", invalid="ignore"):
+        room = np.where(step > 0, (upper - values) / step,
+                        np.where(step < 0, (lower - values) / step, np.inf))
+    alpha = min(1.0, float(np.min(room))) if room.size else 1.0
+    return step * max(alpha, 0.0)
+
+
+def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | None = None
+        ) -> RunResult:
+    """Levenberg-Marquardt from ``start``; see the module docstring."""
+    settings = problem.settings
+    lower, upper = bounds
+    values = np.clip(np.asarray(start, dtype=float), lower, upper)
+    cost, r, _, current_rmse = problem.evaluate(values)
+    if not np.isfinite(cost):
+        raise SimulationDivergedError(
+            "the start values give a diverging simulation; start closer to a stable model "
+            "(the equation-error start or a shorter horizon)")
+    costs, rmses = [cost], [current_rmse]
+    lam = settings.initial_lambda
+    reason, converged, iteration = "iteration limit reached", False, 0
+    f, g = problem.gauss_newton(values, r)
+    while iteration < settings.max_iterations:
+        accepted = False
+        for _ in range(settings.max_tries):
+            step = _bounded_step(f, g, lam, values, lower, upper)
+            trial = np.clip(values + step, lower, upper)
+            trial_cost, trial_r, _, trial_rmse = problem.evaluate(trial)
+            if trial_cost < cost:
+                accepted = True
+                break
+            lam = min(lam * settings.factor, _MAX_LAMBDA)
+        if not accepted:
+            reason = "no step reduced the cost (local minimum or noise floor)"
+            converged = iteration > 0
+            break
+        iteration += 1
+        relative_change = (cost - trial_cost) / max(cost, 1e-300)
+        relative_step = np.max(np.abs(trial - values) / np.maximum(np.abs(values), 1e-3))
+        values, cost, r, current_rmse = trial, trial_cost, trial_r, trial_rmse
+        costs.append(cost)
+        rmses.append(current_rmse)
+        lam = max(lam / settings.factor, 1e-12)
+        if on_progress is not None:
+            on_progress(Progress(iteration, cost, current_rmse, lam, values.copy()))
+        if relative_change < settings.cost_tolerance:
+            reason, converged = "relative cost change below tolerance", True
+            break
+        if relative_step < settings.step_tolerance:
+            reason, converged = "parameter step below tolerance", True
+            break
+        f, g = problem.gauss_newton(values, r)
+    f, _ = problem.gauss_newton(values, r)
+    return RunResult(values, cost, current_rmse, r, f, tuple(costs), tuple(rmses), iteration,
+                     converged, reason)
