@@ -26,7 +26,9 @@ from .errors import (
 )
 from .hookspecs import PluginDescriptor, hookimpl
 from .plugins import create, get_plugin_manager, registry
+from .simulation import Simulator, sensitivities, simulate
 from .structure import CONTROLS, OUTPUTS, STATES, FlightCondition, ModelStructure
+from .transfer import frequency_response
 from .units import FLIGHT_TEST, SI, UnitSystem, unit_system
 
 try:
@@ -39,6 +41,7 @@ __all__ = [
     "ConvergenceWarning", "DataError", "DataFileError", "Delay", "Derivative", "DerivativeError",
     "EstimationError", "FlightCondition", "IdentifiabilityWarning", "Maneuver", "ManeuverSet",
     "MissingFileError", "ModelStructure", "PluginDescriptor", "PluginError", "RotoridError",
-    "RotoridWarning", "Sign", "SimulationDivergedError", "StructureError", "UnitSystem",
-    "create", "get_plugin_manager", "hookimpl", "registry", "unit_system",
+    "RotoridWarning", "Sign", "SimulationDivergedError", "Simulator", "StructureError",
+    "UnitSystem", "create", "frequency_response", "get_plugin_manager", "hookimpl", "registry",
+    "sensitivities", "simulate", "unit_system",
 ]
