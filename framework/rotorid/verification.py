@@ -502,18 +502,19 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
     """Verify an identified model on sweeps not used for identification.
 
     Simulates ``structure`` at ``values`` (vector, name→value mapping or None) on the
-    recorded inputs of every sweep, estimates truth and model responses with identical
-    processing and holds ``ε = H_model/H_truth`` against the envelopes; also compares the
-    analytic response (exact delays) with the truth's conditioned response. ``envelopes``
+    recorded inputs of every sweep (:func:`rotorid.simulation.simulate`, with the sweeps'
+    input hold), estimates truth and model responses with identical processing and holds
+    ``ε = H_model/H_truth`` against the envelopes; also compares the analytic response with
+    exact delays (:func:`rotorid.transfer.frequency_response`) with the truth's conditioned
+    response. ``envelopes``
     may be envelope objects by name or registered envelope names. Other keyword options go
     to :func:`compare_sweeps`.
     """
-    from . import simulation
+    from .simulation import simulate
+    from .transfer import frequency_response
 
     if envelopes is not None and not isinstance(envelopes, Mapping):
         envelopes = envelopes_by_name(tuple(envelopes))
-    outputs = simulation.simulate(structure, values, sweeps)
     return compare_sweeps(
-        sweeps, outputs, pairs, envelopes,
-        analytic=lambda omega: simulation.frequency_response(structure, values, omega),
-        **options)
+        sweeps, simulate(structure, values, sweeps), pairs, envelopes,
+        analytic=lambda omega: frequency_response(structure, values, omega), **options)
