@@ -203,7 +203,8 @@ def _write_result(path, delays):
     result = {
         "estimator": "output-error",
         "parameters": {"M_q": {"value": -3.0}, "M_long": {"value": 30.0},
-                       "L_p": {"value": -5.0}, "L_long": {"value": -6.0}},
+                       "L_p": {"value": -5.0}, "L_long": {"value": -6.0},
+                       "bias_3211-long_q": {"value": 0.4}},   # identification record bias
         "delays": {name: {"value": DELAY} for name in delays},
         "fixed": {},
         "units": "flight-test",

@@ -7,9 +7,11 @@ Usage::
 ``RESULT.json`` is an estimate written by ``rotorid identify``: ``parameters`` and ``delays``
 (``{"L_lat": {"value": 0.05}}``), ``fixed`` values and ``structure`` (the model file's path,
 relative to the result file, or an embedded model-file mapping). ``MODEL.toml`` overrides the
-structure. Free derivatives of the structure that the result does not list were removed by
-the reduction and are dropped. SWEEPS are maneuver files, directories or glob patterns; when
-the maneuvers carry ``kind`` metadata only the ``sweep`` ones are used.
+structure (the estimate JSON of ``Estimate.as_dict`` names none, so give it). Free derivatives
+of the structure that the result does not list were removed by the reduction and are dropped;
+output biases of the identification records are ignored. SWEEPS are maneuver files,
+directories or glob patterns; when the maneuvers carry ``kind`` metadata only the ``sweep``
+ones are used.
 
 Writes ``verification.json`` (every check, J_ave, time-domain metrics) and, per pair,
 ``error_<output>_<input>.png`` and ``bode_<output>_<input>.png`` into ``--out``.
@@ -96,8 +98,13 @@ def _value(entry, name: str, path: Path) -> float:
 
 
 def model_from_result(structure, result: Mapping, path: Path):
-    """The identified structure and its parameter values from an estimate mapping."""
-    parameters = {n: _value(e, n, path) for n, e in result["parameters"].items()}
+    """The identified structure and its parameter values from an estimate mapping.
+
+    Output biases (``bias_<maneuver>_<output>``) belong to the identification records, not
+    to the model, and are ignored.
+    """
+    parameters = {n: _value(e, n, path) for n, e in result["parameters"].items()
+                  if not n.startswith("bias_")}
     for name, value in dict(result.get("fixed") or {}).items():
         if name in structure.names:
             structure = structure.fixing(name, _value(value, name, path))
