@@ -155,8 +155,15 @@ class DataSetConfig:
                             if isinstance(v, tuple) else v)
 
     def digest(self, plant_id: str = "") -> str:
-        """SHA-256 of the settings and ``plant_id``: the cache key."""
-        text = json.dumps({"config": self.as_dict(), "plant": plant_id}, sort_keys=True)
+        """SHA-256 of the settings, the fixed input design of this module, the rotorid
+        version and ``plant_id``: the cache key."""
+        from rotorid import __version__
+
+        design = {"sweep_omega": SWEEP_OMEGA, "sweep_time": SWEEP_TIME,
+                  "sweep_amplitude_ratio": SWEEP_AMPLITUDE_RATIO,
+                  "multistep_start": MULTISTEP_START, "multistep_record": MULTISTEP_RECORD}
+        text = json.dumps({"config": self.as_dict(), "design": design, "plant": plant_id,
+                           "version": __version__}, sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()
 
 

@@ -1,8 +1,9 @@
 """Batched flight of a plant through several maneuvers at once.
 
 The plant is any object with ``state_names``, ``n_states``, ``derivatives(x, stick)`` and
-``measurements(x, stick)`` working on batches (rows) of states. All maneuvers start in the
-same trim and run side by side as one batch; a maneuver leaves the batch when its record ends.
+``measurements(x, stick)`` working on batches (rows) of states. All maneuvers start in trim
+(each row may have its own) and run side by side as one batch; a maneuver leaves the batch when
+its record ends.
 
 Timing is that of a digital flight-test setup running at the sample rate:
 

@@ -179,7 +179,10 @@ def design_loops(model: QuasiSteadyModel, design: LoopDesign, excited: str | Non
 
 
 def feedback(states: np.ndarray, trim_state: np.ndarray, state_names) -> np.ndarray:
-    """Feedback signals (B, 9) in :data:`FEEDBACK` order from plant states (B, n), SI."""
+    """Feedback signals (B, 9) in :data:`FEEDBACK` order from plant states (B, n), SI.
+
+    ``trim_state`` is (n,) or one trim per row (B, n).
+    """
     index = {name: state_names.index(name) for name in BODY}
     delta = states - trim_state
 

@@ -62,21 +62,17 @@ class HelisimSource:
     """Generates maneuver sets from a plant.
 
     Attributes:
-        plant: the plant; ``None`` builds the default :class:`~.model.Bo105Model`.
+        plant: the plant; by default a :class:`~.model.Bo105Model` with its default config.
         trimmer: ``trimmer(plant, airspeed_kt)`` returning an object with ``state`` and
             ``stick``; ``None`` uses :func:`~.trim.trim`.
         cache_dir: directory of cached sets (``None``: no cache).
         progress: optional callback receiving the completed fraction of a flight (0–1).
     """
 
-    plant: object = attrs.field(default=None)
+    plant: object = attrs.field(factory=lambda: _default_plant())
     trimmer: Callable | None = None
     cache_dir: str | Path | None = None
     progress: Callable[[float], None] | None = None
-
-    def __attrs_post_init__(self):
-        if self.plant is None:
-            object.__setattr__(self, "plant", _default_plant())
 
     def trim(self, airspeed_kt: float = 0.0):
         """Trim of the plant in level flight at ``airspeed_kt``."""

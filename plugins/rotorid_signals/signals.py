@@ -138,7 +138,7 @@ class Multistep:
         levels = np.array([0.0] + [sign * self.amplitude for _, sign in self.pattern] + [0.0])
         if self.sample_time is None:
             edges = self.switch_times()
-            position = _held(time, None) + 1e-12 * max(1.0, self.duration)
+            position = time + 1e-12 * max(1.0, self.duration)
         else:
             # Count in whole samples so switching is exact on the grid.
             edges = np.round(self.switch_times() / self.sample_time)
