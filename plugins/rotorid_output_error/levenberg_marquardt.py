@@ -97,9 +97,14 @@ class Problem:
             outputs = self.model.simulate(values, self.maneuvers)
         except SimulationDivergedError:
             return np.inf, None, None, np.inf
-        residuals = self.residuals(outputs)
-        r = self.noise(residuals)
+        with np.errstate(over="ignore", invalid="ignore"):
+            residuals = self.residuals(outputs)
+            r = self.noise(residuals)
+        if not np.all(np.isfinite(r)):
+            return np.inf, None, None, np.inf      # a model of one's own that blew up
         cost = float(np.linalg.det(r))
+        if not cost > 0.0:
+            return np.inf, None, None, np.inf
         stacked_rmse = float(np.sqrt(sum(np.sum(e**2) for e in residuals)
                                      / (self.n_samples * residuals[0].shape[1])))
         return (cost if np.isfinite(cost) else np.inf), r, residuals, stacked_rmse
