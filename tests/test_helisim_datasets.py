@@ -210,3 +210,22 @@ def test_truth_model_loops_are_stable(truth_source, condition):
     for excited in (None, *AXES):
         gains = loops.design_loops(model, loops.LoopDesign(), excited, theta0).matrix
         assert np.linalg.eigvals(a - b @ gains @ feedback).real.max() < -0.02, excited
+
+
+def test_cases_from_attrs_objects_and_physics_conveniences(truth_source):
+    import attrs
+
+    @attrs.frozen
+    class Case:
+        condition: str = "forward"
+        airspeed_kt: float = 70.0
+        seed: int = 9
+        name: str = "ignored: not a data-set setting"
+
+    config = resolve_case(Case())
+    assert (config.condition, config.airspeed_kt, config.seed) == ("forward", 70.0, 9)
+    point = truth_source.trim(70.0)
+    assert point.state.shape == (truth_source.plant.n_states,) and point.stick.shape == (4,)
+    linear = truth_source.linearize(0.0)
+    assert linear.airspeed_kt == 0.0
+    assert linear.eigenvalues.real.max() > 0.1  # the unstable hover phugoid

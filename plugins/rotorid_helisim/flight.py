@@ -110,7 +110,7 @@ def fly(plant, trim_state, trim_stick, pilot, n_samples, gains, sample_time: flo
             raise SimulationDivergedError(
                 f"the flight of maneuver #{bad} diverged at t = {(k + 1) * sample_time:.3f} s; "
                 f"reduce the input amplitude or the sample time / raise substeps")
-        if progress is not None and k % 250 == 0:
+        if progress is not None and k % 50 == 0:
             progress(k / (length - 1))
     if progress is not None:
         progress(1.0)
