@@ -76,7 +76,7 @@ def test_missing_delay_fails_phase_envelope_and_delay_passes(case, envelopes):
                              analytic=_analytic(DELAY))
     for pair in pairs:
         bad, good = no_delay[pair], delayed[pair]
-        assert bad.truth.conditioned_on == ("lat",)
+        assert bad.truth.conditioned_on == () and bad.conditioned.conditioned_on == ("lat",)
         for checks in (bad.checks, bad.analytic_checks):
             muad = checks["muad"]
             assert muad.passed is False
@@ -106,8 +106,10 @@ def test_pairs_and_sweeps_are_matched_with_clear_errors(case, envelopes):
     with pytest.raises(VerificationError, match="simulate every sweep"):
         compare_sweeps(sweeps, without[:1], ["q/long"], envelopes)
     result = compare_sweeps(sweeps, without, ["q/long"], envelopes, omega=OMEGA,
-                            conditioning="none")
-    assert result["q/long"].truth.conditioned_on == ()
+                            analytic=_analytic(0.0), conditioning="none")
+    assert result["q/long"].conditioned is result["q/long"].truth
+    assert compare_sweeps(sweeps, without, ["q/long"], envelopes,
+                          omega=OMEGA)["q/long"].conditioned is None
     with pytest.raises(VerificationError, match="was not verified"):
         result["p/lat"]
 

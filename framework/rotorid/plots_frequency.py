@@ -54,7 +54,8 @@ def plot_error(errors: Mapping[str, PairVerification] | PairVerification,
             several models drawn side by side (e.g. ``{"no delays": a, "with delays": b}``).
         envelopes: envelopes whose bounds are drawn dashed (unavailable ones are only named
             in the legend; unverified ones are labelled so).
-        analytic: draw ``ε`` of the analytic model response instead of the simulated one.
+        analytic: draw ``ε`` of the analytic model response against the truth's conditioned
+            response (with its partial coherence) instead of the simulated one.
     """
     if isinstance(errors, PairVerification):
         errors = {"model": errors}
@@ -84,16 +85,17 @@ def plot_error(errors: Mapping[str, PairVerification] | PairVerification,
         error = item.analytic_error if analytic else item.error
         if error is None:
             raise ValueError(f"{label}: no analytic response was evaluated")
+        coherence = item.analytic_coherence if analytic else item.coherence
         magnitude, phase = error_db_deg(error)
         color, marker = f"C{index}", _MARKERS[index % len(_MARKERS)]
-        _scatter(mag_axis, item.omega, magnitude, item.coherence, color, marker, label)
-        _scatter(phase_axis, item.omega, phase, item.coherence, color, marker, label)
-        coh_axis.semilogx(item.omega, item.coherence, color=color, label=label)
+        _scatter(mag_axis, item.omega, magnitude, coherence, color, marker, label)
+        _scatter(phase_axis, item.omega, phase, coherence, color, marker, label)
+        coh_axis.semilogx(item.omega, coherence, color=color, label=label)
     coh_axis.axhline(COHERENCE_THRESHOLD, color="grey", linestyle=":",
                      label=f"γ² = {COHERENCE_THRESHOLD}")
     mag_axis.set_ylabel("|ε| [dB]")
     phase_axis.set_ylabel("∠ε [deg]")
-    coh_axis.set_ylabel("γ² (truth) [-]")
+    coh_axis.set_ylabel(("partial γ²" if analytic else "γ²") + " (truth) [-]")
     coh_axis.set_ylim(0.0, 1.05)
     coh_axis.set_xlabel("frequency ω [rad/s]")
     for axis in (mag_axis, phase_axis, coh_axis):
@@ -106,12 +108,20 @@ def plot_error(errors: Mapping[str, PairVerification] | PairVerification,
 
 def plot_bode(item: PairVerification, output_unit: str = "", input_unit: str = "%",
               title: str | None = None):
-    """Bode overlay of truth, simulated model and (if evaluated) analytic model, with γ²."""
+    """Bode overlay of truth, simulated model and (if evaluated) analytic model, with γ².
+
+    When the truth's response was conditioned on other inputs, its conditioned estimate (the
+    one the analytic response is compared with) is drawn too, with its partial coherence.
+    """
     unit = f"{output_unit}/{input_unit}" if output_unit else f"output/{input_unit}"
     figure, (mag_axis, phase_axis, coh_axis) = _figure(
         3, title or f"{item.pair}: frequency responses")
     curves = [("truth (estimated)", item.truth.response, item.truth.coherence, "C0"),
               ("model (simulated sweeps)", item.model.response, item.truth.coherence, "C1")]
+    conditioned = item.conditioned
+    if conditioned is not None and conditioned.conditioned_on:
+        curves.append((f"truth conditioned on {', '.join(conditioned.conditioned_on)}",
+                       conditioned.response, conditioned.coherence, "C3"))
     for label, response, coherence, color in curves:
         with np.errstate(divide="ignore"):
             magnitude = 20.0 * np.log10(np.abs(response))
@@ -125,6 +135,9 @@ def plot_bode(item: PairVerification, output_unit: str = "", input_unit: str = "
                             label="model (analytic, exact delays)")
     coh_axis.semilogx(item.omega, item.truth.coherence, color="C0", label="truth")
     coh_axis.semilogx(item.omega, item.model.coherence, color="C1", label="model (simulated)")
+    if conditioned is not None and conditioned.conditioned_on:
+        coh_axis.semilogx(item.omega, conditioned.coherence, color="C3",
+                          label="truth, partial")
     coh_axis.axhline(COHERENCE_THRESHOLD, color="grey", linestyle=":")
     mag_axis.set_ylabel(f"magnitude [dB, {unit}]")
     phase_axis.set_ylabel("phase [deg]")

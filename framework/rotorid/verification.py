@@ -297,19 +297,25 @@ class PairVerification:
     Attributes:
         pair: ``"q/long"`` style name.
         maneuvers: names of the sweeps pooled for this pair.
-        truth: response estimated from the recorded (truth) outputs.
-        model: response estimated from the model's simulation of the same inputs, processed
-            identically (same grid, windows, conditioning).
+        truth: single-input response estimated from the recorded (truth) outputs.
+        model: single-input response estimated from the model's simulation of the same
+            recorded inputs, processed identically (same grid and windows). Both include the
+            effect of the other inputs that moved, alike, so no conditioning is needed.
+        conditioned: the truth's response conditioned on the other inputs that moved (the
+            conditioned response the analytic model response is compared with), or None.
         analytic: the model's analytic response (exact delays) on the grid, shape (M,), or
             None when not evaluated.
-        checks: envelope name → check of ``ε = model/truth`` (the paper's eq. 19).
-        analytic_checks: envelope name → check of ``ε = analytic/truth``.
+        checks: envelope name → check of ``ε = model/truth`` (the paper's eq. 19), selected
+            by the truth's coherence.
+        analytic_checks: envelope name → check of ``ε = analytic/conditioned``, selected by
+            the partial coherence.
     """
 
     pair: str
     maneuvers: tuple[str, ...]
     truth: FrequencyResponse
     model: FrequencyResponse
+    conditioned: FrequencyResponse | None
     analytic: np.ndarray | None = attrs.field(
         converter=lambda a: None if a is None else _readonly(a, complex))
     checks: Mapping[str, EnvelopeCheck] = attrs.field(converter=_frozen_mapping)
@@ -321,8 +327,13 @@ class PairVerification:
 
     @property
     def coherence(self) -> np.ndarray:
-        """Coherence of the truth estimate (partial when conditioned), shape (M,)."""
+        """Coherence of the truth's single-input estimate, shape (M,)."""
         return self.truth.coherence
+
+    @property
+    def analytic_coherence(self) -> np.ndarray | None:
+        """Partial coherence of the truth's conditioned estimate, shape (M,), or None."""
+        return None if self.conditioned is None else self.conditioned.coherence
 
     @property
     def error(self) -> np.ndarray:
@@ -332,31 +343,32 @@ class PairVerification:
 
     @property
     def analytic_error(self) -> np.ndarray | None:
-        """``ε = H_analytic/H_truth``, complex, shape (M,), or None."""
-        if self.analytic is None:
+        """``ε = H_analytic/H_truth,conditioned``, complex, shape (M,), or None."""
+        if self.analytic is None or self.conditioned is None:
             return None
         with np.errstate(divide="ignore", invalid="ignore"):
-            return self.analytic / self.truth.response
+            return self.analytic / self.conditioned.response
 
     def input_coherence(self, threshold: float = COHERENCE_THRESHOLD) -> float | None:
         """Median coherence of the pair's input with the conditioning inputs over the points
-        where the truth's coherence reaches ``threshold``; None if not conditioned.
+        where the partial coherence reaches ``threshold``; None if not conditioned.
 
         Above about 0.5 the conditioned responses are unreliable (Tischler & Remple). The
         median is used because coherence estimated from few averages is biased upwards
         (about 1/n_d for independent inputs), so single points overstate the correlation."""
-        values = self.truth.input_coherence
-        if not self.truth.conditioned_on or values is None:
+        if self.conditioned is None or not self.conditioned.conditioned_on:
             return None
+        values = self.conditioned.input_coherence
         with np.errstate(invalid="ignore"):
-            used = values[self.coherence >= threshold]
+            used = values[self.conditioned.coherence >= threshold]
         used = used[np.isfinite(used)]
         return float(np.median(used)) if used.size else None
 
     def summary(self) -> dict:
         return {
             "pair": self.pair, "maneuvers": list(self.maneuvers),
-            "conditioned_on": list(self.truth.conditioned_on),
+            "conditioned_on": [] if self.conditioned is None else list(
+                self.conditioned.conditioned_on),
             "input_coherence": self.input_coherence(),
             "windows_s": list(self.truth.windows),
             "omega_range_rad_s": [float(self.omega.min()), float(self.omega.max())],
@@ -403,8 +415,9 @@ class VerificationResult:
                 f", median input coherence with them {correlation:.2f}"
                 + (" — too correlated, conditioned responses unreliable"
                    if correlation > 0.5 else ""))
-            lines.append(f"{p.pair} ({len(p.maneuvers)} sweep(s); conditioned on "
-                         f"{', '.join(p.truth.conditioned_on) or 'nothing'}{note})")
+            others = () if p.conditioned is None else p.conditioned.conditioned_on
+            lines.append(f"{p.pair} ({len(p.maneuvers)} sweep(s); analytic comparison "
+                         f"conditioned on {', '.join(others) or 'nothing'}{note})")
             for label, checks in (("simulated", p.checks), ("analytic", p.analytic_checks)):
                 for check in checks.values():
                     lines.append(f"  [{label}] {check.report()}")
@@ -451,8 +464,12 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
         analytic: optional callable ``omega -> (M, 8, 4)`` complex model response.
         omega: frequency grid in rad/s; default :func:`default_omega` of the sweeps.
         windows: window lengths in s; default from the shortest sweep.
-        conditioning: ``"auto"`` (condition on every other input that moved, see
+        conditioning: inputs the truth's response is conditioned on for the analytic
+            comparison: ``"auto"`` (every other input that moved, see
             :func:`rotorid.frequency.moving_inputs`), ``"none"``, or explicit input names.
+
+    The simulated comparison uses single-input responses of truth and model: the model is
+    driven by every recorded input, so the other inputs affect both sides alike.
     """
     parsed = [(name, *parse_pair(name)) for name in pairs]
     if not parsed:
@@ -479,20 +496,23 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
             others = ()
         else:
             others = tuple(c for c in conditioning if c != control)
-        options = dict(conditioned_on=others, windows=windows)
-        truth = response_from_maneuvers(subset, control, output, omega, **options)
-        model = response_from_maneuvers(subset, control, output, omega,
-                                        outputs=[model_outputs[i] for i in chosen], **options)
-        analytic_pair = None if full is None else full[:, OUTPUT_CHANNELS.index(output),
-                                                          INPUT_CHANNELS.index(control)]
+        truth = response_from_maneuvers(subset, control, output, omega, windows=windows)
+        model = response_from_maneuvers(subset, control, output, omega, windows=windows,
+                                        outputs=[model_outputs[i] for i in chosen])
         with np.errstate(divide="ignore", invalid="ignore"):
             error = model.response / truth.response
             checks = {n: e.check(error, truth.coherence, omega) for n, e in envelopes.items()}
-            analytic_checks = {} if analytic_pair is None else {
-                n: e.check(analytic_pair / truth.response, truth.coherence, omega)
-                for n, e in envelopes.items()}
-        results.append(PairVerification(name, subset.names, truth, model, analytic_pair,
-                                        checks, analytic_checks))
+        conditioned, analytic_pair, analytic_checks = None, None, {}
+        if full is not None:
+            conditioned = truth if not others else response_from_maneuvers(
+                subset, control, output, omega, windows=windows, conditioned_on=others)
+            analytic_pair = full[:, OUTPUT_CHANNELS.index(output), INPUT_CHANNELS.index(control)]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ratio = analytic_pair / conditioned.response
+                analytic_checks = {n: e.check(ratio, conditioned.coherence, omega)
+                                   for n, e in envelopes.items()}
+        results.append(PairVerification(name, subset.names, truth, model, conditioned,
+                                        analytic_pair, checks, analytic_checks))
     return VerificationResult(results, time_domain_metrics(sweeps, model_outputs))
 
 
