@@ -1,0 +1,160 @@
+"""``rotorid identify``: estimates from maneuver files against the truth; one-line errors."""
+
+import json
+
+import numpy as np
+import pytest
+from rotorid_files.formats import write_maneuver
+
+import rotorid
+from rotorid import cli
+from rotorid.modelfile import load_model
+
+MODEL = """
+units = "flight-test"
+
+[condition]
+airspeed_kt = 0.0
+
+[structure]
+populate = "none"
+
+[derivatives.X_u]
+[derivatives.X_long]
+[derivatives.M_u]
+[derivatives.M_q]
+sign = "negative"
+[derivatives.M_long]
+[derivatives.L_p]
+[derivatives.L_v]
+[derivatives.L_lat]
+delay = 0.0
+[derivatives.Z_w]
+[derivatives.Z_coll]
+[derivatives.N_r]
+[derivatives.N_ped]
+"""
+TRUTH = {"X_u": -0.03, "X_long": -0.12, "M_u": 0.08, "M_q": -3.0, "M_long": 0.8, "L_p": -9.0,
+         "L_v": -0.3, "L_lat": 2.5, "Z_w": -0.35, "Z_coll": -1.1, "N_r": -0.4, "N_ped": 1.4,
+         "tau_L_lat": 0.06}
+NOISE = np.array([0.05, 0.05, 0.1, 0.05, 0.05, 0.1, 0.05, 0.1])   # ax az q θ ay p φ r
+
+
+def _doublets(n=400, dt=0.02):
+    t = np.arange(n) * dt
+    maneuvers = []
+    for i, axis in enumerate(rotorid.CONTROLS):
+        u = np.zeros((n, 4))
+        u[25:75, i], u[75:125, i] = 4.0, -4.0
+        maneuvers.append(rotorid.Maneuver(f"doublet_{axis}", t, u, np.zeros((n, 8))))
+    return rotorid.ManeuverSet(maneuvers)
+
+
+@pytest.fixture(scope="module")
+def case(tmp_path_factory):
+    """Model file, a directory of noisy CSV maneuvers simulated from TRUTH, the structure."""
+    root = tmp_path_factory.mktemp("identify")
+    model = root / "model.toml"
+    model.write_text(MODEL, encoding="utf-8")
+    structure = load_model(model)
+    blank = _doublets()
+    rng = np.random.default_rng(11)
+    outputs = rotorid.simulate(structure, structure.as_vector(TRUTH), blank)
+    data = root / "data"
+    data.mkdir()
+    for m, y in zip(blank, outputs):
+        write_maneuver(m.with_outputs(y + rng.normal(size=y.shape) * NOISE),
+                       data / f"{m.name}.csv")
+    return model, data, structure
+
+
+def test_identify_recovers_the_truth_and_writes_the_json(case, tmp_path, capsys):
+    model, data, structure = case
+    out = tmp_path / "result.json"
+    status = cli.main(["identify", str(model), str(data), "--out", str(out)])
+    captured = capsys.readouterr()
+    assert status == 0, captured.err
+    record = json.loads(out.read_text(encoding="utf-8"))
+    assert record["estimator"] == "output-error"
+    assert record["converged"] is True
+    assert set(record["parameters"]) == set(structure.parameter_names) - {"tau_L_lat"}
+    assert set(record["delays"]) == {"L_lat"}
+    for name, truth in TRUTH.items():
+        entry = (record["delays"]["L_lat"] if name == "tau_L_lat"
+                 else record["parameters"][name])
+        assert abs(entry["value"] - truth) <= 4 * entry["cramer_rao"], (name, entry, truth)
+        assert entry["cramer_rao_pct"] == pytest.approx(
+            100 * entry["cramer_rao"] / abs(entry["value"]))
+    assert record["parameters"]["M_q"]["sign"] == "negative"
+    noise = np.sqrt(np.diag(record["noise_covariance"]))
+    assert np.allclose(noise, NOISE, rtol=0.1)
+    assert (out.parent / record["structure"]).resolve() == model.resolve()
+    assert "[[Parameters]]" in captured.out and "M_long" in captured.out
+    assert f"estimate written to {out}" in captured.out
+    assert "[full] iteration" in captured.err and "RMSE" in captured.err
+    assert not list(tmp_path.glob(".*.tmp"))
+
+
+def test_options_reach_the_estimator(case, tmp_path, capsys):
+    model, data, _ = case
+    out = tmp_path / "biases.json"
+    status = cli.main(["identify", str(model), str(data / "doublet_*.csv"), "--out", str(out),
+                       "--outputs", "q,theta,p,phi,r,ax,ay,az", "--noise", "diagonal",
+                       "--output-biases", "--enforce-signs", "--max-iterations", "30",
+                       "--quiet"])
+    captured = capsys.readouterr()
+    assert status == 0, captured.err
+    assert captured.err == ""
+    record = json.loads(out.read_text(encoding="utf-8"))
+    assert record["outputs"] == ["q", "theta", "p", "phi", "r", "ax", "ay", "az"]
+    covariance = np.array(record["noise_covariance"])
+    assert np.array_equal(covariance, np.diag(np.diag(covariance)))
+    assert "bias_doublet_long_q" in record["parameters"]
+    assert abs(record["parameters"]["bias_doublet_long_q"]["value"]) < 0.05
+    assert record["parameters"]["M_q"]["value"] <= 0.0
+
+
+def test_max_iterations_limits_the_final_run(case, tmp_path, capsys):
+    model, data, _ = case
+    out = tmp_path / "short.json"
+    status = cli.main(["identify", str(model), str(data), "--out", str(out), "--quiet",
+                       "--max-iterations", "1"])
+    assert status == 0, capsys.readouterr().err
+    assert json.loads(out.read_text(encoding="utf-8"))["iterations"] <= 1
+
+
+def _error_line(argv, capsys):
+    status = cli.main(argv)
+    err = capsys.readouterr().err.strip()
+    assert status == 2
+    assert "\n" not in err and "Traceback" not in err
+    return err
+
+
+def test_bad_inputs_give_one_line_errors(case, tmp_path, capsys):
+    model, data, _ = case
+    out = str(tmp_path / "r.json")
+    assert "does not exist" in _error_line(
+        ["identify", str(tmp_path / "nope.toml"), str(data), "--out", out], capsys)
+    assert "no such file" in _error_line(
+        ["identify", str(model), str(tmp_path / "missing.csv"), "--out", out], capsys)
+    assert "no estimator named 'least-squares'" in _error_line(
+        ["identify", str(model), str(data), "--estimator", "least-squares", "--out", out],
+        capsys)
+    assert "unknown output" in _error_line(
+        ["identify", str(model), str(data), "--outputs", "q,vz", "--out", out, "--quiet"],
+        capsys)
+    assert "must be at least 1" in _error_line(
+        ["identify", str(model), str(data), "--max-iterations", "0", "--out", out], capsys)
+    assert "directory" in _error_line(
+        ["identify", str(model), str(data), "--out", str(tmp_path / "no" / "r.json")], capsys)
+    lines = (data / "doublet_long.csv").read_text(encoding="utf-8").splitlines()
+    first = next(i for i, line in enumerate(lines) if not line.startswith("#"))
+    row = lines[first + 5].split(",")
+    row[lines[first].split(",").index("q")] = "nan"
+    lines[first + 5] = ",".join(row)
+    broken = tmp_path / "broken.csv"
+    broken.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    message = _error_line(["identify", str(model), str(broken), "--out", out], capsys)
+    assert "NaN" in message and "'q'" in message
+    assert not (tmp_path / "r.json").exists()
