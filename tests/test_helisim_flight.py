@@ -178,3 +178,24 @@ def test_config_digest_covers_every_setting():
     assert len(digests) == len(variants) + 1
     assert base.digest("p") == DataSetConfig().digest("p")
     assert base.digest("p") != base.digest("other plant")
+
+
+def test_loops_keep_the_stand_in_near_trim_through_the_full_data_set(plant):
+    source = HelisimSource(plant, trimmer=lambda p, kt: p.trim)
+    maneuvers = source.generate("hover")
+    assert len(maneuvers) == 20
+    for maneuver in maneuvers:
+        excursion = maneuver.metadata["excursion"]
+        assert max(excursion["theta_deg"], excursion["phi_deg"]) <= 10.0, maneuver.name
+        assert max(excursion[k] for k in ("airspeed_kt", "u_kt", "v_kt", "w_kt")) <= 10.0
+        # Back near trim at the end of the record.
+        assert np.abs(maneuver.outputs[-50:, [3, 6]]).max() < 3.0, maneuver.name
+
+
+def test_other_sample_rates(plant):
+    source = HelisimSource(plant, trimmer=lambda p, kt: p.trim)
+    [maneuver] = source.generate({"kinds": ["3211"], "axes": ["long"], "directions": [1],
+                                  "sample_rate": 100.0, "quick": True})
+    assert maneuver.dt == pytest.approx(0.01)
+    changes = maneuver.time[1:][np.diff(maneuver.inputs[:, 0]) != 0]
+    assert changes.size > 20  # the loop moves the stick every sample, not only at the steps

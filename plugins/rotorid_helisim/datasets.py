@@ -43,7 +43,7 @@ STEP_WIDTH = {"long": 0.4, "lat": 0.3, "coll": 1.0, "ped": 1.0}
 #: Multistep amplitude per axis, % of travel.
 AMPLITUDE = {"long": 5.0, "lat": 3.0, "coll": 6.0, "ped": 6.0}
 #: Sweep sine amplitude per axis, % of travel.
-SWEEP_AMPLITUDE = {"long": 1.2, "lat": 1.6, "coll": 4.0, "ped": 5.0}
+SWEEP_AMPLITUDE = {"long": 1.0, "lat": 1.4, "coll": 4.0, "ped": 5.0}
 #: Sweep law: ω_min, ω_max (rad/s) and T_rec (s) at duration_scale 1.
 SWEEP_OMEGA = (0.45, 14.0)
 SWEEP_TIME = 40.0

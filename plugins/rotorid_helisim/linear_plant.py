@@ -9,9 +9,10 @@ harness, loops and sensors can be tested against a model with a known linear sol
   ψ̇ = (q·sinΦ0 + r·cosΦ0)/cosΘ0 linearised about trim.
 * Actuators: a first-order lag of :data:`ACTUATOR_TIME_CONSTANT` s from each stick to its
   actuator state (in % of travel), within the 0.02–0.04 s of truth-model.md §1.
-* Gearing: :data:`GEARING_DEG_PER_PERCENT` deg of blade angle per % of stick, with the signs of
-  the stick conventions: long forward → θ1s < 0 (nose down), lat right → θ1c < 0 (roll right),
-  coll up → θ0 > 0, right pedal → θ0T < 0 (nose right).
+* Gearing: :data:`GEARING_DEG_PER_PERCENT` deg of blade angle per % of stick (the truth model's
+  stick mixing, docs/truth-model.md), with the signs of the stick conventions: long forward →
+  θ1s < 0 (nose down), lat right → θ1c < 0 (roll right), coll up → θ0 > 0, right pedal →
+  θ0T < 0 (nose right).
 * Trim: Θ0 = 2.2°, Φ0 = −2.6° (the attitudes the Helisim gravity terms imply, truth-model.md
   §2.0), zero body velocities, sticks at :data:`TRIM_STICK` %.
 """
@@ -51,7 +52,8 @@ HELISIM_ORDER = ("u", "w", "q", "theta", "v", "p", "phi", "r")
 BODY_STATES = ("u", "v", "w", "p", "q", "r", "phi", "theta", "psi")
 ACTUATOR_STATES = ("act_long", "act_lat", "act_coll", "act_ped")
 ACTUATOR_TIME_CONSTANT = 0.03  #: s
-GEARING_DEG_PER_PERCENT = 0.1  #: deg of blade angle per % of stick travel
+#: deg of blade angle per % of stick travel, for [long lat coll ped].
+GEARING_DEG_PER_PERCENT = (0.12, 0.08, 0.12, 0.14)
 #: Blade angle [θ0 θ1s θ1c θ0T] per % of [long lat coll ped], signs per the stick conventions.
 _GEAR_SIGNS = np.array([
     [0.0, 0.0, 1.0, 0.0],
@@ -82,7 +84,7 @@ class LinearHoverPlant:
         order = [self.state_names.index(name) for name in HELISIM_ORDER]
         n = self.n_states
         theta0, phi0 = math.radians(TRIM_THETA_DEG), math.radians(TRIM_PHI_DEG)
-        gearing = math.radians(GEARING_DEG_PER_PERCENT) * _GEAR_SIGNS  # rad per %
+        gearing = np.radians(GEARING_DEG_PER_PERCENT) * _GEAR_SIGNS  # rad per %
         actuators = [self.state_names.index(name) for name in ACTUATOR_STATES]
         a = np.zeros((n, n))
         a[np.ix_(order, order)] = HOVER_A
