@@ -6,6 +6,12 @@ derivatives of that same recursion: the sensitivity states obey the recursion's 
 forced by the derivatives of the maps applied to the simulated states and inputs, batched over
 maneuvers and parameters (no Python loop over parameters inside the time loop).
 
+The lagged recursion runs in first-order (companion) form: the state is extended by the few
+delayed state samples that the maps read, so that each time step is one small matrix product.
+The sensitivities run in time blocks sized to stay in cache: per block, one product forms the
+forcing of every maneuver and parameter, the block is stepped, and its output sensitivities
+are written once into the result.
+
 Units are the structure's (flight-test by default); the maneuvers must be in the same system.
 Before t = 0 every state and input is at trim (zero perturbation). Under first-order hold a
 delayed input between t = −dt and 0 is interpolated from trim to the first sample, so a record
@@ -26,7 +32,8 @@ from .structure import ModelStructure
 
 #: A state perturbation beyond this magnitude (structure units) counts as divergence.
 DIVERGENCE_LIMIT = 1e7
-_CHECK_EVERY = 50
+#: Size of the sensitivity states of one time block (bytes), chosen to stay in cache.
+_BLOCK_BYTES = 1 << 20
 
 
 class _Group:
@@ -48,46 +55,122 @@ class _Group:
         return self.inputs.shape[0]
 
 
-def _shifted(array: np.ndarray, lag: int) -> np.ndarray:
-    """array[n − lag] for every n, zero (trim) outside the record; time is axis 0."""
-    out = np.zeros_like(array)
-    n = array.shape[0]
-    if lag >= 0:
-        out[lag:] = array[: n - lag]
-    else:
-        out[: n + lag] = array[-lag:]
+def _nonzero_columns(matrix: np.ndarray) -> np.ndarray:
+    """Columns (last axis) of ``matrix`` (…, 8, C) with at least one non-zero entry."""
+    return np.flatnonzero(np.any(matrix.reshape(-1, matrix.shape[-1]) != 0, axis=0))
+
+
+def _taps(*families) -> list[tuple[int, int]]:
+    """Sorted (lag, source) pairs that the maps read; sources 0–7 are states, 8–11 controls.
+
+    ``families`` are (maps, offset) pairs: maps lag → (P, 8, C), offset 0 for states and 8 for
+    controls. Columns that are zero for every parameter are left out.
+    """
+    return sorted({(lag, offset + int(c)) for maps, offset in families
+                   for lag, stack in maps.items() for c in _nonzero_columns(stack)})
+
+
+def _tap_weights(taps, families, n_params: int, width: int) -> np.ndarray:
+    """(K, n_params·width) weights W with Σ_lag M[lag]·z[n − lag] = lagged(z)[n] @ W.
+
+    Entry [k, p·width + i] is M[lag][p, i, column] of tap k = (lag, column); entries
+    i ≥ 8 (the history slots of the companion state) stay zero.
+    """
+    index = {tap: k for k, tap in enumerate(taps)}
+    weights = np.zeros((len(taps), n_params, width))
+    for maps, offset in families:
+        for lag, stack in maps.items():
+            for c in _nonzero_columns(stack):
+                weights[index[(lag, offset + int(c))], :, :8] += stack[:, :, c]
+    return weights.reshape(len(taps), -1)
+
+
+def _lagged(sources: np.ndarray, taps) -> np.ndarray:
+    """(N, B, K) array whose column k is source column c at sample n − lag for tap (lag, c).
+
+    sources: (N, B, 12) states then controls, time-major. Samples outside the record are trim
+    (zero): before t = 0 by convention, after the end because only FOH reads ahead (one
+    sample) and the last sample's step is never used.
+    """
+    n = sources.shape[0]
+    out = np.zeros(sources.shape[:2] + (len(taps),))
+    for k, (lag, column) in enumerate(taps):
+        if abs(lag) >= n:
+            continue
+        if lag >= 0:
+            out[lag:, :, k] = sources[:n - lag, :, column]
+        else:
+            out[:n + lag, :, k] = sources[-lag:, :, column]
     return out
 
 
-def _apply(maps: dict, signal: np.ndarray) -> np.ndarray:
-    """Σ_lag signal[n − lag] @ M[lag]ᵀ for (8, ·) maps; signal (N, B, ·) → (N, B, 8)."""
-    total = np.zeros(signal.shape[:2] + (8,))
-    for lag, matrix in maps.items():
-        total += _shifted(signal, lag) @ matrix.T
-    return total
+class _Companion:
+    """The lagged recursion in first-order form over z_n = [x_n; x_n−l[c] for each history slot].
 
-
-def _derivative_forcing(state_maps: dict, input_maps: dict, states: np.ndarray,
-                        inputs: np.ndarray, state_columns: dict) -> np.ndarray | None:
-    """Σ_lag dM[lag]·signal[n − lag] for every parameter, as one matrix product.
-
-    state_maps/input_maps: lag → (P, 8, ·) derivative maps; states (N, B, 8), inputs
-    (N, B, 4); state_columns: lag → columns that a lag ≥ 1 state map reads.
-    Returns (N, B, P, 8), or ``None`` when there is nothing to add.
+    Attributes:
+        size: S = 8 + number of history slots (state column c at lag l, 1 ≤ l ≤ its depth).
+        transition: (S, S) map z_n → z_n+1 without forcing (Ps[0], the history maps, shifts).
+        output: (8, S) map z_n → the state part of y_n (Cs at every lag).
     """
-    signals, blocks = [], []
-    for maps, signal in ((state_maps, states), (input_maps, inputs)):
-        for lag, stack in maps.items():
-            columns = (state_columns.get(lag, np.arange(8)) if signal is states and lag > 0
-                       else np.arange(signal.shape[2]))
-            signals.append(_shifted(signal, lag)[:, :, columns])
-            blocks.append(stack[:, :, columns].transpose(2, 0, 1).reshape(len(columns), -1))
-    if not signals:
-        return None
-    n, b = states.shape[:2]
-    stacked = np.concatenate(signals, axis=2).reshape(n * b, -1)
-    product = stacked @ np.concatenate(blocks, axis=0)
-    return product.reshape(n, b, -1, 8)
+
+    def __init__(self, maps: DiscreteMaps):
+        depth: dict[int, int] = {}
+        history = [(lag, columns) for lag, columns in maps.state_history.items()]
+        history += [(lag, _nonzero_columns(m)) for lag, m in maps.Cs.items() if lag >= 1]
+        for lag, columns in history:
+            for c in columns:
+                depth[int(c)] = max(depth.get(int(c), 0), lag)
+        slots = {(c, lag): 8 + k for k, (c, lag) in enumerate(
+            (c, lag) for c in sorted(depth) for lag in range(1, depth[c] + 1))}
+        self.size = 8 + len(slots)
+        self.transition = np.zeros((self.size, self.size))
+        self.transition[:8, :8] = maps.Ps[0]
+        self.output = np.zeros((8, self.size))
+        self.output[:, :8] = maps.Cs.get(0, 0.0)
+        for (c, lag), slot in slots.items():
+            self.transition[slot, c if lag == 1 else slots[(c, lag - 1)]] = 1.0
+            if lag in maps.Ps:
+                self.transition[:8, slot] = maps.Ps[lag][:, c]
+            if lag in maps.Cs:
+                self.output[:, slot] = maps.Cs[lag][:, c]
+
+
+def _propagate(companion: _Companion, start: np.ndarray, forcing, n: int, block: int, emit,
+               where: str, dt: float) -> None:
+    """Run z_k+1 = transition·z_k + forcing_k for k < n − 1, one time block at a time.
+
+    Args:
+        start: (R, S) z_0.
+        forcing: ``forcing(first, stop, out)`` writes the forcing of steps first … stop − 1
+            into ``out`` (stop − first, R, S) (zero in the history slots).
+        n: number of samples; block: samples per block.
+        emit: ``emit(first, stop, z)`` receives z_first … z_stop−1 as (stop − first, R, S).
+        where, dt: named in the divergence error; dt in s.
+    Raises:
+        SimulationDivergedError: |z| exceeds :data:`DIVERGENCE_LIMIT` or is not finite.
+    """
+    rows, size = start.shape
+    buffer = np.empty((block + 1, rows, size))
+    buffer[0] = start
+    step = companion.transition.T
+    product = np.empty((rows, size))
+    with np.errstate(over="ignore", invalid="ignore"):
+        for first in range(0, n, block):
+            stop = min(first + block, n)
+            length = stop - first
+            forcing(first, stop, buffer[1:length + 1])
+            steps = length if stop < n else length - 1
+            for k in range(steps):
+                np.matmul(buffer[k], step, out=product)
+                buffer[k + 1] += product
+            peak = np.abs(buffer[steps]).max()
+            if not np.isfinite(peak) or peak > DIVERGENCE_LIMIT:
+                raise SimulationDivergedError(
+                    f"simulation diverged ({where}) by t = {(first + steps) * dt:.3f} s: "
+                    f"state magnitude {peak:.3g} exceeds {DIVERGENCE_LIMIT:g}; "
+                    f"the model is unstable for these parameter values")
+            emit(first, stop, buffer[:length])
+            buffer[0] = buffer[length]
 
 
 class Simulator:
@@ -153,71 +236,88 @@ class Simulator:
         for group in self.groups:
             maps = discrete_maps(self.structure, vector, group.dt, self.hold,
                                  with_derivatives=with_sensitivities)
-            states = self._states(maps, group)
-            y = _apply(maps.Cs, states) + _apply(maps.Du, group.inputs)
-            dy = self._sensitivities(maps, group, states) if with_sensitivities else None
+            companion = _Companion(maps)
+            states = self._states(maps, companion, group)
+            y = self._outputs(maps, companion, group, states)
+            dy = (self._sensitivities(maps, companion, group, states)
+                  if with_sensitivities else None)
             for b, (i, n) in enumerate(zip(group.indices, group.lengths)):
                 outputs[i] = y[:n, b]
                 if dy is not None:
                     sens[i] = dy[:n, b]
         return outputs, (sens if with_sensitivities else None)
 
-    def _history_plan(self, maps: DiscreteMaps):
-        """Lags and columns of the delayed-state history, and their stacked map."""
-        lags, cols, blocks = [], [], []
-        for lag, columns in maps.state_history.items():
-            lags.extend([lag] * len(columns))
-            cols.extend(columns.tolist())
-            blocks.append(maps.Ps[lag][:, columns])
-        if not lags:
-            return None
-        return np.array(lags), np.array(cols), np.hstack(blocks).T      # (H,), (H,), (H, 8)
+    @staticmethod
+    def _states(maps: DiscreteMaps, companion: _Companion, group: _Group) -> np.ndarray:
+        """Companion states z_n of every maneuver of the group, (N, B, S)."""
+        n, b = group.n_samples, len(group.indices)
+        families = [({lag: m[None] for lag, m in maps.Pu.items()}, 8)]
+        taps = _taps(*families)
+        weights = _tap_weights(taps, families, 1, companion.size)
+        lagged = _lagged(np.concatenate([np.zeros((n, b, 8)), group.inputs], axis=2), taps)
+        start = np.zeros((b, companion.size))
+        start[:, :8] = group.x0
+        states = np.empty((n, b, companion.size))
 
-    def _recursion(self, maps: DiscreteMaps, forcing: np.ndarray, start: np.ndarray, where):
-        """x_n+1 = Ps[0] x_n + Σ history + forcing_n over time-major (N, R, 8) arrays."""
-        n = forcing.shape[0]
-        plan = self._history_plan(maps)
-        offset = 0 if plan is None else int(plan[0].max())
-        x = np.zeros((n + offset, start.shape[0], 8))
-        x[offset] = start
-        step = maps.Ps[0].T
-        with np.errstate(over="ignore", invalid="ignore"):
-            for k in range(n - 1):
-                now = offset + k
-                nxt = x[now] @ step + forcing[k]
-                if plan is not None:
-                    lags, cols, stacked = plan
-                    nxt += x[now - lags, :, cols].T @ stacked
-                x[now + 1] = nxt
-                if k % _CHECK_EVERY == 0 or k == n - 2:
-                    peak = np.abs(nxt).max()
-                    if not np.isfinite(peak) or peak > DIVERGENCE_LIMIT:
-                        raise SimulationDivergedError(
-                            f"simulation diverged ({where}) at t = {(k + 1) * maps.dt:.3f} s: "
-                            f"state magnitude {peak:.3g} exceeds {DIVERGENCE_LIMIT:g}; "
-                            f"the model is unstable for these parameter values")
-        return x[offset:]
+        def forcing(first, stop, out):
+            np.matmul(lagged[first:stop], weights, out=out)
 
-    def _states(self, maps: DiscreteMaps, group: _Group) -> np.ndarray:
-        forcing = _apply(maps.Pu, group.inputs)
-        return self._recursion(maps, forcing, group.x0, f"maneuvers {', '.join(group.names)}")
+        def emit(first, stop, z):
+            states[first:stop] = z
 
-    def _sensitivities(self, maps: DiscreteMaps, group: _Group, states: np.ndarray):
+        _propagate(companion, start, forcing, n, n, emit,
+                   f"maneuvers {', '.join(group.names)}", maps.dt)
+        return states
+
+    @staticmethod
+    def _outputs(maps: DiscreteMaps, companion: _Companion, group: _Group,
+                 states: np.ndarray) -> np.ndarray:
+        """y_n = output·z_n + Σ_lag Du[lag]·u_n−lag, (N, B, 8)."""
+        families = [({lag: m[None] for lag, m in maps.Du.items()}, 8)]
+        taps = _taps(*families)
+        y = states @ companion.output.T
+        if taps:
+            sources = np.concatenate([np.zeros(states.shape[:2] + (8,)), group.inputs], axis=2)
+            y += _lagged(sources, taps) @ _tap_weights(taps, families, 1, 8)
+        return y
+
+    def _sensitivities(self, maps: DiscreteMaps, companion: _Companion, group: _Group,
+                       states: np.ndarray) -> np.ndarray:
+        """∂y/∂θ, (N, B, P, 8), from the recursion's own maps.
+
+        The sensitivity states obey the companion recursion, forced by the derivative maps
+        applied to the simulated states and inputs (one matrix product per time block for
+        all maneuvers and parameters); the outputs add the derivative output maps' term.
+        """
         n, b = states.shape[:2]
-        p = self.structure.n_parameters
-        forcing = _derivative_forcing(maps.dPs, maps.dPu, states, group.inputs,
-                                      maps.state_history)
-        if forcing is None:
-            forcing = np.zeros((n, b, p, 8))
-        sens = self._recursion(maps, forcing.reshape(n, b * p, 8), np.zeros((b * p, 8)),
-                               "sensitivities").reshape(n, b, p, 8)
-        dy = None
-        for lag, matrix in maps.Cs.items():
-            term = _shifted(sens, lag) @ matrix.T
-            dy = term if dy is None else dy + term
-        direct = _derivative_forcing(maps.dCs, maps.dDu, states, group.inputs, {})
-        if direct is not None:
-            dy += direct
+        p, size = self.structure.n_parameters, companion.size
+        forcing_maps = [(maps.dPs, 0), (maps.dPu, 8)]
+        direct_maps = [(maps.dCs, 0), (maps.dDu, 8)]
+        taps = _taps(*forcing_maps, *direct_maps)
+        lagged = _lagged(np.concatenate([states[:, :, :8], group.inputs], axis=2), taps)
+        forcing_weights = _tap_weights(taps, forcing_maps, p, size)
+        direct_weights = _tap_weights(taps, direct_maps, p, 8)
+        direct_columns = _nonzero_columns(direct_weights)
+        direct_weights = direct_weights[:, direct_columns]
+        dy = np.empty((n, b, p, 8))
+        output = companion.output.T
+
+        def forcing(first, stop, out):
+            np.matmul(lagged[first:stop].reshape(-1, len(taps)), forcing_weights,
+                      out=out.reshape(-1, p * size))
+
+        def emit(first, stop, z):
+            rows = dy[first:stop].reshape(stop - first, b * p, 8)
+            np.matmul(z, output, out=rows)
+            if direct_columns.size:
+                flat = rows.reshape(-1, p * 8)
+                flat[:, direct_columns] += (lagged[first:stop].reshape(-1, len(taps))
+                                            @ direct_weights)
+
+        rows_per_step = b * p * size * 8
+        block = max(1, min(n, _BLOCK_BYTES // rows_per_step))
+        _propagate(companion, np.zeros((b * p, size)), forcing, n, block, emit,
+                   "sensitivities", maps.dt)
         return dy
 
 
