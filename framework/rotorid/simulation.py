@@ -82,7 +82,7 @@ def _tap_weights(taps, families, n_params: int, width: int) -> np.ndarray:
         for lag, stack in maps.items():
             for c in _nonzero_columns(stack):
                 weights[index[(lag, offset + int(c))], :, :8] += stack[:, :, c]
-    return weights.reshape(len(taps), -1)
+    return weights.reshape(len(taps), n_params * width)
 
 
 def _lagged(sources: np.ndarray, taps) -> np.ndarray:

@@ -1,0 +1,44 @@
+"""Edge cases of the simulation engine: nothing to force, records shorter than a delay."""
+
+import numpy as np
+
+from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
+from rotorid.simulation import Simulator
+
+CONDITION = FlightCondition.from_airspeed(40.0)
+
+
+def test_zero_inputs_and_zero_derivatives_give_trim_and_finite_sensitivities():
+    structure = ModelStructure.six_dof(CONDITION).with_delays(["L_lat"])
+    t = np.arange(50) * 0.02
+    maneuvers = ManeuverSet([Maneuver("quiet", t, np.zeros((50, 4)), np.zeros((50, 8)))])
+    y, sens = Simulator(structure, maneuvers).outputs_and_sensitivities(None)
+    assert np.array_equal(y[0], np.zeros((50, 8)))
+    assert sens[0].shape == (50, structure.n_parameters, 8)
+    assert np.array_equal(sens[0], np.zeros_like(sens[0]))
+
+
+def test_initial_state_drives_sensitivities_without_inputs():
+    structure = ModelStructure.six_dof(CONDITION)
+    values = structure.as_vector({"L_p": -3.0, "M_q": -1.5})
+    t = np.arange(40) * 0.02
+    x0 = np.zeros(8)
+    x0[5] = 2.0  # roll rate
+    maneuver = Maneuver("free", t, np.zeros((40, 4)), np.zeros((40, 8)), initial_state=x0)
+    y, sens = Simulator(structure, ManeuverSet([maneuver])).outputs_and_sensitivities(values)
+    p = structure.outputs.index("p")
+    assert np.allclose(y[0][:, p], 2.0 * np.exp(-3.0 * t), rtol=1e-9)
+    expected = t * 2.0 * np.exp(-3.0 * t)   # ∂/∂L_p of 2·exp(L_p·t)
+    k = structure.parameter_names.index("L_p")
+    assert np.allclose(sens[0][:, k, p], expected, rtol=1e-8, atol=1e-12)
+
+
+def test_delay_longer_than_the_record_leaves_the_input_unseen():
+    structure = ModelStructure.six_dof(CONDITION).with_delays(["L_lat"])
+    values = structure.as_vector({"L_p": -3.0, "L_lat": 1.0, "tau_L_lat": 0.2})
+    t = np.arange(6) * 0.02
+    u = np.zeros((6, 4))
+    u[:, 1] = 1.0
+    y = Simulator(structure, ManeuverSet([Maneuver("short", t, u, np.zeros((6, 8)))])
+                  ).outputs(values)[0]
+    assert np.array_equal(y, np.zeros_like(y))
