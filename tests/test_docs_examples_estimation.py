@@ -1,0 +1,43 @@
+"""docs/examples/nonlinear_model.py runs and identifies its aircraft (docs/estimation.md)."""
+
+import importlib.util
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+
+matplotlib.use("Agg")
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "docs" / "examples" / "nonlinear_model.py"
+
+
+def _load():
+    spec = importlib.util.spec_from_file_location("nonlinear_model_example", EXAMPLE)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_nonlinear_example_identifies_the_aerodynamic_coefficients(tmp_path, capsys):
+    example = _load()
+    assert not hasattr(example.LongitudinalAircraft, "sensitivities")   # finite differences
+    figure = tmp_path / "fit.png"
+    estimate = example.main(["--seed", "7", "--plot", str(figure)])
+    out = capsys.readouterr().out
+    assert "[[Parameters]]" in out and "C_La2" in out and "error/CR" in out
+    assert estimate.converged, estimate.stop_reason
+    truth = np.array([example.TRUTH[n] for n in estimate.parameter_names])
+    start = example.LongitudinalAircraft(1.0, (50.0, 0.0, 0.0, 0.0)).initial_values()
+    assert np.all(np.abs(start - truth) > 0.15 * np.abs(truth))        # a real start error
+    assert np.all(np.abs(estimate.values - truth) <= 4 * estimate.cramer_rao)
+    assert np.all(np.abs(estimate.values - truth) <= 0.03 * np.abs(truth))
+    assert figure.stat().st_size > 10_000
+
+
+def test_nonlinear_example_data_follow_the_seed():
+    example = _load()
+    _, first = example.flight_test(seed=3)
+    _, again = example.flight_test(seed=3)
+    _, other = example.flight_test(seed=4)
+    assert all(np.array_equal(a.outputs, b.outputs) for a, b in zip(first, again))
+    assert not np.array_equal(first[0].outputs, other[0].outputs)
