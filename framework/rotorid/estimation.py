@@ -205,7 +205,42 @@ class Estimate:
                 "correlation": self.correlation.tolist(),
                 "sign_violations": list(self.sign_violations), "at_bound": list(self.at_bound),
                 "unidentifiable": [list(c) for c in self.unidentifiable],
-                "notes": list(self.notes), "units": self.units}
+                "notes": list(self.notes), "units": self.units,
+                "parameter_names": list(self.parameter_names), "start": self.start.tolist(),
+                "information": self.information.tolist()}
+
+    @classmethod
+    def from_dict(cls, record: Mapping) -> "Estimate":
+        """Rebuild an estimate from :meth:`as_dict` output (e.g. a saved ``result.json``)."""
+        try:
+            names = tuple(record["parameter_names"])
+            entries = {**record["parameters"],
+                       **{f"tau_{k}": v for k, v in record["delays"].items()}}
+
+            def column(key):
+                return [np.inf if entries[n][key] is None else entries[n][key] for n in names]
+
+            return cls(
+                estimator=record["estimator"], parameter_names=names,
+                values=column("value"), start=record["start"],
+                cramer_rao=column("cramer_rao"), insensitivity=column("insensitivity"),
+                correlation=np.array(record["correlation"], dtype=float).reshape(
+                    len(names), len(names)),
+                information=np.array(record["information"], dtype=float).reshape(
+                    len(names), len(names)),
+                noise_covariance=record["noise_covariance"], output_names=record["outputs"],
+                cost=record["cost"], rmse=record["rmse"], cost_history=record["cost_history"],
+                rmse_history=record["rmse_history"], iterations=record["iterations"],
+                converged=record["converged"], stop_reason=record["stop_reason"],
+                n_samples=record["n_samples"],
+                sign_violations=tuple(record["sign_violations"]),
+                at_bound=tuple(record["at_bound"]),
+                unidentifiable=tuple(tuple(c) for c in record["unidentifiable"]),
+                fixed=record["fixed"],
+                signs={n: e["sign"] for n, e in record["parameters"].items() if "sign" in e},
+                units=record["units"], notes=tuple(record["notes"]))
+        except (KeyError, TypeError, ValueError) as error:
+            raise EstimationError(f"not a complete rotorid estimate record: {error!r}") from None
 
     def to_json(self) -> str:
         return json.dumps(self.as_dict(), indent=2)

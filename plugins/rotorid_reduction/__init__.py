@@ -1,0 +1,1 @@
+"""Built-in model-reduction criteria: normalised insensitivity and Cramér-Rao bound."""
