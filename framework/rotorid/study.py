@@ -18,6 +18,7 @@ from __future__ import annotations
 import json
 import sys
 import time
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
 from pathlib import Path
@@ -26,7 +27,7 @@ import attrs
 import numpy as np
 
 from .data import ManeuverSet
-from .errors import DataError, EstimationError, RotoridError
+from .errors import DataError, EstimationError, IdentifiabilityWarning, RotoridError
 from .estimation import Estimate
 from .flightcase import FlightCase
 from .io import atomic_write
@@ -256,10 +257,14 @@ def run_case(case: FlightCase, out_dir: str | Path, resume: bool = True,
     finished = _load_steps(directory / "steps", structure) if resume else []
     if finished:
         report(case.name, f"resuming after {len(finished)} finished reduction steps")
-    path = reduce(structure, ident, estimator, criteria, continue_to_zero=case.continue_to_zero,
-                  warm_start=case.warm_start, rule=case.rule,
-                  rmse_tolerance=case.rmse_tolerance, finished=finished, on_step=on_step,
-                  case=case.name)
+    with warnings.catch_warnings():
+        # Reduction starts from deliberately over-parameterised structures: their unidentifiable
+        # combinations are recorded in each step's estimate instead of flooding the terminal.
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
+        path = reduce(structure, ident, estimator, criteria,
+                      continue_to_zero=case.continue_to_zero, warm_start=case.warm_start,
+                      rule=case.rule, rmse_tolerance=case.rmse_tolerance, finished=finished,
+                      on_step=on_step, case=case.name)
     clock["reduction"] = time.perf_counter()
     selected = path.selected
     report(case.name, f"selected step {selected.index}: {selected.n_parameters} parameters, "
