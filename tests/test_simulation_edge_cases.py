@@ -1,8 +1,12 @@
-"""Edge cases of the simulation engine: nothing to force, records shorter than a delay."""
+"""Edge cases of the simulation engine: nothing to force, records shorter than a delay,
+and the interval integrals of the discretisation against the block matrix exponential."""
 
 import numpy as np
+import pytest
+import scipy.linalg
 
 from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
+from rotorid.discretisation import EQUATION_ROWS, _integrals
 from rotorid.simulation import Simulator
 
 CONDITION = FlightCondition.from_airspeed(40.0)
@@ -42,3 +46,32 @@ def test_delay_longer_than_the_record_leaves_the_input_unseen():
     y = Simulator(structure, ManeuverSet([Maneuver("short", t, u, np.zeros((6, 8)))])
                   ).outputs(values)[0]
     assert np.array_equal(y, np.zeros_like(y))
+
+
+@pytest.mark.parametrize("scale", [0.1, 3.0, 40.0])  # no doubling, a few, many
+def test_interval_integrals_match_the_block_exponential(scale):
+    rng = np.random.default_rng(4)
+    a = rng.normal(size=(2, 8, 8)) * scale
+    s = np.array([[0.02, 0.007], [0.02, 0.0131]])
+    phi, gam, kin = _integrals(a.astype(complex), s.astype(complex))
+    rows = list(EQUATION_ROWS)
+    for d in range(2):
+        for j in range(2):
+            block = np.zeros((20, 20))
+            block[:8, :8] = a[d]
+            block[rows, 8 + np.arange(6)] = 1.0
+            block[8 + np.arange(6), 14 + np.arange(6)] = 1.0
+            ex = scipy.linalg.expm(block * s[d, j])
+            for mine, ref in ((phi, ex[:8, :8]), (gam, ex[:8, 8:14]), (kin, ex[:8, 14:])):
+                assert np.max(np.abs(mine[d, j] - ref)) <= 1e-12 * np.max(np.abs(ref))
+
+
+def test_complex_step_through_the_integrals_gives_the_frechet_derivative():
+    rng = np.random.default_rng(5)
+    a = rng.normal(size=(8, 8)) * 5.0
+    direction = np.zeros((8, 8))
+    direction[2, 5] = 1.0
+    h = 1e-30
+    phi, _, _ = _integrals((a + 1j * h * direction)[None], np.array([[0.02 + 0j]]))
+    _, frechet = scipy.linalg.expm_frechet(a * 0.02, direction * 0.02)
+    assert np.max(np.abs(phi[0, 0].imag / h - frechet)) <= 1e-12 * np.max(np.abs(frechet))
