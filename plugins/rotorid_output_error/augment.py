@@ -1,10 +1,14 @@
-"""Model wrappers that add per-maneuver parameters: output biases."""
+"""Model wrappers that add per-maneuver parameters: output biases and initial states."""
 
 from __future__ import annotations
 
+import attrs
 import numpy as np
 
+from rotorid.data import ManeuverSet
 from rotorid.models import finite_difference_sensitivities
+from rotorid.simulation import Simulator
+from rotorid.structure import STATES
 
 
 class WithOutputBiases:
@@ -51,5 +55,69 @@ class WithOutputBiases:
             extra = np.zeros((y.shape[0], len(self.parameter_names) - self.n_base, n_o))
             for k in range(n_o):
                 extra[:, i * n_o + k, k] = 1.0
+            full.append(np.concatenate([s, extra], axis=1))
+        return outputs, full
+
+
+class WithInitialStates:
+    """A linear model plus the initial perturbation state of every maneuver
+    (``x0_<maneuver>_<state>``, 8 per maneuver, structure units, states ``u w q θ v p φ r``).
+
+    The outputs are linear in the initial states, so their sensitivities are the free
+    responses: the structure simulated with zero inputs from each unit initial state, all
+    maneuvers and states in one batched simulation.
+
+    Args:
+        model: a :class:`rotorid.models.LinearModel`.
+        maneuver_names: names of the maneuvers, in the order of the fitted sets.
+    """
+
+    def __init__(self, model, maneuver_names):
+        self.model = model
+        self.structure = model.structure
+        self.maneuver_names = tuple(maneuver_names)
+        self.output_names = model.output_names
+        self.n_base = len(model.parameter_names)
+        self.parameter_names = tuple(model.parameter_names) + tuple(
+            f"x0_{m}_{s}" for m in self.maneuver_names for s in STATES)
+
+    def start_states(self, maneuvers) -> np.ndarray:
+        """Each maneuver's ``initial_state`` (zeros without one), flattened to (8·M,)."""
+        return np.concatenate([np.zeros(8) if m.initial_state is None else m.initial_state
+                               for m in maneuvers])
+
+    def initial_values(self) -> np.ndarray:
+        extra = len(self.parameter_names) - self.n_base
+        return np.concatenate([self.model.initial_values(), np.zeros(extra)])
+
+    def bounds(self):
+        lower, upper = self.model.bounds()
+        extra = len(self.parameter_names) - self.n_base
+        return (np.concatenate([lower, np.full(extra, -np.inf)]),
+                np.concatenate([upper, np.full(extra, np.inf)]))
+
+    def _simulator(self, values, maneuvers) -> Simulator:
+        states = np.asarray(values[self.n_base:], dtype=float).reshape(len(maneuvers), 8)
+        return Simulator(self.structure, maneuvers, initial_states=states)
+
+    def simulate(self, values, maneuvers):
+        return self._simulator(values, maneuvers).outputs(values[: self.n_base])
+
+    def _free_responses(self, values, maneuvers) -> list[np.ndarray]:
+        """Per maneuver (N_i, 8, n_o): outputs of zero inputs from each unit initial state."""
+        quiet = ManeuverSet([attrs.evolve(m, name=f"{m.name}#{j}", inputs=np.zeros_like(m.inputs))
+                             for m in maneuvers for j in range(8)], hold=maneuvers.hold)
+        units = np.tile(np.eye(8), (len(maneuvers), 1))
+        responses = Simulator(self.structure, quiet, initial_states=units).outputs(
+            values[: self.n_base])
+        return [np.stack(responses[8 * i: 8 * i + 8], axis=1) for i in range(len(maneuvers))]
+
+    def sensitivities(self, values, maneuvers):
+        outputs, sens = self._simulator(values, maneuvers).outputs_and_sensitivities(
+            values[: self.n_base])
+        full = []
+        for i, (s, free) in enumerate(zip(sens, self._free_responses(values, maneuvers))):
+            extra = np.zeros((s.shape[0], 8 * len(maneuvers), s.shape[2]))
+            extra[:, 8 * i: 8 * i + 8] = free
             full.append(np.concatenate([s, extra], axis=1))
         return outputs, full

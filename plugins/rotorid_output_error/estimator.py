@@ -24,7 +24,7 @@ from rotorid.models import LinearModel, as_model, measured_outputs
 from rotorid.structure import ModelStructure
 from rotorid.plugins import notify
 
-from .augment import WithOutputBiases
+from .augment import WithInitialStates, WithOutputBiases
 from .levenberg_marquardt import Problem, Settings, run
 
 NAME = "output-error"
@@ -52,6 +52,9 @@ class OutputErrorEstimator:
         weights: optional output name → weight multiplying its residual.
         enforce_signs: use the sign priors as bounds.
         output_biases: estimate one constant bias per maneuver and output.
+        initial_states: estimate the initial perturbation state of every maneuver
+            (``x0_<maneuver>_<state>``, structure units; model structures only), starting
+            from each maneuver's ``initial_state`` or trim.
         start: ``"auto"`` (equation error when every initial value is zero, else the
             initial values), ``"initial"`` or ``"equation-error"``.
         horizons: durations (s) of the initial portions fitted before the full records.
@@ -68,6 +71,7 @@ class OutputErrorEstimator:
     weights: Mapping[str, float] | None = None
     enforce_signs: bool = False
     output_biases: bool = False
+    initial_states: bool = False
     start: str = attrs.field(default="auto", validator=_check_choice(START_STRATEGIES))
     horizons: tuple[float, ...] = attrs.field(default=(3.0, 6.0), converter=tuple)
     callback: Callable | None = None
@@ -85,8 +89,15 @@ class OutputErrorEstimator:
         base = (LinearModel(model, enforce_signs=self.enforce_signs)
                 if isinstance(model, ModelStructure) else as_model(model))
         start_values, start_note = self._start_values(base, maneuvers, start)
-        fitted = WithOutputBiases(base, maneuvers.names) if self.output_biases else base
+        fitted = base
+        if self.initial_states:
+            if not isinstance(base, LinearModel):
+                raise EstimationError("initial_states=True needs a model structure; a model of "
+                                      "one's own can declare its initial states as parameters")
+            fitted = WithInitialStates(base, maneuvers.names)
+            start_values = np.concatenate([start_values, fitted.start_states(maneuvers)])
         if self.output_biases:
+            fitted = WithOutputBiases(fitted, maneuvers.names)
             start_values = np.concatenate(
                 [start_values, np.zeros(len(fitted.parameter_names) - start_values.size)])
         columns, weights = self._output_selection(fitted)
