@@ -100,7 +100,8 @@ def test_options_reach_the_estimator(case, tmp_path, capsys):
     out = tmp_path / "biases.json"
     status = cli.main(["identify", str(model), str(data / "doublet_*.csv"), "--out", str(out),
                        "--outputs", "q,theta,p,phi,r,ax,ay,az", "--noise", "diagonal",
-                       "--output-biases", "--enforce-signs", "--max-iterations", "30",
+                       "--output-biases", "--initial-states", "--enforce-signs",
+                       "--max-iterations", "30",
                        "--quiet"])
     captured = capsys.readouterr()
     assert status == 0, captured.err
@@ -111,6 +112,7 @@ def test_options_reach_the_estimator(case, tmp_path, capsys):
     assert np.array_equal(covariance, np.diag(np.diag(covariance)))
     assert "bias_doublet_long_q" in record["parameters"]
     assert abs(record["parameters"]["bias_doublet_long_q"]["value"]) < 0.05
+    assert "x0_doublet_lat_p" in record["parameters"]
     assert record["parameters"]["M_q"]["value"] <= 0.0
 
 

@@ -4,7 +4,8 @@ Usage::
 
     rotorid identify MODEL.toml DATA... [--estimator output-error] [--out result.json]
                      [--outputs ax,az,...] [--noise full|diagonal] [--max-iterations N]
-                     [--enforce-signs] [--output-biases] [--hold zoh|foh] [--quiet]
+                     [--enforce-signs] [--output-biases] [--initial-states]
+                     [--hold zoh|foh] [--quiet]
 
 ``MODEL.toml`` is a model file (:mod:`rotorid.modelfile`); its initial values are the start
 values (all zero: the estimator chooses its own start, see docs/estimation.md). DATA are
@@ -47,6 +48,8 @@ def add_arguments(parser) -> None:
                         help="use the derivatives' sign priors as bounds")
     parser.add_argument("--output-biases", action="store_true",
                         help="estimate one constant bias per maneuver and output")
+    parser.add_argument("--initial-states", action="store_true",
+                        help="estimate the initial perturbation state of every maneuver")
     parser.add_argument("--hold", choices=("zoh", "foh"), default="zoh",
                         help="input hold between samples (default zoh)")
     parser.add_argument("--quiet", action="store_true",
@@ -74,6 +77,8 @@ def _options(args) -> dict:
         options["enforce_signs"] = True
     if args.output_biases:
         options["output_biases"] = True
+    if args.initial_states:
+        options["initial_states"] = True
     if not args.quiet:
         options["callback"] = _print_progress
     return options
