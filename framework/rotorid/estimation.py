@@ -83,7 +83,9 @@ def statistics(information: np.ndarray, names) -> ParameterStatistics:
         for k in np.flatnonzero(weak):
             vec = eigvec[:, k]
             members = np.flatnonzero(np.abs(vec) >= 0.2 * np.abs(vec).max())
-            combos.append(tuple(names[i] for i in members))
+            combo = tuple(names[i] for i in members)
+            if combo not in combos:
+                combos.append(combo)
         warnings.warn(IdentifiabilityWarning(
             "information matrix is ill-conditioned; nearly unidentifiable combination(s): "
             + "; ".join(" + ".join(c) for c in combos)
