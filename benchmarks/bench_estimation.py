@@ -21,7 +21,11 @@ Printed: both wall times, each fit's cost det R divided by det R at the true par
 the noise floor; below 1 is the usual overfit of 62 parameters), and the ratio of the times.
 BLAS runs on one thread. Target (2 cores): rotorid ≤ 2 s, ≥ 20× faster than the reference.
 
+``--variants`` also fits once without the equation-error start, without the horizons, and
+with neither (the paper's plain procedure), to measure what each departure buys.
+
     .venv/bin/python benchmarks/bench_estimation.py [--repeats 3] [--reference-max-nfev N]
+                                                    [--variants]
 """
 
 from __future__ import annotations
@@ -62,9 +66,15 @@ def det_r(structure, values, maneuvers) -> float:
     return float(np.linalg.det(residuals.T @ residuals / len(residuals)))
 
 
-def rotorid_fit(structure, maneuvers):
-    """(wall time in s, estimate) of one fit with the default output-error estimator."""
-    estimator = rotorid.create("estimators", "output-error")
+#: ``--variants``: the default's two departures from the paper's procedure, one at a time.
+VARIANTS = {"equation-error start, no horizons": {"horizons": ()},
+            "zero start, horizons": {"start": "initial"},
+            "plain (paper): zero start, no horizons": {"start": "initial", "horizons": ()}}
+
+
+def rotorid_fit(structure, maneuvers, **options):
+    """(wall time in s, estimate) of one fit with the output-error estimator."""
+    estimator = rotorid.create("estimators", "output-error", **options)
     started = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IdentifiabilityWarning)
@@ -104,6 +114,8 @@ def main(argv=None) -> None:
     parser.add_argument("--jacobian", choices=("2-point", "3-point"), default="2-point",
                         help="finite-difference scheme of the reference (default 2-point)")
     parser.add_argument("--seed", type=int, default=3, help="noise seed of the data")
+    parser.add_argument("--variants", action="store_true",
+                        help="also time the start/horizon variants once (docs/estimation.md)")
     args = parser.parse_args(argv)
 
     structure, truth = true_structure()
@@ -121,6 +133,12 @@ def main(argv=None) -> None:
           f"{min(t for t, _ in runs):.2f}–{max(t for t, _ in runs):.2f}), converged "
           f"{estimate.converged}, {estimate.iterations} final iterations, "
           f"cost/cost(truth) = {estimate.cost / floor:.4f}")
+
+    for label, options in VARIANTS.items() if args.variants else ():
+        elapsed, variant = rotorid_fit(zero, maneuvers, **options)
+        print(f"  variant {label}: {elapsed:.1f} s, converged {variant.converged} "
+              f"({variant.stop_reason}), {variant.iterations} final iterations, "
+              f"cost/cost(truth) = {variant.cost / floor:.4g}, RMSE {variant.rmse:.4g}")
 
     elapsed, result = reference_fit(zero, maneuvers, args.reference_max_nfev, args.jacobian)
     capped = result.status == 0

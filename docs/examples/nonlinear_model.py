@@ -65,7 +65,7 @@ class LongitudinalAircraft:
         self.initial_state = tuple(float(x) for x in initial_state)
 
     def initial_values(self) -> np.ndarray:
-        """Textbook first guesses, shape (6,); 20-60 % away from the truth."""
+        """Textbook first guesses, shape (6,); 18-100 % away from the truth."""
         return np.array([4.0, 0.0, 0.0, -0.5, -6.0, -0.8])
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
