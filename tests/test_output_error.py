@@ -226,3 +226,15 @@ def test_estimate_report_json_and_bad_options():
         estimator(noise="banded")
     with pytest.raises(EstimationError, match="start has shape"):
         estimator().estimate(structure, data, start=np.zeros(2))
+
+
+def test_diverging_start_values_fall_back_to_the_initial_values():
+    structure = small_structure(delays=())
+    truth = structure.as_vector(SMALL_TRUTH)
+    data = with_outputs(structure, truth, doublet_maneuvers(n=400), noise=0.05)
+    unstable = truth.copy()
+    unstable[structure.parameter_names.index("L_p")] = 60.0   # roll divergence
+    result = estimator().estimate(structure, data, start=unstable)
+    assert any("diverging" in note for note in result.notes)
+    assert result.converged
+    assert result.value("L_p") == pytest.approx(SMALL_TRUTH["L_p"], rel=0.05)

@@ -18,7 +18,7 @@ import numpy as np
 
 from rotorid import blas
 from rotorid.data import ManeuverSet
-from rotorid.errors import EstimationError
+from rotorid.errors import EstimationError, SimulationDivergedError
 from rotorid.estimation import Estimate, statistics
 from rotorid.models import LinearModel, as_model, measured_outputs
 from rotorid.structure import ModelStructure
@@ -102,18 +102,16 @@ class OutputErrorEstimator:
                 [start_values, np.zeros(len(fitted.parameter_names) - start_values.size)])
         columns, weights = self._output_selection(fitted)
         notes = [start_note] if start_note else []
-        values = start_values
-        for horizon in self._stages(maneuvers):
-            portion = ManeuverSet([m.head(horizon) for m in maneuvers], hold=maneuvers.hold)
-            result = self._run(fitted, portion, columns, weights, values,
-                               Settings(max_iterations=15, cost_tolerance=1e-4,
-                                        noise=self.noise), stage=f"{horizon:g} s")
-            values = result.values
-            notes.append(f"horizon {horizon:g} s: {result.iterations} iterations, "
-                         f"RMSE {result.rmse:.4g}")
-        result = self._run(fitted, maneuvers, columns, weights, values,
-                           Settings(self.max_iterations, self.cost_tolerance,
-                                    self.step_tolerance, noise=self.noise), stage="full")
+        fallback = fitted.initial_values()
+        try:
+            result = self._run_stages(fitted, maneuvers, columns, weights, start_values, notes)
+        except SimulationDivergedError:
+            if np.array_equal(start_values, fallback):
+                raise
+            notes.append("the start values gave a diverging simulation; restarted from the "
+                         "initial values")
+            start_values = fallback
+            result = self._run_stages(fitted, maneuvers, columns, weights, start_values, notes)
         if np.array_equal(result.values, start_values):
             result = attrs.evolve(result, converged=False, stop_reason=(
                 "no step moved the parameters from their start values: " + result.stop_reason))
@@ -124,6 +122,20 @@ class OutputErrorEstimator:
                               sum(m.n_samples for m in maneuvers), columns)
 
     # ----------------------------------------------------------------- steps
+    def _run_stages(self, fitted, maneuvers, columns, weights, values, notes):
+        """Horizon continuation, then the full records; returns the last run's result."""
+        for horizon in self._stages(maneuvers):
+            portion = ManeuverSet([m.head(horizon) for m in maneuvers], hold=maneuvers.hold)
+            result = self._run(fitted, portion, columns, weights, values,
+                               Settings(max_iterations=15, cost_tolerance=1e-4,
+                                        noise=self.noise), stage=f"{horizon:g} s")
+            values = result.values
+            notes.append(f"horizon {horizon:g} s: {result.iterations} iterations, "
+                         f"RMSE {result.rmse:.4g}")
+        return self._run(fitted, maneuvers, columns, weights, values,
+                         Settings(self.max_iterations, self.cost_tolerance,
+                                  self.step_tolerance, noise=self.noise), stage="full")
+
     def _start_values(self, model, maneuvers, start):
         names = tuple(model.parameter_names)
         if start is not None:
