@@ -32,8 +32,10 @@ from .structure import ModelStructure
 
 #: A state perturbation beyond this magnitude (structure units) counts as divergence.
 DIVERGENCE_LIMIT = 1e7
-#: Size of the sensitivity states of one time block (bytes), chosen to stay in cache.
+#: Size of the states of one time block (bytes), chosen to stay in cache.
 _BLOCK_BYTES = 1 << 20
+#: Longest time block (samples); divergence is checked at the end of every block.
+_BLOCK_SAMPLES = 64
 
 
 class _Group:
@@ -135,21 +137,23 @@ class _Companion:
                 self.output[:, slot] = maps.Cs[lag][:, c]
 
 
-def _propagate(companion: _Companion, start: np.ndarray, forcing, n: int, block: int, emit,
-               where: str, dt: float) -> None:
+def _propagate(companion: _Companion, start: np.ndarray, forcing, n: int, emit, where: str,
+               dt: float) -> None:
     """Run z_k+1 = transition·z_k + forcing_k for k < n − 1, one time block at a time.
 
     Args:
         start: (R, S) z_0.
         forcing: ``forcing(first, stop, out)`` writes the forcing of steps first … stop − 1
             into ``out`` (stop − first, R, S) (zero in the history slots).
-        n: number of samples; block: samples per block.
+        n: number of samples; a block holds at most :data:`_BLOCK_SAMPLES` samples and
+            :data:`_BLOCK_BYTES` of states.
         emit: ``emit(first, stop, z)`` receives z_first … z_stop−1 as (stop − first, R, S).
         where, dt: named in the divergence error; dt in s.
     Raises:
         SimulationDivergedError: |z| exceeds :data:`DIVERGENCE_LIMIT` or is not finite.
     """
     rows, size = start.shape
+    block = max(1, min(n, _BLOCK_SAMPLES, _BLOCK_BYTES // (rows * size * 8)))
     buffer = np.empty((block + 1, rows, size))
     buffer[0] = start
     step = companion.transition.T
@@ -265,7 +269,7 @@ class Simulator:
         def emit(first, stop, z):
             states[first:stop] = z
 
-        _propagate(companion, start, forcing, n, n, emit,
+        _propagate(companion, start, forcing, n, emit,
                    f"maneuvers {', '.join(group.names)}", maps.dt)
         return states
 
@@ -314,9 +318,7 @@ class Simulator:
                 flat[:, direct_columns] += (lagged[first:stop].reshape(-1, len(taps))
                                             @ direct_weights)
 
-        rows_per_step = b * p * size * 8
-        block = max(1, min(n, _BLOCK_BYTES // rows_per_step))
-        _propagate(companion, np.zeros((b * p, size)), forcing, n, block, emit,
+        _propagate(companion, np.zeros((b * p, size)), forcing, n, emit,
                    "sensitivities", maps.dt)
         return dy
 
