@@ -110,6 +110,17 @@ def test_a_fit_that_cannot_move_never_reports_convergence():
     assert np.array_equal(result.values, result.start)
 
 
+def test_a_start_outside_the_bounds_that_cannot_move_never_reports_convergence():
+    structure = ModelStructure(HOVER, [Derivative("M_q", sign="negative"), Derivative("M_long")])
+    quiet = ManeuverSet([Maneuver("quiet", np.arange(200) * 0.02, np.zeros((200, 4)),
+                                  np.random.default_rng(0).normal(size=(200, 8)))])
+    result = estimator(start="initial", horizons=(), enforce_signs=True).estimate(
+        structure, quiet, start={"M_q": 1.0, "M_long": 0.5})
+    assert result.value("M_q") == 0.0          # clipped onto its bound, then never moved
+    assert not result.converged
+    assert "start values" in result.stop_reason
+
+
 def test_zero_start_moves_without_equation_error_start():
     structure = small_structure(delays=())
     truth = structure.as_vector(SMALL_TRUTH)

@@ -112,7 +112,7 @@ class OutputErrorEstimator:
                          "initial values")
             start_values = fallback
             result = self._run_stages(fitted, maneuvers, columns, weights, start_values, notes)
-        if np.array_equal(result.values, start_values):
+        if np.array_equal(result.values, np.clip(start_values, *fitted.bounds())):
             result = attrs.evolve(result, converged=False, stop_reason=(
                 "no step moved the parameters from their start values: " + result.stop_reason))
         elif result.iterations == 0:
