@@ -125,6 +125,19 @@ def test_max_iterations_limits_the_final_run(case, tmp_path, capsys):
     assert json.loads(out.read_text(encoding="utf-8"))["iterations"] <= 1
 
 
+def test_warnings_are_one_line_each(case, tmp_path, capsys):
+    model, data, _ = case
+    out = tmp_path / "long_only.json"
+    status = cli.main(["identify", str(model), str(data / "doublet_long.csv"), "--out", str(out),
+                       "--quiet"])
+    err = capsys.readouterr().err
+    assert status == 0, err
+    lines = err.strip().splitlines()
+    assert lines and all(line.startswith("rotorid identify: warning: ") for line in lines)
+    assert any("nearly unidentifiable" in line and "N_ped" in line for line in lines)
+    assert "N_ped" in sum(json.loads(out.read_text(encoding="utf-8"))["unidentifiable"], [])
+
+
 def _error_line(argv, capsys):
     status = cli.main(argv)
     err = capsys.readouterr().err.strip()

@@ -10,11 +10,11 @@ Usage::
 ``MODEL.toml`` is a model file (:mod:`rotorid.modelfile`); its initial values are the start
 values (all zero: the estimator chooses its own start, see docs/estimation.md). DATA are
 maneuver files (CSV, NPZ, MAT), directories or glob patterns of the ``files`` data source; they
-are converted to the model's unit system. The report goes to stdout, one progress line per
-accepted iteration to stderr (unless ``--quiet``), and the estimate is written atomically as
-JSON (the format of :meth:`rotorid.estimation.Estimate.as_dict`, plus ``structure``: the model
-file's path relative to the JSON file, so that ``rotorid verify RESULT.json SWEEPS...`` finds
-it).
+are converted to the model's unit system. The report goes to stdout; stderr gets one line per
+accepted iteration (unless ``--quiet``) and one line per warning (an unidentifiable parameter
+combination, for instance). The estimate is written atomically as JSON (the format of
+:meth:`rotorid.estimation.Estimate.as_dict`, plus ``structure``: the model file's path relative
+to the JSON file, so that ``rotorid verify RESULT.json SWEEPS...`` finds it).
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from __future__ import annotations
 import json
 import os
 import sys
+import warnings
 from pathlib import Path
 
 NAME = "identify"
@@ -108,7 +109,7 @@ def _record(estimate, model_path: Path, out: Path) -> dict:
 
 
 def run(args) -> int:
-    from ..errors import MissingFileError
+    from ..errors import MissingFileError, RotoridWarning
     from ..io import atomic_write
     from ..modelfile import load_model
     from .simulate import _load_inputs
@@ -119,7 +120,11 @@ def run(args) -> int:
         raise MissingFileError(f"cannot write {out}: directory {out.parent} does not exist")
     estimator = _estimator(args.estimator, _options(args))
     maneuvers = _load_inputs(args.data, args.hold, structure.units.name)
-    estimate = estimator.estimate(structure, maneuvers)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RotoridWarning)
+        estimate = estimator.estimate(structure, maneuvers)
+    for warning in caught:
+        print(f"rotorid identify: warning: {warning.message}", file=sys.stderr)
     atomic_write(out, json.dumps(_record(estimate, Path(args.model), out), indent=2))
     print(estimate.report())
     print(f"estimate written to {out}")
