@@ -7,6 +7,7 @@ import scipy.linalg
 
 from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
 from rotorid.discretisation import EQUATION_ROWS, _integrals
+from rotorid.errors import StructureError
 from rotorid.simulation import Simulator
 
 CONDITION = FlightCondition.from_airspeed(40.0)
@@ -75,3 +76,11 @@ def test_complex_step_through_the_integrals_gives_the_frechet_derivative():
     phi, _, _ = _integrals((a + 1j * h * direction)[None], np.array([[0.02 + 0j]]))
     _, frechet = scipy.linalg.expm_frechet(a * 0.02, direction * 0.02)
     assert np.max(np.abs(phi[0, 0].imag / h - frechet)) <= 1e-12 * np.max(np.abs(frechet))
+
+
+def test_negative_delays_are_rejected_by_name():
+    structure = ModelStructure.six_dof(CONDITION).with_delays(["L_lat", "M_long"])
+    t = np.arange(10) * 0.02
+    maneuvers = ManeuverSet([Maneuver("m", t, np.ones((10, 4)), np.zeros((10, 8)))])
+    with pytest.raises(StructureError, match="negative delay.*tau_M_long.*bound them below"):
+        Simulator(structure, maneuvers).outputs({"tau_M_long": -0.01})

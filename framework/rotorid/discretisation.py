@@ -32,11 +32,12 @@ analytic, as the complex step requires.
 
 from __future__ import annotations
 
-import attrs
 import math
 
+import attrs
 import numpy as np
 
+from .errors import StructureError
 from .structure import ModelStructure
 
 #: Complex-step size; any tiny value works because no difference is taken.
@@ -170,6 +171,10 @@ def discrete_maps(structure: ModelStructure, values, dt: float, hold: str = "zoh
     (structure.parameter_names order) are returned too.
     """
     terms = _terms(structure, values)
+    negative = [d.delay_name for d, tau in zip(structure.derivatives, terms.delay) if tau < 0]
+    if negative:
+        raise StructureError(f"negative delay(s) {', '.join(negative)}: delays are lags ≥ 0 s "
+                             f"(advances are not modelled); bound them below by 0")
     n_params = structure.n_parameters
     gain, delay = _directions(terms, n_params, with_derivatives)
     n_dir = gain.shape[0]
