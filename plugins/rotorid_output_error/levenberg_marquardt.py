@@ -118,15 +118,17 @@ class Problem:
 
             outputs, sens = finite_difference_sensitivities(self.model, values, self.maneuvers)
         residuals = self.residuals(outputs)
-        r_inv = np.linalg.inv(r)
+        # Whiten with R⁻¹ = W Wᵀ, then F = JᵀJ and G = −Jᵀ(e W) with J the whitened
+        # sensitivities laid out as (P, N·n_o): one matrix product per maneuver.
+        whiten = np.linalg.cholesky(np.linalg.inv(r))
         p = len(values)
         f = np.zeros((p, p))
         g = np.zeros(p)
         for e, s in zip(residuals, sens):
-            s = s * self.weights                     # (N, P, n_o)
-            weighted = s @ r_inv                     # (N, P, n_o)
-            f += np.tensordot(weighted, s, axes=([0, 2], [0, 2]))
-            g -= np.tensordot(weighted, e, axes=([0, 2], [0, 1]))
+            jacobian = np.ascontiguousarray(((s * self.weights) @ whiten).transpose(1, 0, 2))
+            jacobian = jacobian.reshape(p, -1)
+            f += jacobian @ jacobian.T
+            g -= jacobian @ (e @ whiten).reshape(-1)
         return f, g
 
 
