@@ -34,6 +34,7 @@ from collections.abc import Sequence
 import attrs
 import numpy as np
 
+from .blas import single_threaded
 from .data import INPUT_CHANNELS, OUTPUT_CHANNELS, ManeuverSet
 from .errors import VerificationError
 
@@ -131,12 +132,35 @@ def effective_averages(n_segments: int, taper: np.ndarray, hop: int) -> float:
 
 
 def _segments(record: np.ndarray, length: int, hop: int) -> np.ndarray:
-    """Mean-removed segments of one record, shape (K, C, length)."""
+    """Mean-removed segments of one record, shape (K, C, length), contiguous."""
     starts = np.arange(0, record.shape[0] - length + 1, hop)
     index = starts[:, None] + np.arange(length)[None, :]
     segments = record[index]  # (K, length, C)
     segments = segments - segments.mean(axis=1, keepdims=True)
-    return np.transpose(segments, (0, 2, 1))
+    return np.ascontiguousarray(np.transpose(segments, (0, 2, 1)))
+
+
+def _accumulate(records, dt, length, hop, taper, kernel_cos, kernel_sin):
+    """Sum of segment cross products over records, segment count and independent averages."""
+    total = None
+    n_segments, n_effective = 0, 0.0
+    for record in records:
+        record = np.asarray(record, dtype=float)
+        if record.ndim != 2:
+            raise VerificationError(f"records must have shape (N, C), got {record.shape}")
+        if not np.all(np.isfinite(record)):
+            raise VerificationError("a record contains NaN or infinite samples; clean it first")
+        if record.shape[0] < length:
+            continue
+        segments = _segments(record, length, hop)
+        flat = segments.reshape(-1, length)  # one matrix product for all segments/channels
+        spectra = ((flat @ kernel_cos - 1j * (flat @ kernel_sin)) * dt).reshape(
+            segments.shape[0], segments.shape[1], -1)  # (K, C, M)
+        outer = np.einsum("kim,kjm->mij", spectra.conj(), spectra)
+        total = outer if total is None else total + outer
+        n_segments += segments.shape[0]
+        n_effective += effective_averages(segments.shape[0], taper, hop)
+    return total, n_segments, n_effective
 
 
 def cross_spectra(records: Sequence[np.ndarray], dt: float, omega: np.ndarray, window: float,
@@ -167,22 +191,9 @@ def cross_spectra(records: Sequence[np.ndarray], dt: float, omega: np.ndarray, w
     taper = _hann(length)
     phase = np.outer(np.arange(length) * dt, omega)  # (L, M)
     kernel_cos, kernel_sin = np.cos(phase) * taper[:, None], np.sin(phase) * taper[:, None]
-    total = None
-    n_segments, n_effective = 0, 0.0
-    for record in records:
-        record = np.asarray(record, dtype=float)
-        if record.ndim != 2:
-            raise VerificationError(f"records must have shape (N, C), got {record.shape}")
-        if not np.all(np.isfinite(record)):
-            raise VerificationError("a record contains NaN or infinite samples; clean it first")
-        if record.shape[0] < length:
-            continue
-        segments = _segments(record, length, hop)
-        spectra = (segments @ kernel_cos - 1j * (segments @ kernel_sin)) * dt  # (K, C, M)
-        outer = np.einsum("kim,kjm->mij", spectra.conj(), spectra)
-        total = outer if total is None else total + outer
-        n_segments += segments.shape[0]
-        n_effective += effective_averages(segments.shape[0], taper, hop)
+    with single_threaded():  # small products: one BLAS thread avoids core contention
+        total, n_segments, n_effective = _accumulate(records, dt, length, hop, taper,
+                                                     kernel_cos, kernel_sin)
     if total is None:
         longest = max((np.asarray(r).shape[0] for r in records), default=0) * dt
         raise VerificationError(f"no record is as long as the {window:.3g} s window (the "
@@ -388,7 +399,8 @@ def estimate_responses(records: Sequence[np.ndarray], dt: float, input_names: Se
     if windows is None:
         windows = default_windows(min(r.shape[0] for r in records) * dt)
     spectra = [cross_spectra(records, dt, omega, t, overlap) for t in windows]
-    estimates = [miso_response(s) for s in spectra]
+    with single_threaded():
+        estimates = [miso_response(s) for s in spectra]
     merged = composite(estimates, [s.window for s in spectra], omega)
     return tuple(
         FrequencyResponse(
