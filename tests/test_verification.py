@@ -267,3 +267,27 @@ def test_verify_command_writes_checks_and_figures(simulated_sweeps, tmp_path, ca
     assert not list((tmp_path / "out2").glob("*.png"))
     assert main(["verify", str(missing), "--out", str(tmp_path / "out3")]) == 2
     assert "RESULT.json SWEEPS" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_paper_story_on_the_truth_model(envelopes):
+    """Hover data from the nonlinear truth model (quick records): the model identified with
+    the paper's delays verifies better on the sweeps than the one without (paper figs. 4–5)."""
+    from rotorid.plugins import create
+    from rotorid.structure import FlightCondition, ModelStructure
+    from rotorid.verification import verify_model
+
+    data = create("data-sources", "helisim").generate({"condition": "hover", "quick": True})
+    identification = data.select(lambda m: m.metadata.get("kind") != "sweep")
+    sweeps = data.select(kind="sweep")
+    estimator = create("estimators", "output-error")
+    plain = ModelStructure.six_dof(FlightCondition.from_airspeed(0.0))
+    first = estimator.estimate(plain, identification)
+    delayed = plain.with_delays()
+    second = estimator.estimate(delayed, identification, start=first.as_mapping())
+    pairs = ["q/long", "p/long", "q/lat", "p/lat"]
+    without = verify_model(plain, first.as_mapping(), sweeps, pairs, envelopes)
+    with_delays = verify_model(delayed, second.as_mapping(), sweeps, pairs, envelopes)
+    assert with_delays.average_cost() < 0.5 * without.average_cost()
+    assert without["q/long"].checks["muad"].passed is False
+    assert with_delays["q/long"].checks["muad"].passed is True
