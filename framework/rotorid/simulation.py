@@ -138,7 +138,7 @@ class _Companion:
 
 
 def _propagate(companion: _Companion, start: np.ndarray, forcing, n: int, emit, where: str,
-               dt: float) -> None:
+               dt: float, limit: float = DIVERGENCE_LIMIT) -> None:
     """Run z_k+1 = transition·z_k + forcing_k for k < n − 1, one time block at a time.
 
     Args:
@@ -149,8 +149,10 @@ def _propagate(companion: _Companion, start: np.ndarray, forcing, n: int, emit, 
             :data:`_BLOCK_BYTES` of states.
         emit: ``emit(first, stop, z)`` receives z_first … z_stop−1 as (stop − first, R, S).
         where, dt: named in the divergence error; dt in s.
+        limit: magnitude counted as divergence (sensitivities of a bounded but unstable
+            response may legitimately be large: they pass ``inf``, so only overflow counts).
     Raises:
-        SimulationDivergedError: |z| exceeds :data:`DIVERGENCE_LIMIT` or is not finite.
+        SimulationDivergedError: |z| exceeds ``limit`` or is not finite.
     """
     rows, size = start.shape
     block = max(1, min(n, _BLOCK_SAMPLES, _BLOCK_BYTES // (rows * size * 8)))
@@ -168,10 +170,10 @@ def _propagate(companion: _Companion, start: np.ndarray, forcing, n: int, emit, 
                 np.matmul(buffer[k], step, out=product)
                 buffer[k + 1] += product
             peak = np.abs(buffer[steps]).max()
-            if not np.isfinite(peak) or peak > DIVERGENCE_LIMIT:
+            if not np.isfinite(peak) or peak > limit:
                 raise SimulationDivergedError(
                     f"simulation diverged ({where}) by t = {(first + steps) * dt:.3f} s: "
-                    f"state magnitude {peak:.3g} exceeds {DIVERGENCE_LIMIT:g}; "
+                    f"state magnitude {peak:.3g} exceeds {limit:g}; "
                     f"the model is unstable for these parameter values")
             emit(first, stop, buffer[:length])
             buffer[0] = buffer[length]
@@ -319,7 +321,7 @@ class Simulator:
                                             @ direct_weights)
 
         _propagate(companion, np.zeros((b * p, size)), forcing, n, emit,
-                   "sensitivities", maps.dt)
+                   "sensitivities", maps.dt, limit=np.inf)
         return dy
 
 

@@ -16,7 +16,6 @@ runs the whole comparison for an identified model.
 
 from __future__ import annotations
 
-import types
 from collections.abc import Mapping, Sequence
 from typing import Protocol, runtime_checkable
 
@@ -288,8 +287,28 @@ def envelopes_by_name(names: Sequence[str], **options) -> dict[str, ValidationEn
 
 
 # ----------------------------------------------------------------- sweep comparison
+class _FrozenMapping(Mapping):
+    """A read-only mapping that, unlike ``types.MappingProxyType``, pickles (results travel
+    between processes when a study runs on an executor)."""
+
+    def __init__(self, mapping):
+        self._items = dict(mapping)
+
+    def __getitem__(self, key):
+        return self._items[key]
+
+    def __iter__(self):
+        return iter(self._items)
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self._items!r})"
+
+
 def _frozen_mapping(mapping) -> Mapping:
-    return types.MappingProxyType(dict(mapping))
+    return _FrozenMapping(mapping)
 
 
 @attrs.frozen(eq=False)
