@@ -29,8 +29,8 @@ def criteria():
 
 @pytest.fixture(scope="module")
 def data():
-    truth_structure = ModelStructure(HOVER, [Derivative(n) for n in TRUE])
-    return with_outputs(truth_structure, truth_structure.as_vector(TRUE),
+    truth_structure = ModelStructure(HOVER, [Derivative(n) for n in TRUE]).with_delays(["L_lat"])
+    return with_outputs(truth_structure, truth_structure.as_vector({**TRUE, "tau_L_lat": 0.06}),
                         doublet_maneuvers(n=300), noise=0.05, seed=2)
 
 
@@ -120,7 +120,12 @@ def test_study_on_flight_data_files_writes_results_and_resumes(tmp_path, data):
     record = json.loads((tmp_path / "out" / "own" / "result.json").read_text())
     assert record["reduction"]["removed"] == list(first.path.removed)
     assert set(record["selected_structure"]) == set(TRUE)
-    assert set(record["estimates"]["with delays"]["delays"]) == {"L_lat", "M_long"}
+    # The data carry a 0.06 s delay on L_lat and none on M_long: the first is estimated, the
+    # second is dropped as undetermined (it sits at its lower bound).
+    delays = record["estimates"]["with delays"]["delays"]
+    assert set(delays) == {"L_lat"}
+    assert delays["L_lat"]["value"] == pytest.approx(0.06, abs=0.01)
+    assert record["dropped_delays"] == ["M_long"]
     assert first.time_metrics["with delays"].rmse <= first.time_metrics["no delays"].rmse * 1.01
 
     again = []

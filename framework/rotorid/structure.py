@@ -279,6 +279,13 @@ class ModelStructure:
                 attrs.evolve(self.derivative(name), delay=Delay(initial, upper)))
         return structure
 
+    def without_delay(self, name: str) -> "ModelStructure":
+        """Return the structure with the delay of derivative ``name`` removed."""
+        derivative = self.derivative(name)
+        if derivative.delay is None:
+            raise StructureError(f"derivative {name} has no delay to remove")
+        return self.replacing(attrs.evolve(derivative, delay=None))
+
     def with_initial(self, values: Mapping[str, float]) -> "ModelStructure":
         """Return the structure with new initial values (derivatives by name, delays by
         ``tau_<name>``)."""

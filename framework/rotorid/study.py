@@ -64,6 +64,7 @@ class CaseResult:
     verification: Mapping[str, VerificationResult]
     truth_derivatives: Mapping[str, float] | None
     seconds: Mapping[str, float]
+    dropped_delays: tuple[str, ...] = ()
 
     @property
     def name(self) -> str:
@@ -100,6 +101,7 @@ class CaseResult:
             "frequency_verification": {label: v.summary()
                                        for label, v in self.verification.items()},
             "key_derivatives": self.key_derivatives(),
+            "dropped_delays": list(self.dropped_delays),
             "seconds": dict(self.seconds),
         }
 
@@ -269,11 +271,13 @@ def run_case(case: FlightCase, out_dir: str | Path, resume: bool = True,
     selected = path.selected
     report(case.name, f"selected step {selected.index}: {selected.n_parameters} parameters, "
                       f"RMSE {selected.rmse:.4f}")
-    delayed, delayed_estimate = _with_delays(case, selected, ident, estimator, directory)
+    delayed, delayed_estimate, dropped = _with_delays(case, selected, ident, estimator,
+                                                      directory)
     clock["delays"] = time.perf_counter()
     report(case.name, "delays: " + ", ".join(
         f"{n[4:]} {delayed_estimate.value(n):.3f} s" for n in delayed_estimate.parameter_names
-        if n.startswith("tau_")) + f"; RMSE {delayed_estimate.rmse:.4f}")
+        if n.startswith("tau_")) + f"; RMSE {delayed_estimate.rmse:.4f}"
+        + (f"; dropped undetermined delays on {', '.join(dropped)}" if dropped else ""))
     structures = {"no delays": selected.structure, "with delays": delayed}
     estimates = {"no delays": selected.estimate, "with delays": delayed_estimate}
     metrics = {label: time_domain_metrics(ident, simulate(structures[label],
@@ -287,7 +291,7 @@ def run_case(case: FlightCase, out_dir: str | Path, resume: bool = True,
     clock["verification"] = time.perf_counter()
     result = CaseResult(case, condition, ident, verif, path, structures, estimates, metrics,
                         verification, truth_derivatives(generator, condition, structure),
-                        _durations(clock))
+                        _durations(clock), dropped)
     atomic_write(directory / "result.json",
                  json.dumps(_jsonable(result.as_dict()), indent=1, default=_json_default))
     if figures:
@@ -314,20 +318,51 @@ def _durations(clock: dict) -> dict:
 
 
 def _with_delays(case: FlightCase, selected: ReductionStep, ident, estimator, directory):
-    """The selected structure with delays, re-estimated from the selected values."""
+    """The selected structure with delays, re-estimated from the selected values.
+
+    Delays the data cannot determine are dropped one at a time, the worst first, and the model
+    re-estimated: a delay at its lower or upper bound, or whose normalised Cramér-Rao bound
+    exceeds the case's Cramér-Rao threshold (a deviation from the paper, which keeps all
+    eight; an undetermined delay on a weak off-axis derivative otherwise wanders to a bound).
+    """
     delayed = selected.structure.with_delays(case.delay_derivatives, case.delay_initial,
                                              case.delay_upper)
     saved = directory / "delays.json"
     if saved.is_file():
         record = json.loads(saved.read_text())
         if record.get("selected_step") == selected.index:
-            return delayed, Estimate.from_dict(record["estimate"])
-    start = {**selected.estimate.as_mapping(),
-             **{d.delay_name: case.delay_initial for d in delayed.free_delays}}
-    estimate = estimator.estimate(delayed, ident, start=start)
+            for name in record["dropped"]:
+                delayed = delayed.without_delay(name)
+            return delayed, Estimate.from_dict(record["estimate"]), tuple(record["dropped"])
+    threshold = dict(case.criteria).get("cramer-rao", {}).get("threshold", 20.0)
+    values = selected.estimate.as_mapping()
+    dropped: list[str] = []
+    while True:
+        start = {**{n: values[n] for n in delayed.parameter_names if n in values},
+                 **{d.delay_name: case.delay_initial for d in delayed.free_delays}}
+        estimate = estimator.estimate(delayed, ident, start=start)
+        worst = _undetermined_delay(estimate, threshold)
+        if worst is None:
+            break
+        dropped.append(worst[4:])
+        delayed = delayed.without_delay(worst[4:])
+        values = estimate.as_mapping()
     atomic_write(saved, json.dumps(_jsonable({"selected_step": selected.index,
+                                              "dropped": dropped,
                                               "estimate": estimate.as_dict()}), indent=1))
-    return delayed, estimate
+    return delayed, estimate, tuple(dropped)
+
+
+def _undetermined_delay(estimate: Estimate, threshold: float) -> str | None:
+    """The worst delay at a bound or above the Cramér-Rao threshold, or ``None``."""
+    worst, worst_metric = None, threshold
+    for i, name in enumerate(estimate.parameter_names):
+        if not name.startswith("tau_"):
+            continue
+        metric = np.inf if name in estimate.at_bound else estimate.cramer_rao_pct[i]
+        if metric > worst_metric or (worst is None and metric == np.inf):
+            worst, worst_metric = name, metric
+    return worst
 
 
 # ----------------------------------------------------------------- study

@@ -102,16 +102,8 @@ class OutputErrorEstimator:
                 [start_values, np.zeros(len(fitted.parameter_names) - start_values.size)])
         columns, weights = self._output_selection(fitted)
         notes = [start_note] if start_note else []
-        fallback = fitted.initial_values()
-        try:
-            result = self._run_stages(fitted, maneuvers, columns, weights, start_values, notes)
-        except SimulationDivergedError:
-            if np.array_equal(start_values, fallback):
-                raise
-            notes.append("the start values gave a diverging simulation; restarted from the "
-                         "initial values")
-            start_values = fallback
-            result = self._run_stages(fitted, maneuvers, columns, weights, start_values, notes)
+        result, start_values = self._best_of_starts(fitted, maneuvers, columns, weights,
+                                                    start_values, notes)
         if np.array_equal(result.values, np.clip(start_values, *fitted.bounds())):
             result = attrs.evolve(result, converged=False, stop_reason=(
                 "no step moved the parameters from their start values: " + result.stop_reason))
@@ -122,6 +114,35 @@ class OutputErrorEstimator:
                               sum(m.n_samples for m in maneuvers), columns)
 
     # ----------------------------------------------------------------- steps
+    def _best_of_starts(self, fitted, maneuvers, columns, weights, start_values, notes):
+        """Fit from ``start_values``; fall back to the model's initial values when that
+        start makes the simulation diverge or ends above the cost of the initial values
+        (a local minimum worse than doing nothing). Returns the result and its start."""
+        fallback = np.clip(fitted.initial_values(), *fitted.bounds())
+        try:
+            result = self._run_stages(fitted, maneuvers, columns, weights, start_values, notes)
+        except SimulationDivergedError:
+            if np.array_equal(np.clip(start_values, *fitted.bounds()), fallback):
+                raise
+            notes.append("the start values gave a diverging simulation; restarted from the "
+                         "initial values")
+            return (self._run_stages(fitted, maneuvers, columns, weights, fallback, notes),
+                    fallback)
+        if np.array_equal(np.clip(start_values, *fitted.bounds()), fallback):
+            return result, start_values
+        problem = Problem(_SelectedOutputs(fitted, columns), maneuvers,
+                          [z[:, columns] for z in measured_outputs(fitted, maneuvers)],
+                          weights, Settings(noise=self.noise))
+        if result.cost <= problem.evaluate(fallback)[0]:
+            return result, start_values
+        notes.append("the fit from the start values ended above the cost of the initial "
+                      "values; refitted from the initial values")
+        try:
+            retry = self._run_stages(fitted, maneuvers, columns, weights, fallback, notes)
+        except SimulationDivergedError:
+            return result, start_values
+        return (retry, fallback) if retry.cost < result.cost else (result, start_values)
+
     def _run_stages(self, fitted, maneuvers, columns, weights, values, notes):
         """Horizon continuation, then the full records; returns the last run's result."""
         for horizon in self._stages(maneuvers):
