@@ -31,8 +31,8 @@ from .frequency import (
     moving_inputs,
     response_from_maneuvers,
 )
-from .metrics import TimeDomainMetrics, time_domain_metrics
 from .errors import VerificationError
+from .metrics import TimeDomainMetrics, time_domain_metrics
 
 #: Default coherence threshold of the checks (the paper's and the project's strict value).
 COHERENCE_THRESHOLD = 0.8
@@ -307,10 +307,6 @@ class _FrozenMapping(Mapping):
         return f"{type(self).__name__}({self._items!r})"
 
 
-def _frozen_mapping(mapping) -> Mapping:
-    return _FrozenMapping(mapping)
-
-
 @attrs.frozen(eq=False)
 class PairVerification:
     """Verification of one ``output/input`` pair on the sweeps of its input axis.
@@ -339,8 +335,8 @@ class PairVerification:
     conditioned: FrequencyResponse | None
     analytic: np.ndarray | None = attrs.field(
         converter=lambda a: None if a is None else _readonly(a, complex))
-    checks: Mapping[str, EnvelopeCheck] = attrs.field(converter=_frozen_mapping)
-    analytic_checks: Mapping[str, EnvelopeCheck] = attrs.field(converter=_frozen_mapping)
+    checks: Mapping[str, EnvelopeCheck] = attrs.field(converter=_FrozenMapping)
+    analytic_checks: Mapping[str, EnvelopeCheck] = attrs.field(converter=_FrozenMapping)
     output_rms_ratio: float = float("nan")
 
     @property
