@@ -144,18 +144,33 @@ class OutputErrorEstimator:
         return (retry, fallback) if retry.cost < result.cost else (result, start_values)
 
     def _run_stages(self, fitted, maneuvers, columns, weights, values, notes):
-        """Horizon continuation, then the full records; returns the last run's result."""
-        for horizon in self._stages(maneuvers):
-            portion = ManeuverSet([m.head(horizon) for m in maneuvers], hold=maneuvers.hold)
-            result = self._run(fitted, portion, columns, weights, values,
-                               Settings(max_iterations=15, cost_tolerance=1e-4,
-                                        noise=self.noise), stage=f"{horizon:g} s")
+        """Horizon continuation, then the full records; returns the last run's result.
+
+        A stage whose start (the previous stage's result) diverges on its longer records
+        starts again from the values the continuation began with.
+        """
+        first = values
+        stages = [(h, Settings(max_iterations=15, cost_tolerance=1e-4, noise=self.noise))
+                  for h in self._stages(maneuvers)]
+        stages.append((None, Settings(self.max_iterations, self.cost_tolerance,
+                                      self.step_tolerance, noise=self.noise)))
+        for horizon, settings in stages:
+            portion = maneuvers if horizon is None else ManeuverSet(
+                [m.head(horizon) for m in maneuvers], hold=maneuvers.hold)
+            label = "full" if horizon is None else f"{horizon:g} s"
+            try:
+                result = self._run(fitted, portion, columns, weights, values, settings, label)
+            except SimulationDivergedError:
+                if values is first:
+                    raise
+                notes.append(f"stage {label}: the previous stage's values diverge on the "
+                             f"longer records; restarted the stage from the start values")
+                result = self._run(fitted, portion, columns, weights, first, settings, label)
             values = result.values
-            notes.append(f"horizon {horizon:g} s: {result.iterations} iterations, "
-                         f"RMSE {result.rmse:.4g}")
-        return self._run(fitted, maneuvers, columns, weights, values,
-                         Settings(self.max_iterations, self.cost_tolerance,
-                                  self.step_tolerance, noise=self.noise), stage="full")
+            if horizon is not None:
+                notes.append(f"horizon {label}: {result.iterations} iterations, "
+                             f"RMSE {result.rmse:.4g}")
+        return result
 
     def _start_values(self, model, maneuvers, start):
         names = tuple(model.parameter_names)

@@ -24,6 +24,8 @@ import numpy as np
 from rotorid.errors import SimulationDivergedError
 
 _MAX_LAMBDA = 1e12
+#: Simulated outputs beyond this multiple of the largest measured value count as divergence.
+DIVERGENCE_FACTOR = 100.0
 #: Floor of R relative to each output's mean square (keeps det R > 0 on noise-free data).
 NOISE_FLOOR = 1e-16
 
@@ -82,6 +84,10 @@ class Problem:
         # R is floored at a tiny fraction of each output's power, so that an output reproduced
         # exactly (noise-free data, an unexcited channel) keeps det R and R⁻¹ finite.
         self.noise_floor = np.diag(np.maximum(NOISE_FLOOR * power, 1e-300))
+        # Simulated outputs far beyond anything measured mean a diverging candidate even when
+        # they stay finite: det R alone can prefer one exploding output if others shrink.
+        self.output_limit = DIVERGENCE_FACTOR * np.maximum(
+            np.max([np.max(np.abs(z), axis=0) for z in measured], axis=0), 1e-12)
 
     def residuals(self, outputs) -> list[np.ndarray]:
         return [(z - y) * self.weights for z, y in zip(self.measured, outputs)]
@@ -96,6 +102,8 @@ class Problem:
         try:
             outputs = self.model.simulate(values, self.maneuvers)
         except SimulationDivergedError:
+            return np.inf, None, None, np.inf
+        if any(np.any(np.abs(y) > self.output_limit) for y in outputs):
             return np.inf, None, None, np.inf
         with np.errstate(over="ignore", invalid="ignore"):
             residuals = self.residuals(outputs)
