@@ -176,3 +176,19 @@ def test_maneuver_front_end_conditioning_and_errors():
                            windows=(20.0,))
     with pytest.raises(VerificationError, match="NaN"):
         cross_spectra([np.column_stack([u, u * np.nan])], DT, omega, 20.0)
+
+
+def test_noise_free_output_fully_coherent_with_two_inputs_does_not_break_conditioning():
+    """A simulated model output is an exact linear function of its inputs."""
+    from rotorid.frequency import cross_spectra, miso_response
+
+    rng = np.random.default_rng(3)
+    n, dt = 4000, 0.02
+    u1 = rng.normal(size=n)
+    u2 = 0.5 * u1 + rng.normal(size=n)
+    y = np.convolve(u1, [0.5, 0.3, 0.1])[:n] + np.convolve(u2, [0.2, -0.1])[:n]
+    omega = np.linspace(0.5, 10.0, 20)
+    spectra = cross_spectra([np.column_stack([u1, u2, y])], dt, omega, window=20.0)
+    estimate = miso_response(spectra)
+    assert np.all(np.isfinite(estimate.coherence))
+    assert np.all(estimate.coherence > 0.999)

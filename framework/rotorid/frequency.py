@@ -267,7 +267,10 @@ def miso_response(spectra: Spectra) -> MisoEstimate:
     response = np.where(silent[:, None], 0.0, solved * scale[:, :n] / np.where(
         silent, 1.0, scale[:, n])[:, None])
     multiple = np.einsum("mi,mi->m", unit[:, :n, n].conj(), solved).real
-    inverse = np.linalg.inv(unit)
+    # A noise-free output (a simulated model) is fully coherent with the inputs, which makes
+    # the full coherence matrix singular; a 1e-12 loading of its unit diagonal keeps the
+    # inverse finite and gives partial coherences of 1 − O(1e-12) there.
+    inverse = np.linalg.inv(unit + np.eye(n + 1) * 1e-12)
     diag = np.einsum("mii->mi", inverse).real
     partial = np.abs(inverse[:, :n, n]) ** 2 / (diag[:, :n] * diag[:, n:n + 1])
     partial = np.clip(partial, 0.0, 1.0)
