@@ -87,6 +87,16 @@ def _tap_weights(taps, families, n_params: int, width: int) -> np.ndarray:
     return weights.reshape(len(taps), n_params * width)
 
 
+def _sources(inputs: np.ndarray, states: np.ndarray | None = None) -> np.ndarray:
+    """(N, B, 12) source signals of the taps: the 8 states (zero where not needed), then the
+    4 controls; inputs (N, B, 4), states (N, B, ≥ 8) with the physical states first."""
+    sources = np.zeros(inputs.shape[:2] + (12,))
+    if states is not None:
+        sources[:, :, :8] = states[:, :, :8]
+    sources[:, :, 8:] = inputs
+    return sources
+
+
 def _lagged(sources: np.ndarray, taps) -> np.ndarray:
     """(N, B, K) array whose column k is source column c at sample n − lag for tap (lag, c).
 
@@ -260,7 +270,7 @@ class Simulator:
         families = [({lag: m[None] for lag, m in maps.Pu.items()}, 8)]
         taps = _taps(*families)
         weights = _tap_weights(taps, families, 1, companion.size)
-        lagged = _lagged(np.concatenate([np.zeros((n, b, 8)), group.inputs], axis=2), taps)
+        lagged = _lagged(_sources(group.inputs), taps)
         start = np.zeros((b, companion.size))
         start[:, :8] = group.x0
         states = np.empty((n, b, companion.size))
@@ -283,8 +293,7 @@ class Simulator:
         taps = _taps(*families)
         y = states @ companion.output.T
         if taps:
-            sources = np.concatenate([np.zeros(states.shape[:2] + (8,)), group.inputs], axis=2)
-            y += _lagged(sources, taps) @ _tap_weights(taps, families, 1, 8)
+            y += _lagged(_sources(group.inputs), taps) @ _tap_weights(taps, families, 1, 8)
         return y
 
     def _sensitivities(self, maps: DiscreteMaps, companion: _Companion, group: _Group,
@@ -300,7 +309,7 @@ class Simulator:
         forcing_maps = [(maps.dPs, 0), (maps.dPu, 8)]
         direct_maps = [(maps.dCs, 0), (maps.dDu, 8)]
         taps = _taps(*forcing_maps, *direct_maps)
-        lagged = _lagged(np.concatenate([states[:, :, :8], group.inputs], axis=2), taps)
+        lagged = _lagged(_sources(group.inputs, states), taps)
         forcing_weights = _tap_weights(taps, forcing_maps, p, size)
         direct_weights = _tap_weights(taps, direct_maps, p, 8)
         direct_columns = _nonzero_columns(direct_weights)
