@@ -166,6 +166,9 @@ def test_cache_reuses_files_until_the_configuration_changes(tmp_path):
         np.testing.assert_array_equal(a.inputs, b.inputs)
     source.generate({**settings, "seed": 3})
     assert CountingPlant.calls > flown  # a new seed means a new data set
+    source.generate({**settings, "directions": [1]})  # a smaller selection replaces the files
+    assert sorted(p.name for p in (tmp_path / "hover").glob("*.npz")) == [
+        "hover_2311_coll_pos.npz"]
 
 
 def test_config_digest_covers_every_setting():

@@ -5,7 +5,7 @@ A generated data set lives in one directory: one ``<maneuver>.npz`` file per man
 and a JSON header with the metadata) and ``manifest.json`` holding the configuration, its
 SHA-256 digest and the file list. A later request with the same digest reads the files back
 instead of flying again; any change of configuration, seed or plant changes the digest and
-the set is regenerated (the old files of that set are replaced).
+the set is regenerated: its files replace those the old manifest listed.
 """
 
 from __future__ import annotations
@@ -20,18 +20,22 @@ from rotorid.io import atomic_write
 MANIFEST = "manifest.json"
 
 
+def _manifest(directory) -> dict:
+    """The manifest in ``directory`` ({} when missing or unreadable)."""
+    path = Path(directory) / MANIFEST
+    try:
+        manifest = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return manifest if isinstance(manifest, dict) else {}
+
+
 def load_cached(directory, digest: str) -> ManeuverSet | None:
     """The set stored in ``directory`` if its manifest matches ``digest``, else ``None``."""
     from rotorid_files.formats import read_maneuver
 
-    path = Path(directory) / MANIFEST
-    if not path.is_file():
-        return None
-    try:
-        manifest = json.loads(path.read_text(encoding="utf-8"))
-    except ValueError:
-        return None
-    if not isinstance(manifest, dict) or manifest.get("digest") != digest:
+    manifest = _manifest(directory)
+    if manifest.get("digest") != digest:
         return None
     files = [Path(directory) / name for name in manifest.get("files", [])]
     if not files or not all(f.is_file() for f in files):
@@ -49,9 +53,15 @@ def save(maneuvers: ManeuverSet, directory, digest: str, settings: dict) -> Path
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     manifest = directory / MANIFEST
+    previous = _manifest(directory).get("files", [])
     if manifest.exists():
         manifest.unlink()
     paths = FileSource().save(maneuvers, directory, format="npz")
+    written = {p.name for p in paths}
+    for name in previous:
+        stale = directory / str(name)
+        if str(name) not in written and stale.parent == directory and stale.is_file():
+            stale.unlink()
     text = json.dumps({"digest": digest, "settings": settings,
                        "files": [p.name for p in paths]}, indent=2, sort_keys=True)
     try:
