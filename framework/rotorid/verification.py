@@ -555,7 +555,7 @@ def _rms_ratio(model_outputs, maneuvers, column: int) -> float:
 
 def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
                  envelopes: Mapping[str, ValidationEnvelope] | Sequence[str] | None = None,
-                 **options) -> VerificationResult:
+                 segment: float | None = None, **options) -> VerificationResult:
     """Verify an identified model on sweeps not used for identification.
 
     Simulates ``structure`` at ``values`` (vector, name→value mapping or None) on the
@@ -563,19 +563,80 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
     input hold), estimates truth and model responses with identical processing and holds
     ``ε = H_model/H_truth`` against the envelopes; also compares the analytic response with
     exact delays (:func:`rotorid.transfer.frequency_response`) with the truth's conditioned
-    response. ``envelopes``
-    may be envelope objects by name or registered envelope names. Other keyword options go
-    to :func:`compare_sweeps`.
+    response. ``envelopes`` may be envelope objects by name or registered envelope names.
+
+    An unstable model (the hover phugoid is unstable) cannot follow a long sweep open loop:
+    its simulation drifts away from the data. Such a model is simulated in segments of
+    ``segment`` seconds (default ``2/σ`` for the largest unstable real part σ, at least 5 s),
+    each restarted from the state measured and reconstructed at its start
+    (:func:`segmented_simulation`); the result's notes say so. Other keyword options go to
+    :func:`compare_sweeps`.
     """
-    from .simulation import simulate
     from .transfer import frequency_response
 
     if envelopes is not None and not isinstance(envelopes, Mapping):
         envelopes = envelopes_by_name(tuple(envelopes))
+    growth = float(np.max(np.linalg.eigvals(structure.matrices(values)[0]).real))
+    notes = _stability_notes(structure, values)
+    if segment is None and growth > 1e-9:
+        segment = max(5.0, 2.0 / growth)
+    if segment is not None:
+        outputs = segmented_simulation(structure, values, sweeps, segment)
+        notes.append(f"the model was simulated in segments of {segment:.1f} s, each restarted "
+                     f"from the measured and reconstructed state (unstable model)")
+    else:
+        from .simulation import simulate
+
+        outputs = simulate(structure, values, sweeps)
     result = compare_sweeps(
-        sweeps, simulate(structure, values, sweeps), pairs, envelopes,
+        sweeps, outputs, pairs, envelopes,
         analytic=lambda omega: frequency_response(structure, values, omega), **options)
-    return attrs.evolve(result, notes=[*_stability_notes(structure, values), *result.notes])
+    return attrs.evolve(result, notes=[*notes, *result.notes])
+
+
+def segmented_simulation(structure, values, maneuvers, segment: float,
+                         lead: float = 0.0) -> list[np.ndarray]:
+    """Outputs simulated in segments restarted from the data's state.
+
+    Each maneuver is cut into segments of ``segment`` s. A segment is simulated from
+    ``lead`` s before its start, starting from the state at that instant: measured q θ p φ r
+    and u v w integrated from the measured specific forces
+    (:func:`rotorid.equation_error.reconstructed_states`); the lead-in is discarded and the
+    segments joined. Delayed terms see trim before each restart, and the reconstructed
+    velocities carry integration error, so the restarts are approximate: on noise-free data
+    of the model itself they reproduce its plain simulation to a few per cent (tested).
+    Returns one (N_i, 8) array per maneuver.
+    """
+    from .data import Maneuver, ManeuverSet
+    from .equation_error import reconstructed_states
+    from .simulation import simulate
+
+    if not segment > 0:
+        raise VerificationError(f"segment must be a positive duration in s, got {segment!r}")
+    pieces, layout = [], []
+    for m in maneuvers:
+        states = reconstructed_states(structure, m)
+        step = max(2, int(round(segment / m.dt)))
+        back = int(round(lead / m.dt))
+        for start in range(0, m.n_samples, step):
+            first = max(0, start - back)
+            stop = min(m.n_samples, start + step)
+            if stop - first < 2:
+                first = max(0, stop - 2)
+            pieces.append(Maneuver(f"{m.name}#{start}", m.time[first:stop],
+                                   m.inputs[first:stop], m.outputs[first:stop],
+                                   units=m.units, initial_state=states[first]))
+            layout.append((start - first, stop - start))
+    simulated = simulate(structure, values, ManeuverSet(pieces, hold=maneuvers.hold))
+    outputs, k = [], 0
+    for m in maneuvers:
+        parts = []
+        while sum(len(p) for p in parts) < m.n_samples:
+            skip, keep = layout[k]
+            parts.append(simulated[k][skip:skip + keep])
+            k += 1
+        outputs.append(np.concatenate(parts))
+    return outputs
 
 
 def _stability_notes(structure, values) -> list[str]:
