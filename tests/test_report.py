@@ -1,0 +1,106 @@
+"""Study figures, tables and reports; the key-derivative sign check; the README's main command."""
+
+import csv
+import json
+import math
+import re
+import types
+import xml.etree.ElementTree as ElementTree
+
+import numpy as np
+import pytest
+
+from rotorid.cli import main
+from rotorid.expectations import check_signs, derivative_scale, derivative_unit, regime_of
+from rotorid.report import mean_phase_error
+
+
+def test_derivative_scales_are_the_unit_ratios():
+    # (rad/s²)/(m/s) → (deg/s²)/(ft/s): 180/π deg per rad times 0.3048 m per ft.
+    assert derivative_scale("M_w", "flight-test") == pytest.approx(180 / math.pi * 0.3048)
+    # (m/s²)/(rad/s) → (ft/s²)/(deg/s)
+    assert derivative_scale("X_q", "flight-test") == pytest.approx(1 / 0.3048 * math.pi / 180)
+    assert derivative_scale("X_u", "flight-test") == 1.0
+    assert derivative_scale("L_p", "flight-test") == pytest.approx(1.0)
+    assert derivative_scale("M_w", "si") == 1.0
+    assert derivative_unit("M_w", "flight-test") == "(deg/s²)/(ft/s)"
+    assert derivative_unit("Y_p", "si") == "(m/s²)/(rad/s)"
+    assert derivative_unit("Z_w", "flight-test") == "1/s"
+
+
+def test_sign_check_verdicts():
+    assert regime_of(0.0) == "hover" and regime_of(70.0) == "forward" and regime_of(30.0) is None
+    identified = {"Z_w": (-0.3, 0.01), "L_v": (0.5, 0.01), "X_v": (0.001, 0.01),
+                  "M_w": (0.2, 0.01)}
+    truth = {"X_v": -0.01, "Y_v": -0.04}
+    hover = {c.name: c for c in check_signs(("Z_w", "L_v", "X_v", "M_w", "Y_v"), identified,
+                                            0.0, "flight-test", truth)}
+    assert hover["Z_w"].verdict == "agrees"
+    assert hover["Z_w"].reference == pytest.approx(-0.32)
+    assert hover["L_v"].verdict == "differs"          # published L_v < 0 in hover
+    assert hover["X_v"].verdict == "undetermined"     # |value| < 2 CR
+    assert hover["X_v"].basis == "truth linearisation"
+    assert hover["M_w"].verdict == "not checked"      # hover reference ≈ 0
+    assert hover["Y_v"].verdict == "removed"
+    assert hover["X_v"].ratio_to_truth == pytest.approx(-0.1)
+    # In forward flight the Bo-105 has M_w > 0: the same value now agrees.
+    forward = check_signs(("M_w",), identified, 70.0, "flight-test")
+    assert forward[0].verdict == "agrees"
+    assert forward[0].reference == pytest.approx(0.018 * 180 / math.pi * 0.3048)
+
+
+def test_mean_phase_error_uses_the_coherent_points_only():
+    omega = np.geomspace(1, 10, 6)
+    item = types.SimpleNamespace(
+        error=np.exp(1j * np.radians([10, -10, 10, -10, 90, 90])),
+        coherence=np.array([0.9, 0.95, 0.8, 0.99, 0.5, np.nan]), omega=omega)
+    assert mean_phase_error(item) == pytest.approx(10.0)
+    item.coherence = np.zeros(6)
+    assert mean_phase_error(item) is None
+
+
+def _read_csv(path):
+    with open(path, newline="") as handle:
+        return list(csv.reader(handle))
+
+
+def test_the_quick_hover_study_writes_a_complete_linked_report(tmp_path, capsys):
+    """The README's main command, end to end: data, reduction, delays, verification, report."""
+    out = tmp_path / "results"
+    assert main(["study", "hover", "--quick", "--out", str(out), "--executor", "serial"]) == 0
+    assert f"report: {out}/report.html" in capsys.readouterr().out
+    case = out / "hover"
+    record = json.loads((case / "result.json").read_text())
+
+    # Every image and link of both reports exists; every SVG is well-formed XML.
+    for page in (out / "report.html", case / "report.html"):
+        text = page.read_text()
+        for target in re.findall(r'(?:src|href)="([^"]+)"', text):
+            assert (page.parent / target).is_file(), f"{page.name} links missing {target}"
+    figures = sorted(p.name for p in (case / "figures").glob("*.png"))
+    assert "rmse.png" in figures
+    assert sum(f.startswith("time_") for f in figures) == 8       # 2311 per control, ± direction
+    assert {f"error_{p.replace('/', '_')}.png" for p in
+            ("q/long", "p/long", "q/lat", "p/lat", "r/coll", "az/coll", "r/ped", "ay/ped")
+            } <= set(figures)
+    for svg in (case / "figures").glob("*.svg"):
+        ElementTree.parse(svg)
+
+    # Appendix-B tables agree with result.json.
+    removed = _read_csv(case / "tables" / "removed.csv")
+    assert [row[1] for row in removed[2:]] == [s["removed"] for s in
+                                               record["reduction"]["steps"][1:]]
+    selected_rows = [row for row in removed[1:] if row[7] == "yes"]
+    assert [int(r[0]) for r in selected_rows] == [record["reduction"]["selected_step"]]
+    parameters = _read_csv(case / "tables" / "parameters.csv")
+    with_delays = record["estimates"]["with delays"]["parameters"]
+    for row in parameters[1:]:
+        if row[0] in with_delays:
+            assert float(row[5]) == pytest.approx(with_delays[row[0]]["value"], rel=1e-3)
+    checks = _read_csv(case / "tables" / "checks.csv")
+    rmse_claims = [row for row in checks if row[0].startswith("time-domain RMSE")]
+    assert len(rmse_claims) == 2 and all(row[2] == "true" for row in rmse_claims)
+    delay_claims = [row for row in checks if row[0].startswith("delay on")]
+    assert len(delay_claims) == len(record["estimates"]["with delays"]["delays"]) >= 1
+    signs = {row[0]: row for row in _read_csv(case / "tables" / "key_derivatives.csv")[1:]}
+    assert signs["Z_w"][8] == "agrees"      # heave damping: robustly negative in hover
