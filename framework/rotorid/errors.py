@@ -64,3 +64,16 @@ class ConvergenceWarning(RotoridWarning):
 class TrimError(RotoridError, ValueError):
     """A simulation model cannot be trimmed at the requested flight condition (outside the
     flight envelope, beyond control travel or power, or the trim iteration failed)."""
+
+
+class StudyError(RotoridError, RuntimeError):
+    """Independent tasks of a study or a Monte Carlo failed.
+
+    ``failures`` maps each failed task (case name, run seed) to what went wrong and where;
+    ``results`` holds the tasks that finished, so their work is not lost.
+    """
+
+    def __init__(self, message: str, results=None, failures=None):
+        super().__init__(message)
+        self.results = dict(results or {})
+        self.failures = dict(failures or {})

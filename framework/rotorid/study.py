@@ -20,15 +20,16 @@ import sys
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import Executor, ProcessPoolExecutor
+from concurrent.futures import Executor
 from pathlib import Path
 
 import attrs
 import numpy as np
 
 from .data import ManeuverSet
-from .errors import DataError, EstimationError, IdentifiabilityWarning, RotoridError
+from .errors import DataError, EstimationError, IdentifiabilityWarning, RotoridError, StudyError
 from .estimation import Estimate
+from .executors import check_executor, failure_error, run_tasks
 from .flightcase import FlightCase
 from .io import atomic_write
 from .metrics import TimeDomainMetrics, time_domain_metrics
@@ -366,16 +367,44 @@ def _undetermined_delay(estimate: Estimate, threshold: float) -> str | None:
 
 
 # ----------------------------------------------------------------- study
+def run_case_task(case: FlightCase, progress: Callable[[str, str], None] | None = print_progress,
+                  **options) -> CaseResult:
+    """:func:`run_case` as an independent task: a failure names the case's last progress
+    message (its reduction step, when it got that far) and the error."""
+    last = ["before any progress"]
+
+    def tracking(name: str, message: str) -> None:
+        last[0] = f"after “{message}”"
+        if progress is not None:
+            progress(name, message)
+
+    try:
+        return run_case(case, progress=tracking, **options)
+    except Exception as error:
+        raise StudyError(f"case {case.name} failed {last[0]}: {type(error).__name__}: "
+                         f"{error}") from error
+
+
 class Study:
-    """Several flight cases run through the pipeline.
+    """Several flight cases run through the pipeline, each as an independent task.
 
     Args:
         cases: :class:`FlightCase` objects or built-in case names / case files.
-        out_dir: results directory.
-        executor: ``None`` runs the cases one after the other in this process; any
-            :class:`concurrent.futures.Executor` (a process pool, a Dask client's executor)
-            runs them as independent tasks; ``"process"`` makes a local process pool.
+        out_dir: results directory; each case writes ``out_dir/<case>/`` (on a cluster it
+            must be a directory every worker can write, e.g. a shared file system).
+        executor: ``None`` runs the cases one after the other in this process; ``"process"``
+            a local process pool sized to the machine; any
+            :class:`concurrent.futures.Executor` (e.g. ``client.get_executor()`` of a
+            ``dask.distributed.Client``) runs them there. The numbers are the same whichever
+            runs them (see :mod:`rotorid.executors`).
         resume: reuse finished steps found in ``out_dir``.
+        progress: ``progress(case, message)`` receives progress lines (it runs in the worker:
+            with a process pool or Dask it must be a picklable module-level function).
+        figures: write each case's figures and the study report.
+
+    :meth:`run` raises :class:`~rotorid.errors.StudyError` when cases fail: its message names
+    each failed case with its last progress message, and its ``results`` holds the cases that
+    finished (their files are written too).
     """
 
     def __init__(self, cases: Sequence[FlightCase | str], out_dir: str | Path,
@@ -386,6 +415,7 @@ class Study:
         names = [c.name for c in self.cases]
         if len(set(names)) != len(names):
             raise EstimationError(f"case names must be distinct, got {names}")
+        check_executor(executor)
         self.out_dir = Path(out_dir)
         self.executor = executor
         self.resume = resume
@@ -395,42 +425,16 @@ class Study:
     def run(self) -> dict[str, CaseResult]:
         """Run every case; returns results by case name and writes the study report."""
         self.out_dir.mkdir(parents=True, exist_ok=True)
-        args = dict(out_dir=self.out_dir, resume=self.resume, progress=self.progress,
-                    figures=self.figures)
-        if self.executor is None or len(self.cases) == 1 and self.executor == "process":
-            results = {c.name: run_case(c, **args) for c in self.cases}
-        else:
-            results = self._run_parallel(args)
+        options = dict(out_dir=self.out_dir, resume=self.resume, progress=self.progress,
+                       figures=self.figures)
+        executor = None if self.executor == "process" and len(self.cases) == 1 else self.executor
+        results, failures = run_tasks(run_case_task,
+                                      {c.name: ((c,), options) for c in self.cases},
+                                      executor, label=lambda name: f"case {name}")
+        if failures:
+            raise failure_error("cases", results, failures, self.out_dir)
         if self.figures:
             from .report import write_study_report
 
             write_study_report(results, self.out_dir)
         return results
-
-    def _run_parallel(self, args) -> dict[str, CaseResult]:
-        own = self.executor == "process"
-        executor = (ProcessPoolExecutor(max_workers=min(len(self.cases), _cpu_count()))
-                    if own else self.executor)
-        try:
-            futures = {c.name: executor.submit(run_case, c, **args) for c in self.cases}
-            results, failures = {}, []
-            for name, future in futures.items():
-                try:
-                    results[name] = future.result()
-                except Exception as error:  # reported with its case; finished ones are kept
-                    failures.append(f"case {name}: {type(error).__name__}: {error}")
-            if failures:
-                raise RotoridError("; ".join(failures) + f" (finished cases: "
-                                   f"{', '.join(results) or 'none'}; their results are in "
-                                   f"{self.out_dir})")
-            return results
-        finally:
-            if own:
-                executor.shutdown()
-
-
-def _cpu_count() -> int:
-    import os
-
-    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
-               else (os.cpu_count() or 1))

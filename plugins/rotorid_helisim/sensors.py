@@ -22,7 +22,7 @@ from collections.abc import Mapping
 import attrs
 import numpy as np
 
-from rotorid.data import OUTPUT_CHANNELS
+from rotorid.data import OUTPUT_CHANNELS, ManeuverSet
 from rotorid.errors import DataError
 from rotorid.units import FLIGHT_TEST, channel_scale
 
@@ -72,3 +72,25 @@ def perturbations(measurements, trim_outputs) -> np.ndarray:
     """Total SI outputs (N, 8) → perturbations from trim in flight-test units (N, 8)."""
     scale = channel_scale(OUTPUT_CHANNELS, FLIGHT_TEST)
     return (np.asarray(measurements) - np.asarray(trim_outputs)) * scale
+
+
+@attrs.frozen(eq=False)
+class NoiseRealisations:
+    """Data sets that differ only in their noise seed: noise-free maneuvers plus, for each
+    seed, the sensor noise a data set generated with that seed carries.
+
+    The stabilising loops feed back the noise-free states, so the flight itself does not
+    depend on the noise: ``realisations(seed)`` equals the data set generated with ``seed``
+    sample for sample, without flying it again.
+    """
+
+    clean: ManeuverSet
+    noise: SensorNoise
+
+    def __call__(self, seed: int) -> ManeuverSet:
+        """The data set with noise seed ``seed``."""
+        maneuvers = [attrs.evolve(m, outputs=m.outputs + self.noise.draw(
+                         m.n_samples, noise_generator(seed, m.name)),
+                         metadata={**m.metadata, "seed": int(seed)})
+                     for m in self.clean]
+        return ManeuverSet(maneuvers, hold=self.clean.hold)

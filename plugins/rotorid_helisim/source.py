@@ -19,6 +19,7 @@ from rotorid.errors import DataError
 
 from . import store
 from .datasets import DataSetConfig, Job, fly_jobs
+from .sensors import NoiseRealisations, SensorNoise
 
 
 def resolve_case(case) -> DataSetConfig:
@@ -127,6 +128,14 @@ class HelisimSource:
         flown = attrs.evolve(self, cache_dir=None).generate(config)
         store.save(flown, directory, digest, config.as_dict())
         return flown, False
+
+    def noise_realisations(self, case, directory) -> NoiseRealisations:
+        """The data sets of ``case`` for any noise seed, for Monte Carlo runs: the noise-free
+        set is flown once (stored in ``directory``) and each seed adds its own noise."""
+        config = resolve_case(case)
+        quiet = attrs.evolve(config, noise=SensorNoise({c: 0.0 for c in config.noise.sigma}))
+        clean, _ = self.generate_into(quiet, directory)
+        return NoiseRealisations(clean, config.noise)
 
     def _directory(self, config: DataSetConfig) -> Path:
         return Path(self.cache_dir) / config.condition

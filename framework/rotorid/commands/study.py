@@ -1,56 +1,75 @@
-"""``rotorid study``: run the paper's pipeline for the hover and/or 70 kt cases."""
+"""``rotorid study``: run the paper's pipeline for the hover and/or 70 kt cases, case files, or
+a speed sweep."""
 
 from __future__ import annotations
 
 NAME = "study"
 HELP = ("identify, reduce, add delays and verify: the built-in cases hover and forward "
-        "(70 kt), all of them, or case TOML files")
+        "(70 kt), all of them, a speed sweep, or case TOML files")
 
 
 def add_arguments(parser) -> None:
     parser.add_argument("cases", nargs="+", metavar="CASE",
-                        help="hover, forward, all, or a case TOML file")
+                        help="hover, forward, all, speed-sweep (one hover-pipeline case per "
+                             "airspeed of --speeds), or a case TOML file")
     parser.add_argument("--out", required=True, help="results directory")
     parser.add_argument("--quick", action="store_true",
                         help="reduced but honest run: shorter records, reduction stopped by "
                              "the criteria (a few minutes on 2 cores)")
     parser.add_argument("--seed", type=int, help="noise seed of generated data")
+    parser.add_argument("--speeds", help="airspeeds of speed-sweep in kt: '0,40,80' or "
+                                         "START:STOP:STEP (default 0:120:10)")
     parser.add_argument("--resume", action="store_true",
                         help="reuse the finished steps found in --out")
-    parser.add_argument("--executor", choices=("serial", "process", "dask"), default="process",
-                        help="how independent cases run (default: a local process pool)")
-    parser.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://HOST:8786")
+    add_executor_arguments(parser, "cases")
     parser.add_argument("--no-figures", action="store_true", help="skip figures and report")
 
 
-def _executor(args):
-    if args.executor == "serial":
-        return None
-    if args.executor == "process":
-        return "process"
-    from ..errors import PluginError
+def add_executor_arguments(parser, what: str) -> None:
+    """``--executor`` and ``--scheduler`` (shared with ``rotorid montecarlo``)."""
+    from ..executors import KINDS
 
-    if not args.scheduler:
-        raise PluginError("--executor dask needs --scheduler tcp://HOST:PORT")
-    try:
-        from dask.distributed import Client
-    except ImportError:
-        raise PluginError("Dask is not installed; pip install 'rotorid[dask]'") from None
-    return Client(args.scheduler).get_executor()
+    parser.add_argument("--executor", choices=KINDS, default="process",
+                        help=f"where independent {what} run: serial (this process), process "
+                             f"(a local process pool, the default) or dask (a Dask cluster; "
+                             f"pip install 'rotorid[dask]')")
+    parser.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://HOST:8786")
+
+
+def expand_cases(names, speeds: str | None):
+    """Flight cases of the command line (``all`` and ``speed-sweep`` expanded), and the names
+    of the speed-sweep cases among them."""
+    from ..errors import DataError
+    from ..flightcase import BUILTIN, FlightCase
+    from ..sweep import DEFAULT_SPEEDS, FAMILY, speed_sweep
+
+    if speeds is not None and FAMILY not in names:
+        raise DataError(f"--speeds only applies to the {FAMILY} case family; add {FAMILY} to "
+                        f"the cases")
+    cases, swept = [], []
+    for name in (list(BUILTIN) if list(names) == ["all"] else names):
+        if name == FAMILY:
+            family = speed_sweep(speeds or DEFAULT_SPEEDS)
+            cases.extend(family)
+            swept.extend(case.name for case in family)
+        else:
+            cases.append(FlightCase.load(name))
+    return cases, swept
 
 
 def run(args) -> int:
-    from ..flightcase import BUILTIN, FlightCase
+    from ..executors import open_executor
     from ..study import Study
+    from ..sweep import sweep_points, write_sweep_summary
 
-    names = list(BUILTIN) if args.cases == ["all"] else args.cases
-    cases = [FlightCase.load(name) for name in names]
+    cases, swept = expand_cases(args.cases, args.speeds)
     if args.quick:
         cases = [case.quick() for case in cases]
     if args.seed is not None:
         cases = [case.with_seed(args.seed) for case in cases]
-    results = Study(cases, args.out, executor=_executor(args), resume=args.resume,
-                    figures=not args.no_figures).run()
+    with open_executor(args.executor, args.scheduler) as executor:
+        results = Study(cases, args.out, executor=executor, resume=args.resume,
+                        figures=not args.no_figures).run()
     for name, result in results.items():
         path = result.path
         delayed = result.estimates["with delays"]
@@ -58,6 +77,9 @@ def run(args) -> int:
               f"{len(path.removed)} (step {path.selected_index} of {len(path.steps) - 1}); "
               f"RMSE without delays {result.estimates['no delays'].rmse:.4f}, "
               f"with delays {delayed.rmse:.4f}")
+    if swept:
+        written = write_sweep_summary(sweep_points({n: results[n] for n in swept}), args.out)
+        print(f"speed sweep: {', '.join(str(p) for p in written)}")
     if not args.no_figures:
         print(f"report: {args.out}/report.html")
     return 0
