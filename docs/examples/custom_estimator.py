@@ -12,7 +12,10 @@ The estimator. Each force/moment equation of the 6-DoF structure is one linear r
 
 over the states and controls z = (u w q θ v p φ r, long lat coll ped). The rates and
 attitudes are measured; u, v, w are reconstructed by integrating the force equations
-(:func:`rotorid.equation_error.reconstructed_states`). Per equation k with regressor matrix
+(:func:`rotorid.equation_error.reconstructed_states`). Each equation is written per sample
+interval: the rate's change over dt against the interval's mean states and the control held
+over it. That is exact for zero-order-hold controls, where a central difference of the rates
+would smear every control step over two samples. Per equation k with regressor matrix
 X_k and residual variance σ_k², the estimate is θ_k = (X_kᵀX_k)⁻¹X_kᵀy_k and the information
 matrix is F_k = X_kᵀX_k/σ_k²; :func:`rotorid.estimation.statistics` turns the block-diagonal F
 into Cramér-Rao bounds, insensitivities and correlations, exactly as for the built-in
@@ -64,7 +67,7 @@ from rotorid.equation_error import reconstructed_states
 from rotorid.errors import EstimationError
 from rotorid.estimation import Estimate, statistics
 from rotorid.flightcase import FlightCase
-from rotorid.structure import STATES, ModelStructure
+from rotorid.structure import CONTROLS, STATES, ModelStructure
 from rotorid.study import KEY_DERIVATIVES, CaseResult, Study, truth_derivatives
 
 NAME = "ls-equation-error"
@@ -74,17 +77,31 @@ EQUATION_NAMES = ("ax", "ay", "az", "p_dot", "q_dot", "r_dot")
 
 
 # ----------------------------------------------------------------- the estimator
+def _interval_mean(signal: np.ndarray) -> np.ndarray:
+    """Mean over each sample interval by the trapezoid rule, shape (N-1,)."""
+    return 0.5 * (signal[:-1] + signal[1:])
+
+
 def _left_side(letter: str, maneuver) -> np.ndarray:
+    """Per sample interval: the mean specific force, or the rate's change over dt."""
     measured = maneuver.channel(LEFT_SIDE[letter])
-    return measured if letter in "XYZ" else np.gradient(measured, maneuver.time)
+    if letter in "XYZ":
+        return _interval_mean(measured)
+    return np.diff(measured) / np.diff(maneuver.time)
 
 
-def _regressor(derivative, signals: dict, time_: np.ndarray) -> np.ndarray:
-    """The variable a derivative multiplies, shifted by its (fixed) delay."""
+def _regressor(derivative, signals: dict, time_: np.ndarray, hold: str) -> np.ndarray:
+    """The variable a derivative multiplies, shifted by its (fixed) delay, per interval.
+
+    Trapezoid means, except a control held constant over the interval (zero-order hold) in
+    the moment equations: there it is its value at the start of the interval.
+    """
     signal = signals[derivative.variable]
-    if derivative.delay is None or derivative.delay.initial == 0.0:
-        return signal
-    return np.interp(time_ - derivative.delay.initial, time_, signal, left=0.0)
+    if derivative.delay is not None and derivative.delay.initial > 0.0:
+        signal = np.interp(time_ - derivative.delay.initial, time_, signal, left=0.0)
+    if hold == "zoh" and derivative.letter in "LMN" and derivative.variable in CONTROLS:
+        return signal[:-1]
+    return _interval_mean(signal)
 
 
 @attrs.frozen
@@ -158,16 +175,17 @@ class EquationErrorEstimator:
     def _equation(self, structure, letter, maneuvers, signals):
         """Solve one equation. Returns ([(parameter index, value)], residual (N,), F_k)."""
         members = [d for d in structure.derivatives if d.letter == letter]
+        def column(d):
+            return np.concatenate([_regressor(d, s, m.time, maneuvers.hold)
+                                   for m, s in zip(maneuvers, signals)])
+
         target = np.concatenate([_left_side(letter, m) for m in maneuvers])
         for d in (d for d in members if d.fixed):
-            target = target - d.initial * np.concatenate(
-                [_regressor(d, s, m.time) for m, s in zip(maneuvers, signals)])
+            target = target - d.initial * column(d)
         free = [d for d in members if not d.fixed]
         if not free:
             return [], target, np.zeros((0, 0))
-        design = np.column_stack([np.concatenate([_regressor(d, s, m.time)
-                                                  for m, s in zip(maneuvers, signals)])
-                                  for d in free])
+        design = np.column_stack([column(d) for d in free])
         moved = design.std(axis=0) > self.min_excitation
         solution = np.zeros(len(free))
         solution[moved], *_ = np.linalg.lstsq(design[:, moved], target, rcond=None)

@@ -154,7 +154,8 @@ phi0_deg = {condition['phi0_deg']}
 pairs = ["q/long", "p/long", "q/lat", "p/lat", "r/coll", "az/coll", "r/ped", "ay/ped"]
 
 [reduction]                            # the paper's criteria and selection rule
-criteria = [{{ name = "insensitivity", threshold = 10.0 }}, {{ name = "cramer-rao", threshold = 20.0 }}]
+criteria = [{{ name = "insensitivity", threshold = 10.0 }},
+            {{ name = "cramer-rao", threshold = 20.0 }}]
 # true: keep removing to zero parameters for the RMSE-versus-removals curve (the paper)
 continue_to_zero = {str(not quick).lower()}
 # true: restart each step from the previous values (faster); false: from zero (the paper)

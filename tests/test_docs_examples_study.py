@@ -1,0 +1,217 @@
+"""The study scripts of docs/examples run, in their quick modes, and give sensible models.
+
+study_hover.py and study_forward.py run the built-in cases' quick variants (about 20 s each),
+own_flight_data.py identifies from CSV files it writes itself, custom_estimator.py registers
+an equation-error estimator plugin and runs a case with it.
+"""
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rotorid
+from rotorid import Derivative, Delay, FlightCondition, ModelStructure
+from rotorid.estimation import Estimate
+from rotorid.flightcase import FlightCase
+
+from test_output_error import doublet_maneuvers, with_outputs
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "docs" / "examples"
+ON_AXIS = ("q/long", "p/lat", "az/coll", "r/ped")
+
+
+def _load(name):
+    spec = importlib.util.spec_from_file_location(f"{name}_example", EXAMPLES / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _muad_passed(result, model, pair):
+    return result.verification[model][pair].checks["muad"].passed
+
+
+def _check_study_result(result, out_dir, out):
+    """What every quick study run must show, whatever the case."""
+    directory = out_dir / result.name
+    record = json.loads((directory / "result.json").read_text())
+    path = result.path
+    assert record["selected_structure"] == list(result.structures["no delays"].names)
+    assert record["reduction"]["removed"] == list(path.removed)
+    assert len(list((directory / "steps").glob("step_*.json"))) == len(path.steps)
+    assert path.steps[0].n_parameters == 60
+    assert len(path.removed) >= 5 and path.selected.n_parameters == 60 - len(path.removed)
+    # Delays are positive, below their bound, and improve the fit (the paper's two steps).
+    delayed = result.estimates["with delays"]
+    taus = delayed.values[delayed.is_delay]
+    assert taus.size >= 3 and np.all((taus > 0.0) & (taus < 0.3)), taus
+    assert not delayed.at_bound
+    rmse = {label: m.rmse for label, m in result.time_metrics.items()}
+    assert rmse["with delays"] < 0.9 * rmse["no delays"] <= 2.0
+    assert all(_muad_passed(result, "with delays", pair) for pair in ON_AXIS)
+    # The printout shows every section with these numbers.
+    assert f"{path.selected_index:>6}  {path.selected.removal.parameter}" in out
+    assert "◀ selected" in out and f"RMSE with delays {rmse['with delays']:.3f}" in out
+    for pair in result.case.pairs:
+        assert f"\n  {pair:<9}" in out
+    for name in ("Reduction path", "Selected structure", "Time delays", "Key derivatives",
+                 "Verification"):
+        assert name in out
+    return {name: row["identified"] for name, row in result.key_derivatives().items()}, {
+        name: row["truth_linearisation"] for name, row in result.key_derivatives().items()}
+
+
+def test_hover_study_example(tmp_path, capsys):
+    result = _load("study_hover").main([str(tmp_path), "--quick"])
+    assert result.case.is_quick and result.name == "hover"
+    identified, truth = _check_study_result(result, tmp_path, capsys.readouterr().out)
+    for name in ("M_w", "M_u", "Z_w", "L_v"):      # hover signs (truth-model.md)
+        assert np.sign(identified[name]) == np.sign(truth[name]), name
+    assert identified["Z_w"] == pytest.approx(truth["Z_w"], rel=0.15)
+    assert identified["M_w"] == pytest.approx(truth["M_w"], rel=0.3)
+
+
+def test_forward_study_example_follows_the_quick_environment_variable(tmp_path, capsys,
+                                                                      monkeypatch):
+    monkeypatch.setenv("ROTORID_QUICK", "1")
+    result = _load("study_forward").main([str(tmp_path)])
+    assert result.case.is_quick and result.condition.airspeed_kt == pytest.approx(70.0)
+    identified, truth = _check_study_result(result, tmp_path, capsys.readouterr().out)
+    for name in ("N_v", "M_u", "Z_w", "L_v", "Y_v"):   # 70 kt: N_v > 0 (fin)
+        assert np.sign(identified[name]) == np.sign(truth[name]), name
+    assert identified["N_v"] > 0 and identified["Z_w"] == pytest.approx(truth["Z_w"], rel=0.2)
+    # With delays, the off-axis pitch response to lateral stick verifies better.
+    checks = {m: result.verification[m]["q/lat"].checks["muad"] for m in ("no delays",
+                                                                         "with delays")}
+    assert checks["with delays"].n_inside > checks["no delays"].n_inside
+
+
+def test_own_flight_data_example_writes_csv_files_and_identifies_from_them(tmp_path, capsys):
+    example = _load("own_flight_data")
+    result = example.main([str(tmp_path), "--quick"])
+    out = capsys.readouterr().out
+    multisteps = sorted((tmp_path / "flight-data" / "multisteps").glob("*.csv"))
+    sweeps = sorted((tmp_path / "flight-data" / "sweeps").glob("*.csv"))
+    assert len(multisteps) == 8 and len(sweeps) == 4
+    lines = multisteps[0].read_text().splitlines()
+    assert lines[:4] == ["# name: hover_2311_coll_pos", '# kind: "2311"', '# axis: "coll"',
+                         "# direction: 1"]
+    assert lines[4] == "time,long,lat,coll,ped,ax,az,q,theta,ay,p,phi,r"
+    # The files read back as what the truth model flew, to the written precision.
+    loaded = rotorid.create("data-sources", "files").load(sweeps[0])[0]
+    assert loaded.metadata == {"kind": "sweep", "axis": "coll", "direction": 1}
+    assert np.allclose(result.verification_data[0].outputs, loaded.outputs, rtol=1e-6,
+                       atol=1e-9)
+
+    case = FlightCase.load(tmp_path / "my-hover.toml")
+    assert case.data["source"] == "files" and not case.continue_to_zero
+    assert case.condition["theta0_deg"] == pytest.approx(2.1, abs=0.05)
+    assert result.case == case and result.truth_derivatives is None
+    assert len(result.identification) == 8 and len(result.verification_data) == 4
+    assert (tmp_path / "my-hover" / "result.json").is_file()
+    assert "[data]\nsource = \"files\"" in out and "hover_sweep_ped" in out
+    rmse = {label: m.rmse for label, m in result.time_metrics.items()}
+    assert rmse["with delays"] < rmse["no delays"] <= 2.0
+    assert all(_muad_passed(result, "with delays", pair) for pair in ON_AXIS)
+    estimate = result.estimates["with delays"]
+    assert estimate.value("M_u") > 0 and estimate.value("Z_w") < 0 and estimate.value("L_p") < 0
+    assert np.all(np.isfinite(estimate.values)) and np.all(np.isfinite(estimate.cramer_rao))
+
+
+def test_own_flight_data_case_file_takes_user_paths(tmp_path):
+    example = _load("own_flight_data")
+    text = example.case_text("/data/f42/ms/*.csv", None,
+                             {"airspeed_kt": 60.0, "theta0_deg": -1.5, "phi0_deg": 0.5},
+                             quick=False)
+    case = example.write_case_file(tmp_path / "f42.toml", text)
+    assert case.data == {"source": "files", "identification": "/data/f42/ms/*.csv"}
+    assert case.continue_to_zero and not case.warm_start
+    assert FlightCondition.from_mapping(case.condition).airspeed_kt == pytest.approx(60.0)
+    with pytest.raises(rotorid.MissingFileError, match="no file matches"):
+        example.inventory(str(tmp_path / "none" / "*.csv"))
+
+
+# ----------------------------------------------------------------- custom estimator
+HOVER = FlightCondition.from_airspeed(0.0)
+TRUE = {"M_u": 0.5, "M_q": -3.7, "M_long": 0.9, "L_v": -0.4, "L_p": -8.0, "L_lat": 2.0,
+        "X_u": -0.3, "X_long": -0.1}
+
+
+def test_equation_error_plugin_recovers_a_known_linear_model():
+    example = _load("custom_estimator")
+    structure = ModelStructure(HOVER, [Derivative(n) for n in TRUE])
+    data = with_outputs(structure, structure.as_vector(TRUE), doublet_maneuvers())
+    estimate = example.EquationErrorEstimator().estimate(structure, data)
+    assert isinstance(estimate, Estimate) and estimate.converged
+    truth = structure.as_vector(TRUE)
+    # Written per sample interval, the equations hold exactly for held controls: only the
+    # trapezoid means of the states differ from the true interval means.
+    assert np.max(np.abs(estimate.values - truth) / np.abs(truth)) < 0.005
+    # With sensor noise: finite Cramér-Rao bounds; the moment derivatives, whose regressors
+    # are measured rates and controls, within a few bounds of the truth.
+    noisy = with_outputs(structure, truth, doublet_maneuvers(), noise=0.02, seed=4)
+    estimate = example.EquationErrorEstimator().estimate(structure, noisy)
+    assert np.all(np.isfinite(estimate.cramer_rao)) and np.all(estimate.cramer_rao > 0)
+    assert np.all(np.abs(estimate.values - truth) < 0.1 * np.abs(truth))
+    moments = np.array([n[0] in "LM" for n in estimate.parameter_names])
+    assert np.all(np.abs(estimate.values - truth)[moments] < 3 * estimate.cramer_rao[moments])
+    assert estimate.information.shape == (8, 8) and estimate.information[0, -1] == 0.0
+
+
+def test_equation_error_plugin_handles_fixed_values_and_refuses_free_delays():
+    example = _load("custom_estimator")
+    structure = ModelStructure(HOVER, [Derivative(n) for n in TRUE])
+    data = with_outputs(structure, structure.as_vector(TRUE), doublet_maneuvers())
+    fixed = structure.fixing("L_p", TRUE["L_p"])
+    estimate = example.EquationErrorEstimator().estimate(fixed, data)
+    assert "L_p" not in estimate.parameter_names and estimate.fixed == {"L_p": -8.0}
+    assert estimate.value("L_v") == pytest.approx(TRUE["L_v"], rel=0.03)
+    with pytest.raises(rotorid.EstimationError, match="cannot estimate delays.*output-error"):
+        example.EquationErrorEstimator().estimate(structure.with_delays(["L_lat"]), data)
+    known_delay = structure.replacing(
+        Derivative("L_lat", delay=Delay(0.06, fixed=True)))
+    assert known_delay.parameter_names == structure.parameter_names
+    example.EquationErrorEstimator().estimate(known_delay, data)
+
+
+def test_custom_estimator_example_registers_the_plugin_and_runs_a_case(tmp_path, capsys):
+    example = _load("custom_estimator")
+    estimates, result = example.main([str(tmp_path)])
+    out = capsys.readouterr().out
+    assert "estimators: ls-equation-error, output-error" in out
+    assert example.NAME not in rotorid.registry("estimators")      # unregistered afterwards
+    ee, oe = estimates[example.NAME], estimates["output-error"]
+    assert ee.estimator == example.NAME and ee.parameter_names == oe.parameter_names
+    assert np.all(np.isfinite(ee.values)) and np.all(np.isfinite(ee.cramer_rao))
+    for name in ("M_w", "Z_w", "M_u", "L_p", "M_q", "N_r"):   # hover signs, both estimators
+        assert np.sign(ee.value(name)) == np.sign(oe.value(name)), name
+    assert ee.value("Z_w") < 0 and ee.value("M_w") < 0 and ee.value("M_u") > 0
+    # The Study ran the reduction with the plugin at every step.
+    assert {s.estimate.estimator for s in result.path.steps} == {example.NAME}
+    assert result.path.selected.n_parameters < 40
+    assert not any(n.startswith("tau_") for n in result.estimates["with delays"].parameter_names)
+    record = json.loads((tmp_path / "hover-equation-error" / "result.json").read_text())
+    assert record["case"]["estimator"] == example.NAME
+    assert result.time_metrics["no delays"].rmse < 2.0
+    assert f"selected step {result.path.selected_index}" in out
+
+
+def test_examples_are_listed_in_the_documentation_index():
+    index = (EXAMPLES.parent / "index.md").read_text()
+    for script in ("study_hover.py", "study_forward.py", "own_flight_data.py",
+                   "custom_estimator.py"):
+        assert f"examples/{script}" in index
+
+
+@pytest.fixture(autouse=True)
+def _forget_example_modules():
+    """study_forward and own_flight_data import study_hover by name from their folder; keep
+    the tests independent of each other and of the rest of the suite."""
+    path = list(sys.path)
+    yield
+    sys.path[:] = path
+    sys.modules.pop("study_hover", None)
