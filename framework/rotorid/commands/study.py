@@ -19,6 +19,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--seed", type=int, help="noise seed of generated data")
     parser.add_argument("--speeds", help="airspeeds of speed-sweep in kt: '0,40,80' or "
                                          "START:STOP:STEP (default 0:120:10)")
+    parser.add_argument("--template", default="hover",
+                        help="case that speed-sweep repeats at each airspeed: a built-in case "
+                             "or a case TOML file with generated data (default hover)")
     parser.add_argument("--resume", action="store_true",
                         help="reuse the finished steps found in --out")
     add_executor_arguments(parser, "cases")
@@ -36,7 +39,7 @@ def add_executor_arguments(parser, what: str) -> None:
     parser.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://HOST:8786")
 
 
-def expand_cases(names, speeds: str | None):
+def expand_cases(names, speeds: str | None = None, template: str = "hover"):
     """Flight cases of the command line (``all`` and ``speed-sweep`` expanded), and the names
     of the speed-sweep cases among them."""
     from ..errors import DataError
@@ -49,7 +52,7 @@ def expand_cases(names, speeds: str | None):
     cases, swept = [], []
     for name in (list(BUILTIN) if list(names) == ["all"] else names):
         if name == FAMILY:
-            family = speed_sweep(speeds or DEFAULT_SPEEDS)
+            family = speed_sweep(speeds or DEFAULT_SPEEDS, template)
             cases.extend(family)
             swept.extend(case.name for case in family)
         else:
@@ -62,7 +65,7 @@ def run(args) -> int:
     from ..study import Study
     from ..sweep import sweep_points, write_sweep_summary
 
-    cases, swept = expand_cases(args.cases, args.speeds)
+    cases, swept = expand_cases(args.cases, args.speeds, args.template)
     if args.quick:
         cases = [case.quick() for case in cases]
     if args.seed is not None:
