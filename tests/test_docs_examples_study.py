@@ -10,6 +10,7 @@ import json
 import sys
 from pathlib import Path
 
+import matplotlib
 import numpy as np
 import pytest
 
@@ -19,6 +20,8 @@ from rotorid.estimation import Estimate
 from rotorid.flightcase import FlightCase
 
 from test_output_error import doublet_maneuvers, with_outputs
+
+matplotlib.use("Agg")
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "docs" / "examples"
 ON_AXIS = ("q/long", "p/lat", "az/coll", "r/ped")
@@ -68,7 +71,12 @@ def _check_study_result(result, out_dir, out):
 def test_hover_study_example(tmp_path, capsys):
     result = _load("study_hover").main([str(tmp_path), "--quick"])
     assert result.case.is_quick and result.name == "hover"
-    identified, truth = _check_study_result(result, tmp_path, capsys.readouterr().out)
+    out = capsys.readouterr().out
+    identified, truth = _check_study_result(result, tmp_path, out)
+    # The figures and the report (the default; the other tests skip them).
+    assert f"Report: {tmp_path / 'report.html'}" in out
+    assert (tmp_path / "report.html").stat().st_size > 1000
+    assert (tmp_path / "hover" / "figures" / "rmse.png").stat().st_size > 10_000
     for name in ("M_w", "M_u", "Z_w", "L_v"):      # hover signs (truth-model.md)
         assert np.sign(identified[name]) == np.sign(truth[name]), name
     assert identified["Z_w"] == pytest.approx(truth["Z_w"], rel=0.15)
@@ -78,7 +86,7 @@ def test_hover_study_example(tmp_path, capsys):
 def test_forward_study_example_follows_the_quick_environment_variable(tmp_path, capsys,
                                                                       monkeypatch):
     monkeypatch.setenv("ROTORID_QUICK", "1")
-    result = _load("study_forward").main([str(tmp_path)])
+    result = _load("study_forward").main([str(tmp_path), "--no-figures"])
     assert result.case.is_quick and result.condition.airspeed_kt == pytest.approx(70.0)
     identified, truth = _check_study_result(result, tmp_path, capsys.readouterr().out)
     for name in ("N_v", "M_u", "Z_w", "L_v", "Y_v"):   # 70 kt: N_v > 0 (fin)
@@ -92,8 +100,9 @@ def test_forward_study_example_follows_the_quick_environment_variable(tmp_path, 
 
 def test_own_flight_data_example_writes_csv_files_and_identifies_from_them(tmp_path, capsys):
     example = _load("own_flight_data")
-    result = example.main([str(tmp_path), "--quick"])
+    result = example.main([str(tmp_path), "--quick", "--no-figures"])
     out = capsys.readouterr().out
+    assert not (tmp_path / "report.html").exists()
     multisteps = sorted((tmp_path / "flight-data" / "multisteps").glob("*.csv"))
     sweeps = sorted((tmp_path / "flight-data" / "sweeps").glob("*.csv"))
     assert len(multisteps) == 8 and len(sweeps) == 4

@@ -52,7 +52,7 @@ Run it from the repository root::
 ``--quick`` (or ``ROTORID_QUICK=1``) makes the demonstration data shorter (one direction per
 multistep, records at 60 %) and stops the reduction with the criteria; without it the
 reduction continues to zero parameters for the full RMSE-versus-removals curve, as in the
-paper. ``--figures`` also writes figures and the HTML report.
+paper. ``--no-figures`` skips the figures and the HTML report (``OUT/report.html``).
 """
 
 from __future__ import annotations
@@ -189,8 +189,8 @@ def parse_arguments(argv=None) -> argparse.Namespace:
                         help="short demonstration data, criteria-stopped reduction "
                              "(also: ROTORID_QUICK=1)")
     parser.add_argument("--seed", type=int, default=0, help="noise seed of the demo data")
-    parser.add_argument("--figures", action="store_true",
-                        help="also write the figures and the HTML report")
+    parser.add_argument("--no-figures", dest="figures", action="store_false",
+                        help="skip the figures and the HTML report")
     return parser.parse_args(argv)
 
 
@@ -220,11 +220,13 @@ def main(argv=None) -> CaseResult:
     case = write_case_file(case_path, text)
     print(f"\n3. The case file {case_path}\n\n{text}")
 
-    print(f"4. Running it (the same as: rotorid study {case_path} --out {out})\n")
+    command = f"rotorid study {case_path} --out {out}" + ("" if args.figures else " --no-figures")
+    print(f"4. Running it (the same as: {command})\n")
     result = run_study(case, out, figures=args.figures)
     print("\n5. The results\n")
     print_summary(result)
-    print(f"\nResults: {out / CASE_NAME / 'result.json'}")
+    print(f"\nResults: {out / CASE_NAME / 'result.json'}"
+          + (f"; report: {out / 'report.html'}" if args.figures else ""))
     return result
 
 

@@ -22,9 +22,10 @@ Run it from the repository root::
 
     python docs/examples/study_forward.py results/forward-example --quick
 
-Options as in the hover script (``--quick`` or ``ROTORID_QUICK=1``, ``--seed``, ``--figures``,
-``--resume``); the quick run takes about 20 s on 2 cores. Results go to
-``<out>/forward/result.json``.
+Options as in the hover script (``--quick`` or ``ROTORID_QUICK=1``, ``--seed``,
+``--no-figures``, ``--resume``); the quick run takes about 20 s on 2 cores, plus about 8 s
+for the figures. Results go to ``<out>/forward/`` (``result.json``, figures, tables,
+``report.html``).
 """
 
 from __future__ import annotations
