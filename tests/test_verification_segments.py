@@ -6,7 +6,7 @@ import pytest
 from rotorid import ManeuverSet
 from rotorid.errors import VerificationError
 from rotorid.simulation import simulate
-from rotorid.verification import segmented_simulation
+from rotorid.verification import DRIFT_LIMIT, segmented_simulation, verify_model
 
 from hover_reference import closed_loop_maneuvers, true_structure
 
@@ -45,3 +45,22 @@ def test_segment_must_be_positive(hover):
     structure, truth, data = hover
     with pytest.raises(VerificationError, match="positive duration"):
         segmented_simulation(structure, truth, data, segment=0.0)
+
+
+def test_only_a_fast_instability_over_the_record_is_simulated_in_segments(hover):
+    structure, truth, data = hover
+    faster = truth.copy()
+    faster[structure.parameter_names.index("M_u")] *= 20.0
+    longest = max(m.duration for m in data)
+
+    def growth_over_record(values):
+        return np.max(np.linalg.eigvals(structure.matrices(values)[0]).real) * longest
+
+    def segmented(values):
+        result = verify_model(structure, values, data, pairs=("q/long",), envelopes=["muad"])
+        return any("segments" in note for note in result.notes)
+
+    # The hover phugoid grows less than 100-fold over the records, the faster one more.
+    assert 0 < growth_over_record(truth) < np.log(DRIFT_LIMIT) < growth_over_record(faster)
+    assert not segmented(truth)
+    assert segmented(faster)

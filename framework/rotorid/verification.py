@@ -16,6 +16,7 @@ runs the whole comparison for an identified model.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from typing import Protocol, runtime_checkable
 
@@ -38,6 +39,9 @@ from .metrics import TimeDomainMetrics, time_domain_metrics
 COHERENCE_THRESHOLD = 0.8
 #: Model-to-truth output RMS ratio above which a simulated sweep counts as drifting.
 DRIFT_RATIO = 10.0
+#: Growth of the unstable mode over the longest sweep above which the model is simulated in
+#: segments restarted from the data (see :func:`verify_model`).
+DRIFT_LIMIT = 100.0
 #: The paper's verification pairs (figs. 4, 5, 12, 14): ``output/input``.
 PAPER_PAIRS = ("q/long", "p/long", "q/lat", "p/lat", "r/coll", "az/coll", "r/ped", "ay/ped")
 
@@ -565,12 +569,15 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
     exact delays (:func:`rotorid.transfer.frequency_response`) with the truth's conditioned
     response. ``envelopes`` may be envelope objects by name or registered envelope names.
 
-    An unstable model (the hover phugoid is unstable) cannot follow a long sweep open loop:
-    its simulation drifts away from the data. Such a model is simulated in segments of
-    ``segment`` seconds (default ``2/σ`` for the largest unstable real part σ, at least 5 s),
-    each restarted from the state measured and reconstructed at its start
-    (:func:`segmented_simulation`); the result's notes say so. Other keyword options go to
-    :func:`compare_sweeps`.
+    An unstable model (the hover phugoid is unstable) cannot follow a long sweep open loop
+    when its unstable mode grows more than :data:`DRIFT_LIMIT`-fold over the longest sweep
+    (σ·T > ln 100 for the largest unstable real part σ): its simulation drifts away from the
+    data. Such a model is simulated in segments of ``segment`` seconds (default ``2/σ``, at
+    least 5 s), each restarted from the state measured and reconstructed at its start
+    (:func:`segmented_simulation`); the result's notes say so. A slower instability is
+    simulated in one piece, because every restart costs accuracy (delayed terms see trim, the
+    reconstructed velocities carry integration error). ``segment`` given explicitly always
+    segments. Other keyword options go to :func:`compare_sweeps`.
     """
     from .transfer import frequency_response
 
@@ -578,7 +585,8 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
         envelopes = envelopes_by_name(tuple(envelopes))
     growth = float(np.max(np.linalg.eigvals(structure.matrices(values)[0]).real))
     notes = _stability_notes(structure, values)
-    if segment is None and growth > 1e-9:
+    longest = max(m.duration for m in sweeps)
+    if segment is None and growth * longest > math.log(DRIFT_LIMIT):
         segment = max(5.0, 2.0 / growth)
     if segment is not None:
         outputs = segmented_simulation(structure, values, sweeps, segment)
