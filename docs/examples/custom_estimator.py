@@ -131,7 +131,7 @@ class EquationErrorEstimator:
                 values[index] = value
                 information[index, [i for i, _ in columns]] = info[local]
             residuals.append(residual)
-        residuals = np.column_stack(residuals)                     # (N, 6)
+        residuals = np.column_stack(residuals)         # (intervals of all maneuvers, 6)
         noise = residuals.T @ residuals / len(residuals)
         stats = statistics(information, names)
         cost, rmse = float(np.linalg.det(noise)), float(np.sqrt(np.mean(residuals**2)))
@@ -175,6 +175,7 @@ class EquationErrorEstimator:
     def _equation(self, structure, letter, maneuvers, signals):
         """Solve one equation. Returns ([(parameter index, value)], residual (N,), F_k)."""
         members = [d for d in structure.derivatives if d.letter == letter]
+
         def column(d):
             return np.concatenate([_regressor(d, s, m.time, maneuvers.hold)
                                    for m, s in zip(maneuvers, signals)])
@@ -192,6 +193,7 @@ class EquationErrorEstimator:
         residual = target - design @ solution
         variance = residual @ residual / max(len(residual) - int(moved.sum()), 1)
         info = design.T @ design / variance
+        info[~moved, :] = info[:, ~moved] = 0.0          # no information on what never moved
         index = structure.parameter_names.index
         return [(index(d.name), v) for d, v in zip(free, solution)], residual, info
 

@@ -84,7 +84,8 @@ KEPT_METADATA = ("kind", "axis", "direction")
 def write_csv(path: Path, maneuver, header: dict) -> Path:
     """One maneuver as a CSV file: ``# key: value`` header lines, channel row, samples."""
     lines = [f"# name: {maneuver.name}"]
-    lines += [f"# {key}: {json.dumps(value)}" for key, value in header.items()]  # "3211" stays text
+    # Values as JSON: "3211" stays text, 1 a number.
+    lines += [f"# {key}: {json.dumps(value)}" for key, value in header.items()]
     lines.append(",".join(COLUMNS))
     table = np.column_stack([maneuver.channel(name) for name in COLUMNS])
     lines += [",".join(f"{v:.7g}" for v in row) for row in table]
