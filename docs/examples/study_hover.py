@@ -25,9 +25,9 @@ Run it from the repository root::
 honest variant (records shortened to 60 %, reduction stopped by the criteria instead of being
 continued to zero parameters): about 20 s on 2 cores, plus about 8 s for the figures.
 Without it the full paper setup runs (full-length records, reduction to zero parameters):
-about 1.5 minutes plus the figures. ``--seed`` changes the sensor noise, ``--resume`` reuses the reduction
-steps a previous run of the same configuration left in the output directory,
-``--no-figures`` skips the figures and the HTML report.
+about 1.5 minutes plus the figures. ``--seed`` changes the sensor noise, ``--resume``
+reuses the reduction steps a previous run of the same configuration left in the output
+directory, ``--no-figures`` skips the figures and the HTML report.
 
 Everything is written under ``<out>/hover/``: the maneuvers (``data/``), one JSON file per
 reduction step (``steps/``), ``delays.json``, ``result.json``, the paper's figures
