@@ -65,9 +65,9 @@ def plot_rmse_path(path: ReductionPath, title: str = "Model reduction"):
     axis.set_title(title)
     finite = rmse[np.isfinite(rmse)]
     if finite.size:
-        axis.set_ylim(0.0, finite.max() * 1.25)
+        axis.set_ylim(0.0, finite.max() * 1.6)   # headroom: labels and legend
     axis.grid(True, alpha=0.3)
-    axis.legend(loc="lower right", fontsize="small")
+    axis.legend(loc="upper left", fontsize="small")
     return figure
 
 
