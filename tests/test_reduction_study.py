@@ -11,7 +11,7 @@ from rotorid.flightcase import FlightCase
 from rotorid.hookspecs import hookimpl
 from rotorid.plugins import get_plugin_manager
 from rotorid.reduction import ReductionPath, reduce
-from rotorid.study import run_case
+from rotorid.study import load_data, run_case
 
 from test_output_error import doublet_maneuvers, with_outputs
 
@@ -165,3 +165,18 @@ def test_builtin_cases_load_and_quick_variant():
         FlightCase.load("cruise")
     with pytest.raises(rotorid.DataFileError, match="unknown key"):
         FlightCase.from_mapping({"name": "x", "data": {"source": "files"}, "colour": 1})
+
+
+def test_data_paths_in_a_case_file_are_relative_to_the_file(tmp_path, data, monkeypatch):
+    rotorid.create("data-sources", "files").save(data, tmp_path / "cases" / "flight",
+                                                 format="csv")
+    (tmp_path / "cases" / "own.toml").write_text(
+        'name = "own"\n[data]\nsource = "files"\nidentification = "flight"\n'
+        '[condition]\nairspeed_kt = 0.0\n')
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    case = FlightCase.load(tmp_path / "cases" / "own.toml")
+    assert case.data["identification"] == str(tmp_path / "cases" / "flight")
+    ident, verif, condition, _ = load_data(case, tmp_path / "out")
+    assert len(ident) == len(data) and verif is None

@@ -57,6 +57,25 @@ def _criteria(entries, source: str) -> tuple[tuple[str, dict], ...]:
     return tuple(result)
 
 
+def _relative_to(mapping: Mapping, base: Path) -> dict:
+    """The case with relative data-file paths (or globs) resolved against ``base``, the case
+    file's folder, so that a case runs the same from any working directory."""
+    data = mapping.get("data")
+    if not isinstance(data, Mapping) or data.get("source") != "files":
+        return dict(mapping)
+
+    def resolve(entry):
+        if isinstance(entry, str):
+            return entry if Path(entry).is_absolute() else str(base / entry)
+        if isinstance(entry, list):
+            return [resolve(item) for item in entry]
+        return entry
+
+    data = {key: resolve(value) if key in ("identification", "verification") else value
+            for key, value in data.items()}
+    return {**mapping, "data": data}
+
+
 @attrs.frozen
 class FlightCase:
     """One flight case of a study (see the module docstring for the file form)."""
@@ -147,7 +166,7 @@ class FlightCase:
             mapping = tomllib.loads(path.read_text(encoding="utf-8"))
         except tomllib.TOMLDecodeError as error:
             raise DataFileError(f"{path}: not valid TOML: {error}") from None
-        return cls.from_mapping(mapping, str(path))
+        return cls.from_mapping(_relative_to(mapping, path.parent), str(path))
 
     # ----------------------------------------------------------------- variants
     def quick(self) -> "FlightCase":
