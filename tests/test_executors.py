@@ -177,3 +177,21 @@ def test_montecarlo_command_repeats_the_final_estimation(tmp_path, capsys):
     assert record["estimates"][1] != record["estimates"][0]
     assert "std/CR" in capsys.readouterr().out
     assert (out / "tiny" / "montecarlo.png").is_file()
+
+
+def test_sweep_figure_marks_removed_derivatives_and_round_trips(tmp_path):
+    from rotorid.plots_sweep import plot_speed_sweep
+    from rotorid.sweep import SweepPoint, load_sweep_summary, write_sweep_summary
+
+    points = [SweepPoint("speed-000kt", 0.0, {"M_q": -2.4, "tau_M_q": 0.15},
+                         {"M_q": 0.01, "tau_M_q": float("inf")}, {"M_q": -3.5}),
+              SweepPoint("speed-060kt", 60.0, {"tau_M_q": 0.17}, {"tau_M_q": 0.002},
+                         {"M_q": -3.7})]
+    figure = plot_speed_sweep(points, derivatives=["M_q"], delays=["M_q"], bound=2.0)
+    visible = [axis for axis in figure.axes if axis.get_visible()]
+    assert [axis.get_title() for axis in visible] == ["M_q", "τ M_q (s)"]
+    labels = [line.get_label() for line in visible[0].get_lines()]
+    assert "truth linearisation" in labels and "removed / dropped" in labels
+    write_sweep_summary(points, tmp_path)
+    again = load_sweep_summary(tmp_path / "speed-sweep.json")
+    assert again == points

@@ -130,7 +130,8 @@ def sweep_points(results: Mapping) -> list[SweepPoint]:
     for name, result in results.items():
         estimate = result.estimates["with delays"]
         points.append(SweepPoint(
-            name, float(result.condition.airspeed_kt), estimate.as_mapping(),
+            name, float(result.case.data.get("airspeed_kt", result.condition.airspeed_kt)),
+            estimate.as_mapping(),
             dict(zip(estimate.parameter_names, estimate.cramer_rao.tolist())),
             result.truth_derivatives or {}, estimate.units))
     return sorted(points, key=lambda p: p.airspeed_kt)
