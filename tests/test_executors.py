@@ -72,9 +72,17 @@ def test_dask_local_cluster_gives_the_serial_numbers_bit_for_bit(serial, tmp_pat
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   host="127.0.0.1", dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
-        results = run_study(tmp_path, executor=client.get_executor())
+        results = run_study(tmp_path / "api", executor=client.get_executor())
+        # The command line connects its own client to the scheduler's address.
+        status = main(["study", "speed-sweep", "--template", str(TINY), "--speeds", "0,60",
+                       "--executor", "dask", "--scheduler", cluster.scheduler_address,
+                       "--no-figures", "--out", str(tmp_path / "cli")])
     assert_identical(serial, results)
-    assert (tmp_path / "speed-060kt" / "result.json").is_file()
+    assert (tmp_path / "api" / "speed-060kt" / "result.json").is_file()
+    assert status == 0
+    points = json.loads((tmp_path / "cli" / "speed-sweep.json").read_text())["points"]
+    for point in points:
+        assert point["values"] == serial[point["case"]].estimates["with delays"].as_mapping()
 
 
 def fail_at_second_step(case, message):

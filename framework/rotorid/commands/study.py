@@ -33,9 +33,9 @@ def add_executor_arguments(parser, what: str) -> None:
     from ..executors import KINDS
 
     parser.add_argument("--executor", choices=KINDS, default="process",
-                        help=f"where independent {what} run: serial (this process), process "
-                             f"(a local process pool, the default) or dask (a Dask cluster; "
-                             f"pip install 'rotorid[dask]')")
+                        help=f"where the independent {what} are computed: serial (this "
+                             f"process), process (a local process pool, the default) or dask "
+                             f"(a Dask cluster; pip install 'rotorid[dask]')")
     parser.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://HOST:8786")
 
 
