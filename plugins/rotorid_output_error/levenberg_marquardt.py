@@ -126,17 +126,18 @@ class Problem:
 
             outputs, sens = finite_difference_sensitivities(self.model, values, self.maneuvers)
         residuals = self.residuals(outputs)
-        # Whiten with R⁻¹ = W Wᵀ, then F = JᵀJ and G = −Jᵀ(e W) with J the whitened
-        # sensitivities laid out as (P, N·n_o): one matrix product per maneuver.
+        # Whiten with R⁻¹ = W Wᵀ, then F = JᵀJ and G = −Jᵀ(e W) with J the weighted, whitened
+        # sensitivities laid out as (N·n_o, P): one batched product builds J per maneuver in
+        # that layout, and JᵀJ is one symmetric matrix product.
         whiten = np.linalg.cholesky(np.linalg.inv(r))
+        mixing = (self.weights[:, None] * whiten).T          # (n_o, n_o)
         p = len(values)
         f = np.zeros((p, p))
         g = np.zeros(p)
         for e, s in zip(residuals, sens):
-            jacobian = np.ascontiguousarray(((s * self.weights) @ whiten).transpose(1, 0, 2))
-            jacobian = jacobian.reshape(p, -1)
-            f += jacobian @ jacobian.T
-            g -= jacobian @ (e @ whiten).reshape(-1)
+            jacobian = np.matmul(mixing, s.transpose(0, 2, 1)).reshape(-1, p)
+            f += jacobian.T @ jacobian
+            g -= jacobian.T @ (e @ whiten).reshape(-1)
         return f, g
 
 
