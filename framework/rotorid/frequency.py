@@ -456,6 +456,14 @@ def response_from_maneuvers(maneuvers: ManeuverSet, input: str, output: str,
     for name in conditioned_on:
         _check_channel(name, INPUT_CHANNELS, "input")
     inputs = [input, *[c for c in conditioned_on if c != input]]
+    records = _records(maneuvers, inputs, output, outputs)
+    return estimate_responses(records, maneuvers[0].dt, inputs, output, omega, windows,
+                              overlap)[0]
+
+
+def _records(maneuvers: ManeuverSet, inputs: Sequence[str], output: str,
+             outputs: Sequence[np.ndarray] | None = None) -> list[np.ndarray]:
+    """Per maneuver, the ``inputs`` columns then the ``output`` column, shape (N_i, n + 1)."""
     dts = {round(m.dt, 9) for m in maneuvers}
     if len(dts) > 1:
         raise VerificationError(f"maneuvers have different sample times {sorted(dts)} s; "
@@ -473,5 +481,79 @@ def response_from_maneuvers(maneuvers: ManeuverSet, input: str, output: str,
             raise VerificationError(f"outputs for maneuver {m.name!r} must have shape "
                                     f"({m.n_samples}, {len(OUTPUT_CHANNELS)}), got {y.shape}")
         records.append(np.column_stack([m.inputs[:, columns], y[:, row]]))
-    return estimate_responses(records, maneuvers[0].dt, inputs, output, omega, windows,
-                              overlap)[0]
+    return records
+
+
+def hold_response(omega: np.ndarray, dt: float, hold: str) -> np.ndarray:
+    """Frequency response of the hold that turns input samples into the signal the aircraft
+    sees, shape (M,): zero-order ``(1 − e^(−jωT))/(jωT)`` (half a sample of lag), first-order
+    (linear interpolation) ``sinc²(ωT/2)`` (no lag)."""
+    x = np.asarray(omega, dtype=float) * dt
+    if hold == "zoh":
+        return (1.0 - np.exp(-1j * x)) / (1j * x)
+    if hold == "foh":
+        return np.sinc(x / (2.0 * np.pi)) ** 2 + 0j
+    raise VerificationError(f"unknown input hold {hold!r}; use 'zoh' or 'foh'")
+
+
+def apparent_response(maneuvers: ManeuverSet, input: str, output: str, omega: np.ndarray,
+                      model: np.ndarray, *, windows: Sequence[float] | None = None,
+                      overlap: float = DEFAULT_OVERLAP) -> tuple[FrequencyResponse,
+                                                                 FrequencyResponse]:
+    """A model's response as the single-input estimate ``output/input`` on these records
+    sees it, beside the truth's single-input estimate from the recorded outputs.
+
+    When the other inputs move with the primary one (stabilising loops), the single-input
+    estimate of a linear system driven by all of them is ``Σ_k H_k · G_{u,u_k}/G_{u,u}``. This
+    evaluates that sum per window from the recorded inputs' cross-spectra and the model's
+    analytic responses ``H_k``, and merges the windows with the truth estimate's weights, so
+    model and truth are processed identically. Nothing is simulated: an unstable model does
+    not drift.
+
+    Args:
+        maneuvers: the records (one sample time).
+        input, output: channel names (``"long"``, ``"q"``).
+        omega: frequencies in rad/s, shape (M,).
+        model: the model's responses of ``output`` to every input on ``omega``, shape (M, 4)
+            complex, inputs in ``INPUT_CHANNELS`` order (e.g. from
+            :func:`rotorid.transfer.frequency_response`).
+
+    The analytic responses are those of the continuous model; the recorded inputs are
+    samples of held signals, so each is multiplied by the frequency response of the records'
+    hold (:func:`hold_response`), as the truth's and a simulation's estimates include it.
+
+    Returns ``(model, truth)``; the model's carries the truth's coherence and random error.
+    """
+    _check_channel(input, INPUT_CHANNELS, "input")
+    _check_channel(output, OUTPUT_CHANNELS, "output")
+    omega = np.asarray(omega, dtype=float)
+    model = np.asarray(model, dtype=complex)
+    if model.shape != (omega.size, len(INPUT_CHANNELS)):
+        raise VerificationError(f"model responses must have shape ({omega.size}, "
+                                f"{len(INPUT_CHANNELS)}), got {model.shape}")
+    order = [input, *[c for c in INPUT_CHANNELS if c != input]]
+    records = _records(maneuvers, order, output)
+    if windows is None:
+        windows = default_windows(min(r.shape[0] for r in records) * maneuvers[0].dt)
+    gains = (model[:, [INPUT_CHANNELS.index(c) for c in order]]
+             * hold_response(omega, maneuvers[0].dt, maneuvers.hold)[:, None])   # (M, 4)
+    truths, models, used, averages = [], [], [], []
+    for window in windows:
+        spectra = cross_spectra(records, maneuvers[0].dt, omega, window, overlap)
+        used.append(spectra.window)
+        averages.append(spectra.n_effective)
+        g = spectra.matrix
+        pair = [0, len(order)]
+        single = attrs.evolve(spectra, matrix=g[:, pair][:, :, pair])
+        with single_threaded():
+            truth = miso_response(single)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            seen = np.einsum("mk,mk->m", gains, g[:, 0, :len(order)]) / g[:, 0, 0]
+        truths.append(truth)
+        models.append(attrs.evolve(truth, response=seen[:, None]))
+    merged = [composite(estimates, used, omega) for estimates in (models, truths)]
+    return tuple(
+        FrequencyResponse(input=input, output=output, omega=omega, response=m.response[:, 0],
+                          coherence=m.coherence[:, 0], random_error=m.random_error[:, 0],
+                          windows=used, n_effective=averages)
+        for m in merged)

@@ -26,6 +26,7 @@ import numpy as np
 from .data import INPUT_CHANNELS, OUTPUT_CHANNELS
 from .frequency import (
     FrequencyResponse,
+    apparent_response,
     default_windows,
     log_grid,
     lowest_frequency,
@@ -477,7 +478,8 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
                    pairs: Sequence[str] = PAPER_PAIRS,
                    envelopes: Mapping[str, ValidationEnvelope] | None = None, *,
                    analytic=None, omega=None, windows=None,
-                   conditioning: str | Sequence[str] = "auto") -> VerificationResult:
+                   conditioning: str | Sequence[str] = "auto",
+                   model_response: str = "simulated") -> VerificationResult:
     """Compare a model's simulated sweeps with the recorded ones, pair by pair.
 
     Args:
@@ -491,10 +493,20 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
         conditioning: inputs the truth's response is conditioned on for the analytic
             comparison: ``"auto"`` (every other input that moved, see
             :func:`rotorid.frequency.moving_inputs`), ``"none"``, or explicit input names.
+        model_response: ``"simulated"``: the model's single-input response is estimated from
+            ``model_outputs``; ``"apparent"``: it is formed from the analytic responses and
+            the recorded inputs' cross-spectra (:func:`rotorid.frequency.apparent_response`;
+            needs ``analytic``), for models whose simulation drifts.
 
-    The simulated comparison uses single-input responses of truth and model: the model is
-    driven by every recorded input, so the other inputs affect both sides alike.
+    Both comparisons use single-input responses of truth and model: the model is driven by
+    every recorded input, so the other inputs affect both sides alike.
     """
+    if model_response not in ("simulated", "apparent"):
+        raise VerificationError(f"model_response must be 'simulated' or 'apparent', got "
+                                f"{model_response!r}")
+    if model_response == "apparent" and analytic is None:
+        raise VerificationError("model_response='apparent' needs the analytic model response "
+                                "(analytic=lambda omega: frequency_response(...))")
     parsed = [(name, *parse_pair(name)) for name in pairs]
     if not parsed:
         raise VerificationError("no response pairs given; e.g. pairs=['q/long', 'p/long']")
@@ -520,9 +532,14 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
             others = ()
         else:
             others = tuple(c for c in conditioning if c != control)
-        truth = response_from_maneuvers(subset, control, output, omega, windows=windows)
-        model = response_from_maneuvers(subset, control, output, omega, windows=windows,
-                                        outputs=[model_outputs[i] for i in chosen])
+        if model_response == "apparent":
+            model, truth = apparent_response(subset, control, output, omega,
+                                             full[:, OUTPUT_CHANNELS.index(output)],
+                                             windows=windows)
+        else:
+            truth = response_from_maneuvers(subset, control, output, omega, windows=windows)
+            model = response_from_maneuvers(subset, control, output, omega, windows=windows,
+                                            outputs=[model_outputs[i] for i in chosen])
         with np.errstate(divide="ignore", invalid="ignore"):
             error = model.response / truth.response
             checks = {n: e.check(error, truth.coherence, omega) for n, e in envelopes.items()}
@@ -542,7 +559,8 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
     notes = [f"{p.pair}: the model's {p.pair.split('/')[0]} has {p.output_rms_ratio:.3g} times "
              f"the truth's RMS on these sweeps; its open-loop simulation drifts (unstable "
              f"model?), so the simulated comparison of this pair is not meaningful"
-             for p in results if p.output_rms_ratio > DRIFT_RATIO]
+             for p in results
+             if model_response == "simulated" and p.output_rms_ratio > DRIFT_RATIO]
     return VerificationResult(results, time_domain_metrics(sweeps, model_outputs), notes)
 
 
@@ -572,13 +590,16 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
     An unstable model (the hover phugoid is unstable) cannot follow a long sweep open loop
     when its unstable mode grows more than :data:`DRIFT_LIMIT`-fold over the longest sweep
     (σ·T > ln 100 for the largest unstable real part σ): its simulation drifts away from the
-    data. Such a model is simulated in segments of ``segment`` seconds (default ``2/σ``, at
-    least 5 s), each restarted from the state measured and reconstructed at its start
-    (:func:`segmented_simulation`); the result's notes say so. A slower instability is
-    simulated in one piece, because every restart costs accuracy (delayed terms see trim, the
-    reconstructed velocities carry integration error). ``segment`` given explicitly always
-    segments. Other keyword options go to :func:`compare_sweeps`.
+    data. For such a model the frequency comparison uses its *apparent* response instead
+    (:func:`rotorid.frequency.apparent_response`: the analytic responses combined through the
+    recorded inputs' cross-spectra, which is what a single-input estimate from its simulation
+    would give if it did not drift), and the time-domain metrics come from a simulation in
+    segments of 2/σ s (at least 5 s) restarted from the data (:func:`segmented_simulation`).
+    A slower instability is simulated in one piece. ``segment`` given explicitly simulates in
+    segments of that length and uses the simulated comparison. The result's notes say which
+    was done. Other keyword options go to :func:`compare_sweeps`.
     """
+    from .simulation import simulate
     from .transfer import frequency_response
 
     if envelopes is not None and not isinstance(envelopes, Mapping):
@@ -586,19 +607,24 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
     growth = float(np.max(np.linalg.eigvals(structure.matrices(values)[0]).real))
     notes = _stability_notes(structure, values)
     longest = max(m.duration for m in sweeps)
-    if segment is None and growth * longest > math.log(DRIFT_LIMIT):
+    drifts = growth * longest > math.log(DRIFT_LIMIT)
+    comparison = "apparent" if drifts and segment is None else "simulated"
+    if segment is None and drifts:
         segment = max(5.0, 2.0 / growth)
-    if segment is not None:
-        outputs = segmented_simulation(structure, values, sweeps, segment)
+        notes.append(f"the model's unstable mode grows e^{growth * longest:.0f}-fold over the "
+                     f"longest sweep: frequency responses compared through its apparent "
+                     f"response (analytic responses and the recorded inputs' cross-spectra); "
+                     f"time-domain metrics from segments of {segment:.1f} s restarted from "
+                     f"the measured and reconstructed state")
+    elif segment is not None:
         notes.append(f"the model was simulated in segments of {segment:.1f} s, each restarted "
-                     f"from the measured and reconstructed state (unstable model)")
-    else:
-        from .simulation import simulate
-
-        outputs = simulate(structure, values, sweeps)
+                     f"from the measured and reconstructed state")
+    outputs = (simulate(structure, values, sweeps) if segment is None
+               else segmented_simulation(structure, values, sweeps, segment))
     result = compare_sweeps(
         sweeps, outputs, pairs, envelopes,
-        analytic=lambda omega: frequency_response(structure, values, omega), **options)
+        analytic=lambda omega: frequency_response(structure, values, omega),
+        model_response=comparison, **options)
     return attrs.evolve(result, notes=[*notes, *result.notes])
 
 
@@ -654,5 +680,5 @@ def _stability_notes(structure, values) -> list[str]:
     if not unstable.size:
         return []
     shown = ", ".join(f"{v.real:.3g}{v.imag:+.3g}j" for v in unstable if v.imag >= 0)
-    return [f"the model is unstable (eigenvalues {shown} 1/s, delays ignored): open-loop "
-            f"simulations of long sweeps drift; judge such pairs by the analytic comparison"]
+    return [f"the model is unstable (eigenvalues {shown} 1/s, delays ignored): its open-loop "
+            f"simulation of a long sweep drifts"]
