@@ -132,6 +132,7 @@ def test_study_on_flight_data_files_writes_results_and_resumes(tmp_path, data):
     second = run_case(case, tmp_path / "out", progress=lambda c, m: again.append(m),
                       figures=False)
     assert any("resuming after" in m for m in again)
+    assert first.resumed_steps == 0 and second.resumed_steps == len(first.path.steps)
     assert not any(m.startswith("reduction step") for m in again)
     assert np.array_equal(second.estimates["with delays"].values,
                           first.estimates["with delays"].values)

@@ -303,6 +303,9 @@ def case_html(result, figures: Mapping[str, list[str]]) -> str:
     estimates = result.estimates
     notes = sorted({n for v in result.verification.values() for n in v.notes})
     seconds = ", ".join(f"{k} {v:.0f} s" for k, v in result.seconds.items())
+    if result.resumed_steps:
+        seconds = (f"{seconds} (this run, which resumed after {result.resumed_steps} finished "
+                   f"reduction steps)")
     verification_count = 0 if result.verification_data is None else len(result.verification_data)
     body = [
         f"<p>{html.escape(case.description)}. Trim: {html.escape(result.condition.describe())}. "

@@ -66,6 +66,7 @@ class CaseResult:
     truth_derivatives: Mapping[str, float] | None
     seconds: Mapping[str, float]
     dropped_delays: tuple[str, ...] = ()
+    resumed_steps: int = 0           # finished reduction steps reused from an earlier run
 
     @property
     def name(self) -> str:
@@ -104,6 +105,7 @@ class CaseResult:
             "key_derivatives": self.key_derivatives(),
             "dropped_delays": list(self.dropped_delays),
             "seconds": dict(self.seconds),
+            "resumed_steps": self.resumed_steps,
         }
 
 
@@ -292,7 +294,7 @@ def run_case(case: FlightCase, out_dir: str | Path, resume: bool = True,
     clock["verification"] = time.perf_counter()
     result = CaseResult(case, condition, ident, verif, path, structures, estimates, metrics,
                         verification, truth_derivatives(generator, condition, structure),
-                        _durations(clock), dropped)
+                        _durations(clock), dropped, len(finished))
     atomic_write(directory / "result.json",
                  json.dumps(_jsonable(result.as_dict()), indent=1, default=_json_default))
     if figures:
