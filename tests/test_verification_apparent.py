@@ -111,3 +111,21 @@ def test_apparent_comparison_needs_the_analytic_response(closed_loop_sweep):
                        model_response="apparent")
     with pytest.raises(VerificationError, match="must be 'simulated' or 'apparent'"):
         compare_sweeps(sweeps, simulate(truth, None, sweeps), ["q/long"], model_response="x")
+
+
+def test_default_grid_starts_at_the_lowest_frequency_the_sweeps_excite():
+    from rotorid.frequency import default_windows, lowest_frequency
+    from rotorid.verification import default_omega
+
+    n = 5000                                  # 100 s: the window limit is about 0.25 rad/s
+    time = np.arange(n) * DT
+    inputs, outputs = np.zeros((n, 4)), np.zeros((n, 8))
+
+    def sweep(name, metadata):
+        return Maneuver(name, time, inputs, outputs, {"axis": "long", **metadata})
+
+    window_limit = lowest_frequency(default_windows(sweep("a", {}).duration)[0])
+    assert default_omega([sweep("a", {})])[0] == pytest.approx(window_limit)
+    recorded = [sweep("a", {"signal": {"omega_min": 0.45}}), sweep("b", {"omega_min": 0.6})]
+    assert default_omega(recorded)[0] == pytest.approx(0.45)
+    assert default_omega([sweep("a", {"omega_min": 0.1})])[0] == pytest.approx(window_limit)

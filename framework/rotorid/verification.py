@@ -465,12 +465,31 @@ def primary_axis(maneuver) -> str:
     return INPUT_CHANNELS[int(np.argmax(np.sqrt(np.mean(centred ** 2, axis=0))))]
 
 
+def sweep_omega_min(maneuver) -> float | None:
+    """The lowest frequency a sweep's signal excites, rad/s, when its metadata records it
+    (``omega_min``, or ``signal.omega_min`` as the input-signal plugins write it)."""
+    metadata = maneuver.metadata
+    signal = metadata.get("signal")
+    value = metadata.get("omega_min",
+                         signal.get("omega_min") if isinstance(signal, Mapping) else None)
+    return None if value is None else float(value)
+
+
 def default_omega(sweeps, n: int = 200, upper: float = 20.0) -> np.ndarray:
-    """Log grid from the longest default window's lowest frequency (4π/(T_rec/2)) to
-    ``upper`` rad/s or a fifth of the Nyquist frequency, whichever is lower."""
+    """Log grid from the lowest frequency the data support to ``upper`` rad/s or a fifth of
+    the Nyquist frequency, whichever is lower.
+
+    The lower end is the longest default window's lowest frequency (4π/(T_rec/2)), raised to
+    the lowest frequency the sweeps excite where their metadata records it
+    (:func:`sweep_omega_min`): below it the inputs' spectra hold only the window's leakage of
+    the lowest sweep frequency, not excitation at the nominal one.
+    """
     shortest = min(m.duration for m in sweeps)
     dt = max(m.dt for m in sweeps)
     low = lowest_frequency(default_windows(shortest)[0])
+    excited = [w for w in (sweep_omega_min(m) for m in sweeps) if w is not None]
+    if excited:
+        low = max(low, min(excited))
     return log_grid(low, min(upper, 0.2 * np.pi / dt), n)
 
 
