@@ -89,6 +89,8 @@ def test_an_unstable_model_is_verified_through_its_apparent_response(closed_loop
     result = verify_model(wrong, None, sweeps, ["q/long"], ["muad"], omega=OMEGA)
     assert any("apparent response" in note for note in result.notes)
     item = result["q/long"]
+    assert item.model_source == "apparent" and item.summary()["model_source"] == "apparent"
+    assert open_loop["q/long"].model_source == "simulated"
     coherent = item.coherence >= 0.8
     assert coherent.sum() > 40
     # Single input: the apparent response is the analytic one, and the truth's closed-loop

@@ -22,6 +22,8 @@ from .verification import COHERENCE_THRESHOLD, PairVerification, ValidationEnvel
 #: Coherence below which points are hidden.
 RELAXED_THRESHOLD = 0.6
 _MARKERS = ("o", "s", "^", "D", "v")
+#: How the model's single-input response was formed (``PairVerification.model_source``).
+_SOURCES = {"simulated": "simulated sweeps", "apparent": "apparent response"}
 
 
 def _figure(n_rows: int, title: str):
@@ -64,7 +66,7 @@ def plot_error(errors: Mapping[str, PairVerification] | PairVerification,
     if isinstance(envelopes, Mapping):
         envelopes = list(envelopes.values())
     first = next(iter(errors.values()))
-    kind = "analytic model" if analytic else "simulated sweeps"
+    kind = "analytic model" if analytic else _SOURCES[first.model_source]
     figure, (mag_axis, phase_axis, coh_axis) = _figure(
         3, title or f"{first.pair}: error ε = H_model/H_truth ({kind})")
     omega = first.omega
@@ -117,7 +119,8 @@ def plot_bode(item: PairVerification, output_unit: str = "", input_unit: str = "
     figure, (mag_axis, phase_axis, coh_axis) = _figure(
         3, title or f"{item.pair}: frequency responses")
     curves = [("truth (estimated)", item.truth.response, item.truth.coherence, "C0"),
-              ("model (simulated sweeps)", item.model.response, item.truth.coherence, "C1")]
+              (f"model ({_SOURCES[item.model_source]})", item.model.response,
+               item.truth.coherence, "C1")]
     conditioned = item.conditioned
     if conditioned is not None and conditioned.conditioned_on:
         curves.append((f"truth conditioned on {', '.join(conditioned.conditioned_on)}",
@@ -134,7 +137,8 @@ def plot_bode(item: PairVerification, output_unit: str = "", input_unit: str = "
         phase_axis.semilogx(item.omega, unwrapped_phase_deg(item.analytic), color="C2",
                             label="model (analytic, exact delays)")
     coh_axis.semilogx(item.omega, item.truth.coherence, color="C0", label="truth")
-    coh_axis.semilogx(item.omega, item.model.coherence, color="C1", label="model (simulated)")
+    if item.model_source == "simulated":
+        coh_axis.semilogx(item.omega, item.model.coherence, color="C1", label="model (simulated)")
     if conditioned is not None and conditioned.conditioned_on:
         coh_axis.semilogx(item.omega, conditioned.coherence, color="C3",
                           label="truth, partial")

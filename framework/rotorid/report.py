@@ -7,6 +7,7 @@ Per case (``<out>/<case>/``):
   input (figs. 2, 3, 7, 8, 11, 13, 15, 17);
 * ``figures/error_<output>_<input>.{png,svg}``: ε against MUAD/AEE with coherence for each
   verified sweep pair (figs. 4, 5, 9, 10, 12, 14, 16, 18);
+* ``figures/bode_<output>_<input>.{png,svg}``: Bode overlays of truth and model with delays;
 * ``tables/removed.csv``, ``tables/parameters.csv`` (Appendix B), ``tables/key_derivatives.csv``,
   ``tables/checks.csv`` (the paper's claims, measured);
 * ``report.html`` linking all of it.
@@ -30,9 +31,10 @@ import numpy as np
 from .data import ManeuverSet
 from .expectations import check_signs
 from .io import atomic_write
-from .plots_frequency import plot_error
+from .plots_frequency import plot_bode, plot_error
 from .plots_study import plot_rmse_path, plot_time_histories, save_figure
 from .study import KEY_DERIVATIVES, MODELS
+from .units import unit_system
 from .verification import envelopes_by_name, error_db_deg, parse_pair
 
 #: Envelope plugins that are costs, not bounds: not drawn in the error plots.
@@ -222,7 +224,8 @@ def _stem(text: str) -> str:
 def case_figures(result, figures_dir: Path) -> dict[str, list[str]]:
     """Write the case's figures; returns section → figure file names (PNG, relative)."""
     figures_dir.mkdir(parents=True, exist_ok=True)
-    written = {"reduction": [], "time": [], "frequency": []}
+    written = {"reduction": [], "time": [], "frequency": [], "bode": []}
+    units = unit_system(result.estimates["with delays"].units)
     name = result.name
     figure = plot_rmse_path(result.path, title=f"{name}: RMSE versus removed parameters")
     save_figure(figure, figures_dir / "rmse")
@@ -250,6 +253,11 @@ def case_figures(result, figures_dir: Path) -> dict[str, list[str]]:
         stem = f"error_{output}_{control}"
         save_figure(figure, figures_dir / stem)
         written["frequency"].append(f"{stem}.png")
+        figure = plot_bode(item, output_unit=units.label(output),
+                           title=f"{name}: {item.pair} frequency responses (model with delays)")
+        stem = f"bode_{output}_{control}"
+        save_figure(figure, figures_dir / stem)
+        written["bode"].append(f"{stem}.png")
     return written
 
 
@@ -339,6 +347,10 @@ def case_html(result, figures: Mapping[str, list[str]]) -> str:
         "".join(f"<p class=\"na\">note: {html.escape(n)}</p>" for n in notes),
         _html_table(verification_rows(result)),
         _images(figures.get("frequency", [])),
+        "<h3>Bode overlays (model with delays)</h3>",
+        "<p>Truth estimated from the sweeps, the model's single-input response (simulated, or "
+        "apparent for an unstable model), and its analytic response with exact delays.</p>",
+        _images(figures.get("bode", [])),
     ]
     return _page(f"rotorid study — case {result.name}", "\n".join(body))
 

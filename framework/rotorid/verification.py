@@ -321,8 +321,9 @@ class PairVerification:
         maneuvers: names of the sweeps pooled for this pair.
         truth: single-input response estimated from the recorded (truth) outputs.
         model: single-input response estimated from the model's simulation of the same
-            recorded inputs, processed identically (same grid and windows). Both include the
-            effect of the other inputs that moved, alike, so no conditioning is needed.
+            recorded inputs, processed identically (same grid and windows), or the model's
+            apparent response (``model_source``). Both include the effect of the other
+            inputs that moved, alike, so no conditioning is needed.
         conditioned: the truth's response conditioned on the other inputs that moved (the
             conditioned response the analytic model response is compared with), or None.
         analytic: the model's analytic response (exact delays) on the grid, shape (M,), or
@@ -343,6 +344,7 @@ class PairVerification:
     checks: Mapping[str, EnvelopeCheck] = attrs.field(converter=_FrozenMapping)
     analytic_checks: Mapping[str, EnvelopeCheck] = attrs.field(converter=_FrozenMapping)
     output_rms_ratio: float = float("nan")
+    model_source: str = "simulated"      # or "apparent" (see compare_sweeps)
 
     @property
     def omega(self) -> np.ndarray:
@@ -394,6 +396,7 @@ class PairVerification:
                 self.conditioned.conditioned_on),
             "input_coherence": self.input_coherence(),
             "output_rms_ratio": _finite_or_none(self.output_rms_ratio),
+            "model_source": self.model_source,
             "windows_s": list(self.truth.windows),
             "omega_range_rad_s": [float(self.omega.min()), float(self.omega.max())],
             "checks": {n: c.summary() for n, c in self.checks.items()},
@@ -574,7 +577,8 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
         ratio = _rms_ratio([model_outputs[i] for i in chosen], [sweeps[i] for i in chosen],
                            OUTPUT_CHANNELS.index(output))
         results.append(PairVerification(name, subset.names, truth, model, conditioned,
-                                        analytic_pair, checks, analytic_checks, ratio))
+                                        analytic_pair, checks, analytic_checks, ratio,
+                                        model_response))
     notes = [f"{p.pair}: the model's {p.pair.split('/')[0]} has {p.output_rms_ratio:.3g} times "
              f"the truth's RMS on these sweeps; its open-loop simulation drifts (unstable "
              f"model?), so the simulated comparison of this pair is not meaningful"
