@@ -159,13 +159,15 @@ class OutputErrorEstimator:
                 [m.head(horizon) for m in maneuvers], hold=maneuvers.hold)
             label = "full" if horizon is None else f"{horizon:g} s"
             try:
-                result = self._run(fitted, portion, columns, weights, values, settings, label)
+                result = self._run(fitted, portion, columns, weights, values, settings, label,
+                                   final_information=horizon is None)
             except SimulationDivergedError:
                 if values is first:
                     raise
                 notes.append(f"stage {label}: the previous stage's values diverge on the "
                              f"longer records; restarted the stage from the start values")
-                result = self._run(fitted, portion, columns, weights, first, settings, label)
+                result = self._run(fitted, portion, columns, weights, first, settings, label,
+                                   final_information=horizon is None)
             values = result.values
             if horizon is not None:
                 notes.append(f"horizon {label}: {result.iterations} iterations, "
@@ -216,7 +218,8 @@ class OutputErrorEstimator:
         columns = [names.index(n) for n in chosen]
         return columns, np.array([float(weights.get(n, 1.0)) for n in chosen])
 
-    def _run(self, model, maneuvers, columns, weights, start, settings, stage):
+    def _run(self, model, maneuvers, columns, weights, start, settings, stage,
+             final_information: bool = True):
         selected = _SelectedOutputs(model, columns)
         measured = [z[:, columns] for z in measured_outputs(model, maneuvers)]
         problem = Problem(selected, maneuvers, measured, weights, settings)
@@ -227,7 +230,7 @@ class OutputErrorEstimator:
             if self.callback is not None:
                 self.callback(stage, record)
 
-        return run(problem, start, model.bounds(), progress)
+        return run(problem, start, model.bounds(), progress, final_information)
 
     def _estimate(self, fitted, base, result, start, notes, n_samples, columns):
         names = tuple(fitted.parameter_names)

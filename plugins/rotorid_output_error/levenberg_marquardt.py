@@ -166,9 +166,14 @@ def _bounded_step(f, g, lam, values, lower, upper):
     return step * max(alpha, 0.0)
 
 
-def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | None = None
-        ) -> RunResult:
-    """Levenberg-Marquardt from ``start``; see the module docstring."""
+def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | None = None,
+        final_information: bool = True) -> RunResult:
+    """Levenberg-Marquardt from ``start``; see the module docstring.
+
+    ``final_information=False`` skips the information matrix at the final values (the
+    result's ``information`` is then the one at the last Gauss-Newton point): for a stage
+    whose values only start the next one.
+    """
     settings = problem.settings
     lower, upper = bounds
     values = np.clip(np.asarray(start, dtype=float), lower, upper)
@@ -211,6 +216,7 @@ def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | Non
             reason, converged = "parameter step below tolerance", True
             break
         f, g = problem.gauss_newton(values, r)
-    f, _ = problem.gauss_newton(values, r)
+    if final_information:
+        f, _ = problem.gauss_newton(values, r)
     return RunResult(values, cost, current_rmse, r, f, tuple(costs), tuple(rmses), iteration,
                      converged, reason)
