@@ -131,3 +131,7 @@ def test_default_grid_starts_at_the_lowest_frequency_the_sweeps_excite():
     recorded = [sweep("a", {"signal": {"omega_min": 0.45}}), sweep("b", {"omega_min": 0.6})]
     assert default_omega(recorded)[0] == pytest.approx(0.45)
     assert default_omega([sweep("a", {"omega_min": 0.1})])[0] == pytest.approx(window_limit)
+    from rotorid.errors import VerificationError
+
+    with pytest.raises(VerificationError, match="omega_min must be the sweep's lowest"):
+        default_omega([sweep("a", {"omega_min": "slow"})])

@@ -475,7 +475,17 @@ def sweep_omega_min(maneuver) -> float | None:
     signal = metadata.get("signal")
     value = metadata.get("omega_min",
                          signal.get("omega_min") if isinstance(signal, Mapping) else None)
-    return None if value is None else float(value)
+    if value is None:
+        return None
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        value = float("nan")
+    if not (np.isfinite(value) and value > 0):
+        raise VerificationError(f"maneuver {maneuver.name!r}: metadata omega_min must be the "
+                                f"sweep's lowest frequency in rad/s (> 0), got "
+                                f"{metadata.get('omega_min', value)!r}")
+    return value
 
 
 def default_omega(sweeps, n: int = 200, upper: float = 20.0) -> np.ndarray:
