@@ -68,7 +68,10 @@ def test_the_quick_hover_study_writes_a_complete_linked_report(tmp_path, capsys)
     """The README's main command, end to end: data, reduction, delays, verification, report."""
     out = tmp_path / "results"
     assert main(["study", "hover", "--quick", "--out", str(out), "--executor", "serial"]) == 0
-    assert f"report: {out}/report.html" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert f"report: {out}/report.html" in printed
+    claims = [line for line in printed.splitlines() if "paper's claims:" in line]
+    assert len(claims) == 1 and " hold" in claims[0]
     case = out / "hover"
     record = json.loads((case / "result.json").read_text())
 

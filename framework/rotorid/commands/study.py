@@ -60,6 +60,18 @@ def expand_cases(names, speeds: str | None = None, template: str = "hover"):
     return cases, swept
 
 
+def claims_summary(result) -> str:
+    """One line: how many of the paper's claims hold for a case, and which do not."""
+    from ..report import paper_checks
+
+    decided = [c for c in paper_checks(result) if c.passed is not None]
+    failed = [c for c in decided if not c.passed]
+    line = f"paper's claims: {len(decided) - len(failed)}/{len(decided)} hold"
+    if failed:
+        line += "; not: " + "; ".join(f"{c.claim} ({c.measured})" for c in failed)
+    return line
+
+
 def run(args) -> int:
     from ..executors import open_executor
     from ..study import Study
@@ -80,6 +92,7 @@ def run(args) -> int:
               f"{len(path.removed)} (step {path.selected_index} of {len(path.steps) - 1}); "
               f"RMSE without delays {result.estimates['no delays'].rmse:.4f}, "
               f"with delays {delayed.rmse:.4f}")
+        print(f"  {claims_summary(result)}")
     if swept:
         written = write_sweep_summary(sweep_points({n: results[n] for n in swept}), args.out)
         print(f"speed sweep: {', '.join(str(p) for p in written)}")
