@@ -26,6 +26,7 @@ import numpy as np
 
 from .data import ManeuverSet
 from .errors import DataError, IdentifiabilityWarning
+from .estimation import _frozen_array
 from .executors import failure_error, run_tasks
 from .io import atomic_write
 from .plugins import create
@@ -37,19 +38,13 @@ INTERVAL = 2.0
 NOMINAL_COVERAGE = math.erf(INTERVAL / math.sqrt(2.0))
 
 
-def _array(value):
-    array = np.array(value, dtype=float, copy=True)
-    array.setflags(write=False)
-    return array
-
-
 @attrs.frozen(eq=False)
 class WhiteNoise:
     """Noisy copies of noise-free maneuvers: Gaussian white noise with standard deviation
     ``sigma`` (n_outputs,) per output channel, drawn from ``numpy.random.default_rng(seed)``."""
 
     clean: ManeuverSet
-    sigma: np.ndarray = attrs.field(converter=_array)
+    sigma: np.ndarray = attrs.field(converter=_frozen_array)
 
     def __call__(self, seed: int) -> ManeuverSet:
         rng = np.random.default_rng(seed)
@@ -71,11 +66,11 @@ class MonteCarloResult:
     case: str
     parameter_names: tuple[str, ...] = attrs.field(converter=tuple)
     seeds: tuple[int, ...] = attrs.field(converter=tuple)
-    estimates: np.ndarray = attrs.field(converter=_array)
-    cramer_rao: np.ndarray = attrs.field(converter=_array)
+    estimates: np.ndarray = attrs.field(converter=_frozen_array)
+    cramer_rao: np.ndarray = attrs.field(converter=_frozen_array)
     converged: np.ndarray = attrs.field(converter=lambda v: np.asarray(v, dtype=bool))
-    truth: np.ndarray = attrs.field(converter=_array)
-    reference: np.ndarray = attrs.field(converter=_array)
+    truth: np.ndarray = attrs.field(converter=_frozen_array)
+    reference: np.ndarray = attrs.field(converter=_frozen_array)
     failures: Mapping[int, str] = attrs.field(factory=dict, converter=dict)
     units: str = "flight-test"
 

@@ -305,8 +305,9 @@ def _delays_text(result) -> str:
     return text
 
 
-def case_html(result, figures: Mapping[str, list[str]]) -> str:
-    """The case report page (figures referenced relative to the case directory)."""
+def case_html(result, figures: Mapping[str, list[str]], claims: Sequence[Check]) -> str:
+    """The case report page (figures referenced relative to the case directory; ``claims``
+    from :func:`paper_checks`)."""
     case, path = result.case, result.path
     estimates = result.estimates
     notes = sorted({n for v in result.verification.values() for n in v.notes})
@@ -325,7 +326,7 @@ def case_html(result, figures: Mapping[str, list[str]]) -> str:
         + ", ".join(f'<a href="tables/{t}.csv">{t}.csv</a>'
                     for t in ("removed", "parameters", "key_derivatives", "verification",
                               "checks")) + ".</p>",
-        "<h2>The paper's claims, measured</h2>", checks_html(paper_checks(result)),
+        "<h2>The paper's claims, measured</h2>", checks_html(claims),
         "<h2>Model reduction</h2>",
         f"<p>Selected step {path.selected_index} of {len(path.steps) - 1} by rule "
         f"<code>{path.rule}</code> (tolerance {path.rmse_tolerance:.0%}): "
@@ -361,14 +362,15 @@ def write_case_outputs(result, directory: str | Path) -> Path:
     figures = case_figures(result, directory / "figures")
     tables = directory / "tables"
     tables.mkdir(exist_ok=True)
+    claims = paper_checks(result)
     checks = [["claim", "measured", "holds"]] + [
         [c.claim, c.measured, "" if c.passed is None else str(c.passed).lower()]
-        for c in paper_checks(result)]
+        for c in claims]
     for name, rows in (("removed", removed_rows(result)), ("parameters", parameter_rows(result)),
                        ("key_derivatives", key_derivative_rows(result)),
                        ("verification", verification_rows(result)), ("checks", checks)):
         atomic_write(tables / f"{name}.csv", _csv(rows))
-    return atomic_write(directory / "report.html", case_html(result, figures))
+    return atomic_write(directory / "report.html", case_html(result, figures, claims))
 
 
 def write_study_report(results: Mapping[str, object], out_dir: str | Path) -> Path:

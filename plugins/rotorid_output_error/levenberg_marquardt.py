@@ -186,6 +186,7 @@ def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | Non
     lam = settings.initial_lambda
     reason, converged, iteration = "iteration limit reached", False, 0
     f, g = problem.gauss_newton(values, r)
+    current = True                       # f and g belong to the current values
     while iteration < settings.max_iterations:
         accepted = False
         for _ in range(settings.max_tries):
@@ -204,6 +205,7 @@ def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | Non
         relative_change = (cost - trial_cost) / max(cost, 1e-300)
         relative_step = np.max(np.abs(trial - values) / np.maximum(np.abs(values), 1e-3))
         values, cost, r, current_rmse = trial, trial_cost, trial_r, trial_rmse
+        current = False
         costs.append(cost)
         rmses.append(current_rmse)
         lam = max(lam / settings.factor, 1e-12)
@@ -216,7 +218,8 @@ def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | Non
             reason, converged = "parameter step below tolerance", True
             break
         f, g = problem.gauss_newton(values, r)
-    if final_information:
+        current = True
+    if final_information and not current:
         f, _ = problem.gauss_newton(values, r)
     return RunResult(values, cost, current_rmse, r, f, tuple(costs), tuple(rmses), iteration,
                      converged, reason)
