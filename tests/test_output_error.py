@@ -249,3 +249,42 @@ def test_diverging_start_values_fall_back_to_the_initial_values():
     assert any("diverging" in note for note in result.notes)
     assert result.converged
     assert result.value("L_p") == pytest.approx(SMALL_TRUTH["L_p"], rel=0.05)
+
+
+def test_predicted_cost_change_matches_the_observed_one_near_the_minimum():
+    """The convergence test's Gauss-Newton prediction −(2GᵀΔ + ΔᵀFΔ)/N of the relative
+    change of det R agrees with the change a simulated step actually gives."""
+    from rotorid.models import LinearModel
+    from rotorid_output_error.levenberg_marquardt import (Problem, Settings, _bounded_step,
+                                                          predicted_change)
+
+    structure = small_structure()
+    truth = structure.as_vector({**SMALL_TRUTH, "tau_L_lat": 0.07, "tau_M_long": 0.05})
+    data = with_outputs(structure, truth, doublet_maneuvers(), noise=0.01, seed=2)
+    model = LinearModel(structure)
+    problem = Problem(model, data, [m.outputs for m in data], np.ones(8), Settings())
+    bounds = model.bounds()
+    values = truth * (1 + 3e-4 * np.random.default_rng(1).normal(size=truth.size))
+    cost, r, residuals, _ = problem.evaluate(values)
+    f, g = problem.gauss_newton(values, r, residuals)
+    predicted = predicted_change(f, g, values, bounds, problem.n_samples)
+    stepped = problem.evaluate(values + _bounded_step(f, g, 0.0, values, *bounds))[0]
+    observed = (cost - stepped) / cost
+    assert 1e-4 < predicted < 1e-1, predicted
+    assert abs(predicted / observed - 1) < 0.01
+
+
+def test_a_converged_fit_reports_the_information_at_its_final_values():
+    structure = small_structure()
+    truth = structure.as_vector({**SMALL_TRUTH, "tau_L_lat": 0.07, "tau_M_long": 0.05})
+    data = with_outputs(structure, truth, doublet_maneuvers(), noise=0.01, seed=2)
+    result = estimator().estimate(structure.with_initial(dict(zip(
+        structure.parameter_names, truth * 0.8))), data)
+    assert result.converged, result.stop_reason
+    outputs = simulate(structure, result.values, data)
+    residuals = [m.outputs - y for m, y in zip(data, outputs)]
+    q = np.linalg.inv(sum(e.T @ e for e in residuals) / sum(len(e) for e in residuals))
+    from rotorid.models import LinearModel
+
+    fresh, _ = LinearModel(structure).gauss_newton(result.values, data, residuals, q)
+    assert np.allclose(result.information, fresh, rtol=1e-6)

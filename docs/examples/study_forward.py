@@ -12,9 +12,12 @@ What differs from hover, and what to look for in the printout:
 * the key derivatives: speed stability M_u > 0 and heave damping Z_w < 0 as in hover, while
   the weathercock stability N_v is now clearly positive (the fin; in hover it is small and
   negative). The Bo-105's M_w is small and positive at 70 kt in the truth model's
-  linearisation, but it is weakly determined by the data next to M_u, M_q and Z_w: the quick
-  run identifies it with the other sign, and the printout flags it as DIFFERS. Compare it
+  linearisation, but it is weakly determined by the data next to M_u, M_q and Z_w: a quick
+  run may identify it with either sign (the printout flags a sign that differs). Compare it
   with a full run (no ``--quick``) before reading anything into it;
+* the delays of the quick run: its short records leave M_p's delay free to run to about
+  0.26 s, which makes az/coll *with* delays miss MUAD between about 3.6 and 7.2 rad/s
+  (without delays it passes). The full run drops that delay as undetermined and passes;
 * the truth model is stable at 70 kt except for a near-neutral phugoid (truth-model.md),
   whereas the hover model has an unstable oscillation.
 

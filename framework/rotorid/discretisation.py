@@ -111,6 +111,23 @@ def _integrals(a: np.ndarray, s: np.ndarray):
     return phi, gam, kin
 
 
+def _distinct_integrals(a: np.ndarray, s: np.ndarray):
+    """:func:`_integrals` computed once for the nominal direction 0 and for the directions
+    that change A or a sub-interval; the others (control gains, outputs) share direction 0's.
+    """
+    changed = np.flatnonzero(np.any(a[1:] != a[:1], axis=(1, 2)) | np.any(s[1:] != s[:1], axis=1))
+    distinct = np.concatenate([[0], changed + 1])
+    if distinct.size == a.shape[0]:
+        return _integrals(a, s)
+    parts = _integrals(a[distinct], s[distinct])
+    full = []
+    for part in parts:
+        out = np.repeat(part[:1], a.shape[0], axis=0)
+        out[distinct] = part
+        full.append(out)
+    return tuple(full)
+
+
 @attrs.frozen(eq=False)
 class _Terms:
     """The structure's terms split by role, with parameter bookkeeping."""
@@ -193,7 +210,7 @@ def discrete_maps(structure: ModelStructure, values, dt: float, hold: str = "zoh
     s = np.full((n_dir, 1 + len(delayed_forcing)), T, dtype=complex)
     for col, k in enumerate(delayed_forcing, start=1):
         s[:, col] = T - frac[k]
-    phi, gam, kin = _integrals(a, s)
+    phi, gam, kin = _distinct_integrals(a, s)
     slot = {k: col for col, k in enumerate(delayed_forcing, start=1)}
 
     ps_raw = {0: phi[:, 0]}

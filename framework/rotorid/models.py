@@ -8,8 +8,10 @@ An estimator never needs to know what it identifies. Any object with
 
 is identifiable; ``sensitivities(values, maneuvers) -> (outputs, list of (N_i, P, n_o))`` is
 optional (central finite differences are used otherwise, see
-:func:`finite_difference_sensitivities`). Outputs are compared with the maneuvers' measured
-outputs picked by ``output_names``.
+:func:`finite_difference_sensitivities`), and so is ``gauss_newton(values, maneuvers,
+residuals, weighting) -> (F, G)``, the products of :func:`gauss_newton_products` computed
+without storing the sensitivities. Outputs are compared with the maneuvers' measured outputs
+picked by ``output_names``.
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ import numpy as np
 
 from .data import OUTPUT_CHANNELS, ManeuverSet
 from .errors import StructureError
-from .simulation import Simulator
+from .simulation import Simulator, weighting_factor
 from .structure import ModelStructure
 
 
@@ -66,6 +68,35 @@ def finite_difference_sensitivities(model, values, maneuvers: ManeuverSet,
     return outputs, sens
 
 
+def gauss_newton_products(model, values, maneuvers: ManeuverSet, residuals, weighting):
+    """F = Σ Jᵀ Q J and G = −Σ Jᵀ Q e over all samples of all maneuvers, J = ∂y/∂θ.
+
+    Args:
+        model: an identifiable model; its ``gauss_newton`` is used when it has one, else its
+            sensitivities (or finite differences).
+        values: (P,) parameter vector.
+        residuals: per maneuver (N_i, n_o) residuals e = z − y at ``values``.
+        weighting: (n_o, n_o) symmetric positive semi-definite Q.
+    Returns:
+        F (P, P) and G (P,).
+    """
+    if hasattr(model, "gauss_newton"):
+        return model.gauss_newton(values, maneuvers, residuals, weighting)
+    if hasattr(model, "sensitivities"):
+        _, sens = model.sensitivities(values, maneuvers)
+    else:
+        _, sens = finite_difference_sensitivities(model, values, maneuvers)
+    factor = weighting_factor(weighting)
+    p = len(values)
+    f = np.zeros((p, p))
+    g = np.zeros(p)
+    for e, s in zip(residuals, sens):
+        jacobian = np.matmul(factor, s.transpose(0, 2, 1)).reshape(-1, p)
+        f += jacobian.T @ jacobian
+        g -= jacobian.T @ (e @ factor.T).reshape(-1)
+    return f, g
+
+
 class LinearModel:
     """A :class:`ModelStructure` seen through the model protocol.
 
@@ -98,6 +129,9 @@ class LinearModel:
 
     def sensitivities(self, values, maneuvers: ManeuverSet):
         return self._simulator(maneuvers).outputs_and_sensitivities(values)
+
+    def gauss_newton(self, values, maneuvers: ManeuverSet, residuals, weighting):
+        return self._simulator(maneuvers).gauss_newton(values, residuals, weighting)
 
     @property
     def signs(self) -> dict[str, str]:

@@ -20,7 +20,9 @@ should start in trim (as flight-test maneuvers do).
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -28,6 +30,7 @@ from . import blas
 from .data import ManeuverSet
 from .discretisation import DiscreteMaps, discrete_maps
 from .errors import DataError, SimulationDivergedError
+from .executors import cpu_count
 from .structure import ModelStructure
 
 #: A state perturbation beyond this magnitude (structure units) counts as divergence.
@@ -177,6 +180,8 @@ def _propagate(companion: _Companion, start: np.ndarray, forcing, n: int, emit, 
             forcing(first, stop, buffer[1:length + 1])
             steps = length if stop < n else length - 1
             for k in range(steps):
+                # numpy's product releases the GIL (scipy's BLAS wrappers do not), so that
+                # a sink's worker thread runs meanwhile.
                 np.matmul(buffer[k], step, out=product)
                 buffer[k + 1] += product
             peak = np.abs(buffer[steps]).max()
@@ -229,7 +234,7 @@ class Simulator:
     # ----------------------------------------------------------------- public
     def outputs(self, values=None) -> list[np.ndarray]:
         """Simulated outputs, one (N_i, 8) array per maneuver (order of the set)."""
-        return self._run(values, with_sensitivities=False)[0]
+        return self._run(values, None)[0]
 
     def outputs_and_sensitivities(self, values=None):
         """Outputs and ∂y/∂θ: per maneuver an (N_i, 8) and an (N_i, P, 8) array.
@@ -237,31 +242,64 @@ class Simulator:
         ``sens[i][n, p, k]`` is ∂y_k(t_n)/∂θ_p (views into one batch buffer: copy them
         before modifying).
         """
-        return self._run(values, with_sensitivities=True)
+        outputs, sinks = self._run(values, lambda group: _DenseSink(group, self.n_parameters))
+        sens: list = [None] * len(self.maneuvers)
+        for group, sink in zip(self.groups, sinks):
+            for b, (i, n) in enumerate(zip(group.indices, group.lengths)):
+                sens[i] = sink.dy[:n, :, b].transpose(0, 2, 1)
+        return outputs, sens
+
+    def gauss_newton(self, values, residuals, weighting: np.ndarray):
+        """Gauss-Newton products F = Σ Jᵀ Q J and G = −Σ Jᵀ Q e, without storing J = ∂y/∂θ.
+
+        Args:
+            values: parameter vector or mapping (see :meth:`outputs`).
+            residuals: per maneuver (N_i, 8) residuals e = z − y at ``values``.
+            weighting: (8, 8) symmetric positive semi-definite Q (for the output-error cost,
+                R⁻¹ with the output weights).
+        Returns:
+            F (P, P) and G (P,), summed over every sample of every maneuver. Each time block
+            of the sensitivities is folded into F and G while it is in cache: the (N·8, P)
+            sensitivities never exist as a whole.
+        """
+        if len(residuals) != len(self.maneuvers):
+            raise DataError(f"{len(residuals)} residual arrays for {len(self.maneuvers)} "
+                            "maneuvers")
+        leading = _direct_outputs(self.structure)
+        factor = weighting_factor(weighting, leading)
+        background = cpu_count() > 1
+        _, sinks = self._run(values, lambda group: _InformationSink(
+            group, [residuals[i] for i in group.indices], factor, self.n_parameters,
+            background))
+        return sum(s.f for s in sinks), sum(s.g for s in sinks)
+
+    @property
+    def n_parameters(self) -> int:
+        return self.structure.n_parameters
 
     # ----------------------------------------------------------------- engine
-    def _run(self, values, with_sensitivities: bool):
+    def _run(self, values, make_sink):
+        """Outputs per maneuver and, with ``make_sink(group)``, the groups' filled sinks."""
         with blas.single_threaded():
-            return self._run_single_threaded(values, with_sensitivities)
+            return self._run_single_threaded(values, make_sink)
 
-    def _run_single_threaded(self, values, with_sensitivities: bool):
+    def _run_single_threaded(self, values, make_sink):
         vector = (self.structure.initial_values() if values is None
                   else self.structure.as_vector(values))
         outputs: list = [None] * len(self.maneuvers)
-        sens: list = [None] * len(self.maneuvers)
+        sinks = []
         for group in self.groups:
             maps = discrete_maps(self.structure, vector, group.dt, self.hold,
-                                 with_derivatives=with_sensitivities)
+                                 with_derivatives=make_sink is not None)
             companion = _Companion(maps)
             states = self._states(maps, companion, group)
             y = self._outputs(maps, companion, group, states)
-            dy = (self._sensitivities(maps, companion, group, states)
-                  if with_sensitivities else None)
             for b, (i, n) in enumerate(zip(group.indices, group.lengths)):
                 outputs[i] = y[:n, b]
-                if dy is not None:
-                    sens[i] = dy[:n, b]
-        return outputs, (sens if with_sensitivities else None)
+            if make_sink is not None:
+                sinks.append(make_sink(group))
+                self._sensitivities(maps, companion, group, states, sinks[-1])
+        return outputs, sinks
 
     @staticmethod
     def _states(maps: DiscreteMaps, companion: _Companion, group: _Group) -> np.ndarray:
@@ -297,41 +335,208 @@ class Simulator:
         return y
 
     def _sensitivities(self, maps: DiscreteMaps, companion: _Companion, group: _Group,
-                       states: np.ndarray) -> np.ndarray:
-        """∂y/∂θ, (N, B, P, 8), from the recursion's own maps.
+                       states: np.ndarray, sink) -> None:
+        """∂y/∂θ from the recursion's own maps, handed to ``sink`` one time block at a time.
 
         The sensitivity states obey the companion recursion, forced by the derivative maps
         applied to the simulated states and inputs (one matrix product per time block for
         all maneuvers and parameters); the outputs add the derivative output maps' term.
+        Blocks reach the sink mapped by its ``output_map`` M (m, 8), laid out (L, m, B, P),
+        with a function that completes them (adds the direct term) wherever the sink works.
         """
-        n, b = states.shape[:2]
-        p, size = self.structure.n_parameters, companion.size
+        b = states.shape[1]
+        p, size = self.n_parameters, companion.size
         forcing_maps = [(maps.dPs, 0), (maps.dPu, 8)]
         direct_maps = [(maps.dCs, 0), (maps.dDu, 8)]
         taps = _taps(*forcing_maps, *direct_maps)
         lagged = _lagged(_sources(group.inputs, states), taps)
+        direct = _DirectTerm(_tap_weights(taps, direct_maps, p, 8), sink.output_map, p)
         forcing_weights = _tap_weights(taps, forcing_maps, p, size)
-        direct_weights = _tap_weights(taps, direct_maps, p, 8)
-        direct_columns = _nonzero_columns(direct_weights)
-        direct_weights = direct_weights[:, direct_columns]
-        dy = np.empty((n, b, p, 8))
-        output = companion.output.T
+        forcing_weights = forcing_weights.reshape(len(taps), p, size)[:, direct.order]
+        forcing_weights = forcing_weights.reshape(len(taps), p * size)
+        output = sink.output_map @ companion.output                  # (m, S)
 
         def forcing(first, stop, out):
             np.matmul(lagged[first:stop].reshape(-1, len(taps)), forcing_weights,
                       out=out.reshape(-1, p * size))
 
         def emit(first, stop, z):
-            rows = dy[first:stop].reshape(stop - first, b * p, 8)
-            np.matmul(z, output, out=rows)
-            if direct_columns.size:
-                flat = rows.reshape(-1, p * 8)
-                flat[:, direct_columns] += (lagged[first:stop].reshape(-1, len(taps))
-                                            @ direct_weights)
+            block = np.matmul(output, z.transpose(0, 2, 1))         # (L, m, B·P)
+            sink.take(first, stop, block.reshape(stop - first, -1, b, p),
+                      lambda block: direct.add(block, lagged[first:stop]))
 
-        _propagate(companion, np.zeros((b * p, size)), forcing, n, emit,
-                   "sensitivities", maps.dt, limit=np.inf)
-        return dy
+        try:
+            _propagate(companion, np.zeros((b * p, size)), forcing, len(states), emit,
+                       "sensitivities", maps.dt, limit=np.inf)
+        finally:
+            sink.close(direct.order)
+
+
+def _direct_outputs(structure: ModelStructure) -> list[int]:
+    """Outputs whose equations contain parameters directly (the accelerations)."""
+    return [k for k, name in enumerate(structure.outputs) if name in ("ax", "az", "ay")]
+
+
+def weighting_factor(weighting, leading=()) -> np.ndarray:
+    """M (m, n) with MᵀM = Q for a symmetric positive semi-definite Q (n, n).
+
+    Outputs with zero weight (Q_kk = 0, their rows and columns zero) get zero columns. M is
+    the transposed Cholesky factor with the ``leading`` outputs ordered first, so that their
+    columns are non-zero only in the first len(leading) rows.
+    """
+    q = np.asarray(weighting, dtype=float)
+    if q.ndim != 2 or q.shape[0] != q.shape[1] or not np.all(np.isfinite(q)):
+        raise DataError(f"the weighting must be a finite square matrix, got shape {q.shape}")
+    diagonal = np.diag(q)
+    unused = diagonal == 0
+    if np.any(diagonal < 0) or np.any(q[unused] != 0) or np.all(unused):
+        raise DataError("the weighting matrix is not positive semi-definite with at least "
+                        "one weighted output (negative diagonal, or a zero-weight output "
+                        "coupled to others)")
+    used = [k for k in range(q.shape[0]) if not unused[k]]
+    order = [k for k in leading if k in used] + [k for k in used if k not in leading]
+    try:
+        lower = np.linalg.cholesky(q[np.ix_(order, order)])
+    except np.linalg.LinAlgError as error:
+        raise DataError("the weighting matrix is not positive definite on its weighted "
+                        "outputs") from error
+    factor = np.zeros((len(order), q.shape[0]))
+    factor[:, order] = lower.T
+    return factor
+
+
+class _DirectTerm:
+    """The output maps' own parameter derivatives applied to the lagged sources, mapped by M.
+
+    ``weights`` (K, P·8) from :func:`_tap_weights`; only its non-zero (parameter, output)
+    columns are evaluated. Every such column adds M[:, output] times its value to its
+    parameter's sensitivities. Unless M is the identity (where each column touches one
+    output), the sensitivities run with the parameters reordered (``order``): those with a
+    direct term first, so that the mapped term is added to a contiguous slice.
+    """
+
+    def __init__(self, weights: np.ndarray, output_map: np.ndarray, n_parameters: int):
+        columns = _nonzero_columns(weights)
+        self.weights = weights[:, columns]
+        parameters, self.outputs = np.divmod(columns, 8)
+        self.identity = output_map.shape == (8, 8) and np.array_equal(output_map, np.eye(8))
+        if self.identity:
+            self.order = np.arange(n_parameters)
+            self.parameters = parameters
+            return
+        leading = np.unique(parameters)
+        self.order = np.concatenate([leading, np.setdiff1d(np.arange(n_parameters), leading)])
+        self.parameters = np.searchsorted(leading, parameters)       # positions in ``order``
+        self.mapped = output_map[:, self.outputs]                   # (m, C)
+        # Rows of M the term reaches: with a factor from :func:`weighting_factor` that puts
+        # the direct outputs first, only the first few.
+        self.rows = int(np.max(np.flatnonzero(np.any(self.mapped != 0, axis=1)),
+                               initial=-1)) + 1
+        # Columns in layers without a repeated parameter (in practice one layer: a derivative
+        # feeds one acceleration), each added at once.
+        rank = np.zeros(columns.size, dtype=int)
+        seen: dict[int, int] = {}
+        for c, parameter in enumerate(self.parameters):
+            rank[c] = seen.get(int(parameter), 0)
+            seen[int(parameter)] = rank[c] + 1
+        self.layers = []
+        for r in range(int(rank.max(initial=-1)) + 1):
+            layer = np.flatnonzero(rank == r)
+            layer = layer[np.argsort(self.parameters[layer])]
+            positions = self.parameters[layer]
+            contiguous = np.array_equal(positions, np.arange(positions.size))
+            self.layers.append((layer, slice(0, positions.size) if contiguous else positions))
+
+    def add(self, block: np.ndarray, lagged: np.ndarray) -> None:
+        """Add the term to ``block`` (L, m, B, P); ``lagged`` (L, B, K) sources of the block."""
+        if not self.parameters.size:
+            return
+        values = lagged @ self.weights                              # (L, B, C)
+        if self.identity:                                           # (output, parameter) unique
+            block[:, self.outputs, :, self.parameters] += values.transpose(2, 0, 1)
+            return
+        rows = self.rows
+        for layer, where in self.layers:
+            block[:, :rows, :, where] += (self.mapped[None, :rows, None, layer]
+                                          * values[:, None, :, layer])
+
+
+class _DenseSink:
+    """Keeps every block: ``dy`` (N, 8, B, P), the unmapped output sensitivities."""
+
+    def __init__(self, group: _Group, n_parameters: int):
+        self.output_map = np.eye(8)
+        self.dy = np.empty((group.n_samples, 8, len(group.indices), n_parameters))
+
+    def take(self, first: int, stop: int, block: np.ndarray, complete) -> None:
+        complete(block)
+        self.dy[first:stop] = block
+
+    def close(self, order: np.ndarray) -> None:
+        """The blocks came in parameter ``order``; with the identity map that is the
+        structure's own."""
+        assert np.array_equal(order, np.arange(order.size))
+
+
+class _InformationSink:
+    """Folds blocks into F = Σ JᵀJ and G = −Σ Jᵀ(M e); samples past a maneuver's end (the
+    padding of shorter maneuvers in a group) are left out.
+
+    With ``background`` the blocks are completed and folded in (mostly BLAS, which releases
+    the GIL) on a second thread while the next block is propagated; one worker takes the
+    blocks in order, so the sums are the same as without it.
+    """
+
+    #: Blocks handed to the worker and not yet folded in, at most.
+    IN_FLIGHT = 4
+
+    def __init__(self, group: _Group, residuals, output_map: np.ndarray, n_parameters: int,
+                 background: bool):
+        self.output_map = output_map
+        n, b, m = group.n_samples, len(group.indices), output_map.shape[0]
+        self.mapped_residuals = np.zeros((n, m, b))
+        for k, (e, length) in enumerate(zip(residuals, group.lengths)):
+            e = np.asarray(e, dtype=float)
+            if e.shape != (length, 8):
+                raise DataError(f"residuals of maneuver {group.names[k]!r} have shape "
+                                f"{e.shape}, expected ({length}, 8)")
+            self.mapped_residuals[:length, :, k] = e @ output_map.T
+        self.lengths = np.array(group.lengths)
+        self.padded = bool(np.any(self.lengths < n))
+        self.f = np.zeros((n_parameters, n_parameters))
+        self.g = np.zeros(n_parameters)
+        self.worker = ThreadPoolExecutor(max_workers=1) if background else None
+        self.pending: deque = deque()
+
+    def take(self, first: int, stop: int, block: np.ndarray, complete) -> None:
+        if self.worker is None:
+            self._fold(first, stop, block, complete)
+            return
+        self.pending.append(self.worker.submit(self._fold, first, stop, block, complete))
+        while len(self.pending) > self.IN_FLIGHT:
+            self.pending.popleft().result()
+
+    def _fold(self, first: int, stop: int, block: np.ndarray, complete) -> None:
+        complete(block)
+        if self.padded:
+            for k in np.flatnonzero(self.lengths < stop):
+                block[max(self.lengths[k] - first, 0):, :, k] = 0.0
+        rows = block.reshape(-1, block.shape[-1])
+        self.f += rows.T @ rows
+        self.g -= rows.T @ self.mapped_residuals[first:stop].reshape(-1)
+
+    def close(self, order: np.ndarray) -> None:
+        """Wait for the worker, then return F and G from the blocks' parameter ``order`` to
+        the structure's."""
+        if self.worker is not None:
+            try:
+                while self.pending:
+                    self.pending.popleft().result()
+            finally:
+                self.worker.shutdown(cancel_futures=True)
+        inverse = np.argsort(order)
+        self.f = self.f[np.ix_(inverse, inverse)]
+        self.g = self.g[inverse]
 
 
 def simulate(structure: ModelStructure, values, maneuvers: ManeuverSet,

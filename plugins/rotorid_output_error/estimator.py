@@ -20,7 +20,7 @@ from rotorid import blas
 from rotorid.data import ManeuverSet
 from rotorid.errors import EstimationError, SimulationDivergedError
 from rotorid.estimation import Estimate, statistics
-from rotorid.models import LinearModel, as_model, measured_outputs
+from rotorid.models import LinearModel, as_model, gauss_newton_products, measured_outputs
 from rotorid.structure import ModelStructure
 from rotorid.plugins import notify
 
@@ -270,13 +270,16 @@ class _SelectedOutputs:
     def simulate(self, values, maneuvers):
         return [y[:, self.columns] for y in self.model.simulate(values, maneuvers)]
 
-    def sensitivities(self, values, maneuvers):
-        if hasattr(self.model, "sensitivities"):
-            outputs, sens = self.model.sensitivities(values, maneuvers)
-        else:
-            from rotorid.models import finite_difference_sensitivities
-
-            outputs, sens = finite_difference_sensitivities(self.model, values, maneuvers)
-        if len(self.columns) == len(self.model.output_names):
-            return outputs, sens
-        return ([y[:, self.columns] for y in outputs], [s[:, :, self.columns] for s in sens])
+    def gauss_newton(self, values, maneuvers, residuals, weighting):
+        """The products of the selected outputs: residuals and weighting embedded in all
+        outputs (zero weight on the others)."""
+        n_all = len(self.model.output_names)
+        embedded_weighting = np.zeros((n_all, n_all))
+        embedded_weighting[np.ix_(self.columns, self.columns)] = weighting
+        embedded = []
+        for e in residuals:
+            full = np.zeros((e.shape[0], n_all))
+            full[:, self.columns] = e
+            embedded.append(full)
+        return gauss_newton_products(self.model, values, maneuvers, embedded,
+                                     embedded_weighting)

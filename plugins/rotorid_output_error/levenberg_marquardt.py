@@ -12,6 +12,12 @@ of very different magnitudes converge together). A step that raises the cost is 
 shrinks by ``factor``. Bounds (delays ≥ 0, optional sign priors) are respected by the step
 itself: parameters at a bound whose step points outward are frozen for that step, and the step
 is shortened so that no parameter crosses its bound.
+
+Besides the observed change of det R, the run stops when the change that the Gauss-Newton
+model predicts for the next (bounded, λ = 0) step is below the cost tolerance: with R fixed,
+d ln det R = dQ/N for Q = Σ eᵀR⁻¹e, so the predicted relative change is −(2GᵀΔ + ΔᵀFΔ)/N.
+This test uses the F and G that the next step needs anyway, so a converged run ends with F at
+its final values without one more sensitivity evaluation.
 """
 
 from __future__ import annotations
@@ -22,6 +28,7 @@ import attrs
 import numpy as np
 
 from rotorid.errors import SimulationDivergedError
+from rotorid.models import gauss_newton_products
 
 _MAX_LAMBDA = 1e12
 #: Simulated outputs beyond this multiple of the largest measured value count as divergence.
@@ -89,16 +96,16 @@ class Problem:
         self.output_limit = DIVERGENCE_FACTOR * np.maximum(
             np.max([np.max(np.abs(z), axis=0) for z in measured], axis=0), 1e-12)
 
-    def residuals(self, outputs) -> list[np.ndarray]:
-        return [(z - y) * self.weights for z, y in zip(self.measured, outputs)]
-
     def noise(self, residuals) -> np.ndarray:
+        """R of the weighted residuals (full or diagonal), floored."""
         r = sum(e.T @ e for e in residuals) / self.n_samples
+        r = self.weights[:, None] * r * self.weights[None, :]
         r = np.diag(np.diag(r)) if self.settings.noise == "diagonal" else r
         return r + self.noise_floor
 
     def evaluate(self, values):
-        """(cost, R, residuals, rmse) at ``values``; cost = inf when the simulation diverges."""
+        """(cost, R, residuals z − y, rmse) at ``values``; cost = inf when the simulation
+        diverges. The RMSE is that of the weighted residuals."""
         try:
             outputs = self.model.simulate(values, self.maneuvers)
         except SimulationDivergedError:
@@ -106,39 +113,24 @@ class Problem:
         if any(np.any(np.abs(y) > self.output_limit) for y in outputs):
             return np.inf, None, None, np.inf
         with np.errstate(over="ignore", invalid="ignore"):
-            residuals = self.residuals(outputs)
+            residuals = [z - y for z, y in zip(self.measured, outputs)]
             r = self.noise(residuals)
         if not np.all(np.isfinite(r)):
             return np.inf, None, None, np.inf      # a model of one's own that blew up
         cost = float(np.linalg.det(r))
         if not cost > 0.0:
             return np.inf, None, None, np.inf
-        stacked_rmse = float(np.sqrt(sum(np.sum(e**2) for e in residuals)
-                                     / (self.n_samples * residuals[0].shape[1])))
+        stacked_rmse = float(np.sqrt(np.mean(np.diag(r - self.noise_floor))))
         return (cost if np.isfinite(cost) else np.inf), r, residuals, stacked_rmse
 
-    def gauss_newton(self, values, r: np.ndarray):
-        """F (P×P) and G (P,) at ``values`` with R held fixed, plus the residuals."""
-        if hasattr(self.model, "sensitivities"):
-            outputs, sens = self.model.sensitivities(values, self.maneuvers)
-        else:
-            from rotorid.models import finite_difference_sensitivities
+    def gauss_newton(self, values, r: np.ndarray, residuals):
+        """F (P×P) and G (P,) at ``values`` with R held fixed; ``residuals`` z − y there.
 
-            outputs, sens = finite_difference_sensitivities(self.model, values, self.maneuvers)
-        residuals = self.residuals(outputs)
-        # Whiten with R⁻¹ = W Wᵀ, then F = JᵀJ and G = −Jᵀ(e W) with J the weighted, whitened
-        # sensitivities laid out as (N·n_o, P): one batched product builds J per maneuver in
-        # that layout, and JᵀJ is one symmetric matrix product.
-        whiten = np.linalg.cholesky(np.linalg.inv(r))
-        mixing = (self.weights[:, None] * whiten).T          # (n_o, n_o)
-        p = len(values)
-        f = np.zeros((p, p))
-        g = np.zeros(p)
-        for e, s in zip(residuals, sens):
-            jacobian = np.matmul(mixing, s.transpose(0, 2, 1)).reshape(-1, p)
-            f += jacobian.T @ jacobian
-            g -= jacobian.T @ (e @ whiten).reshape(-1)
-        return f, g
+        F = Σ (∂y/∂Θ)ᵀ Q (∂y/∂Θ) and G = −Σ (∂y/∂Θ)ᵀ Q (z − y) with Q = w R⁻¹ w, the inverse
+        noise covariance of the weighted residuals seen from the unweighted ones.
+        """
+        weighting = self.weights[:, None] * np.linalg.inv(r) * self.weights[None, :]
+        return gauss_newton_products(self.model, values, self.maneuvers, residuals, weighting)
 
 
 def _bounded_step(f, g, lam, values, lower, upper):
@@ -166,6 +158,12 @@ def _bounded_step(f, g, lam, values, lower, upper):
     return step * max(alpha, 0.0)
 
 
+def predicted_change(f, g, values, bounds, n_samples: int) -> float:
+    """Relative decrease of det R predicted by the Gauss-Newton model for the bounded full step."""
+    step = _bounded_step(f, g, 0.0, values, *bounds)
+    return float(-(2.0 * g @ step + step @ f @ step) / n_samples)
+
+
 def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | None = None,
         final_information: bool = True) -> RunResult:
     """Levenberg-Marquardt from ``start``; see the module docstring.
@@ -177,7 +175,7 @@ def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | Non
     settings = problem.settings
     lower, upper = bounds
     values = np.clip(np.asarray(start, dtype=float), lower, upper)
-    cost, r, _, current_rmse = problem.evaluate(values)
+    cost, r, residuals, current_rmse = problem.evaluate(values)
     if not np.isfinite(cost):
         raise SimulationDivergedError(
             "the start values give a diverging simulation; start closer to a stable model "
@@ -185,14 +183,14 @@ def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | Non
     costs, rmses = [cost], [current_rmse]
     lam = settings.initial_lambda
     reason, converged, iteration = "iteration limit reached", False, 0
-    f, g = problem.gauss_newton(values, r)
+    f, g = problem.gauss_newton(values, r, residuals)
     current = True                       # f and g belong to the current values
     while iteration < settings.max_iterations:
         accepted = False
         for _ in range(settings.max_tries):
             step = _bounded_step(f, g, lam, values, lower, upper)
             trial = np.clip(values + step, lower, upper)
-            trial_cost, trial_r, _, trial_rmse = problem.evaluate(trial)
+            trial_cost, trial_r, trial_residuals, trial_rmse = problem.evaluate(trial)
             if trial_cost < cost:
                 accepted = True
                 break
@@ -205,6 +203,7 @@ def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | Non
         relative_change = (cost - trial_cost) / max(cost, 1e-300)
         relative_step = np.max(np.abs(trial - values) / np.maximum(np.abs(values), 1e-3))
         values, cost, r, current_rmse = trial, trial_cost, trial_r, trial_rmse
+        residuals = trial_residuals
         current = False
         costs.append(cost)
         rmses.append(current_rmse)
@@ -217,9 +216,12 @@ def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | Non
         if relative_step < settings.step_tolerance:
             reason, converged = "parameter step below tolerance", True
             break
-        f, g = problem.gauss_newton(values, r)
+        f, g = problem.gauss_newton(values, r, residuals)
         current = True
+        if predicted_change(f, g, values, bounds, problem.n_samples) < settings.cost_tolerance:
+            reason, converged = "predicted cost change below tolerance", True
+            break
     if final_information and not current:
-        f, _ = problem.gauss_newton(values, r)
+        f, _ = problem.gauss_newton(values, r, residuals)
     return RunResult(values, cost, current_rmse, r, f, tuple(costs), tuple(rmses), iteration,
                      converged, reason)
