@@ -113,6 +113,8 @@ def test_bad_weightings_and_residuals_are_rejected():
         weighting_factor(np.ones((8, 8)))
     with pytest.raises(DataError, match="finite square"):
         weighting_factor(np.full((8, 8), np.nan))
+    with pytest.raises(DataError, match=r"must be \(8, 8\)"):
+        simulator.gauss_newton(values, residuals, np.eye(3))
     with pytest.raises(DataError, match="residual arrays"):
         simulator.gauss_newton(values, residuals[:2], np.eye(8))
     with pytest.raises(DataError, match=r"residuals of maneuver 'b' have shape"):

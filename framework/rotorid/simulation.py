@@ -265,6 +265,9 @@ class Simulator:
         if len(residuals) != len(self.maneuvers):
             raise DataError(f"{len(residuals)} residual arrays for {len(self.maneuvers)} "
                             "maneuvers")
+        if np.shape(weighting) != (8, 8):
+            raise DataError(f"the weighting must be (8, 8), one row and column per output, "
+                            f"got shape {np.shape(weighting)}")
         leading = _direct_outputs(self.structure)
         factor = weighting_factor(weighting, leading)
         background = cpu_count() > 1
