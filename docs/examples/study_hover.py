@@ -107,13 +107,18 @@ def structure_summary(result: CaseResult) -> str:
 
 
 def delay_summary(result: CaseResult) -> str:
-    """Estimated delays with Cramér-Rao bounds, and the delays dropped as undetermined."""
+    """Estimated delays with Cramér-Rao bounds, in brackets the truth model's equivalent delays
+    (``rotorid.equivalent_delays``), and the delays dropped as undetermined."""
     estimate = result.estimates["with delays"]
-    lines = ["Time delays (s)"]
+    truth = {} if result.truth_delays is None else result.truth_delays.delays
+    lines = ["Time delays (s)" + ("   [truth model's equivalent delay]" if truth else "")]
     for i, name in enumerate(estimate.parameter_names):
         if name.startswith("tau_"):
-            lines.append(f"  {name[4:]:<8}{estimate.values[i]:7.3f} ± "
-                         f"{estimate.cramer_rao[i]:.3f} (Cramér-Rao)")
+            line = (f"  {name[4:]:<8}{estimate.values[i]:7.3f} ± "
+                    f"{estimate.cramer_rao[i]:.3f} (Cramér-Rao)")
+            if name[4:] in truth:
+                line += f"   [{truth[name[4:]]:.3f}]"
+            lines.append(line)
     if result.dropped_delays:
         lines.append(f"  dropped (undetermined): {', '.join(result.dropped_delays)}")
     return "\n".join(lines)

@@ -27,6 +27,7 @@ import attrs
 import numpy as np
 
 from .data import ManeuverSet
+from .equivalent_delays import ROTOR_DERIVATIVES, EquivalentDelays, equivalent_delays
 from .errors import DataError, EstimationError, IdentifiabilityWarning, RotoridError, StudyError
 from .estimation import Estimate
 from .executors import check_executor, failure_error, run_tasks
@@ -67,6 +68,7 @@ class CaseResult:
     seconds: Mapping[str, float]
     dropped_delays: tuple[str, ...] = ()
     resumed_steps: int = 0           # finished reduction steps reused from an earlier run
+    truth_delays: EquivalentDelays | None = None   # the truth model's equivalent delays
 
     @property
     def name(self) -> str:
@@ -104,6 +106,8 @@ class CaseResult:
                                        for label, v in self.verification.items()},
             "key_derivatives": self.key_derivatives(),
             "dropped_delays": list(self.dropped_delays),
+            "truth_equivalent_delays": (None if self.truth_delays is None
+                                        else self.truth_delays.as_dict()),
             "seconds": dict(self.seconds),
             "resumed_steps": self.resumed_steps,
         }
@@ -174,6 +178,17 @@ def truth_derivatives(generator, condition: FlightCondition, structure: ModelStr
         for j, control in enumerate(structure.controls):
             values[f"{letter}_{control}"] = float(b[i, j])
     return values
+
+
+def truth_equivalent_delays(generator, condition: FlightCondition, delayed: ModelStructure):
+    """The truth model's equivalent delays (:mod:`rotorid.equivalent_delays`) for the rotor
+    delays the identified model kept, or ``None`` without a truth model or such delays."""
+    names = [d.name for d in delayed.free_delays if d.name in ROTOR_DERIVATIVES]
+    if generator is None or not names:
+        return None
+    units = delayed.units.name
+    return equivalent_delays(generator.linearize(condition.airspeed_kt, full=True, units=units),
+                             generator.linearize(condition.airspeed_kt, units=units), names)
 
 
 # ----------------------------------------------------------------- persistence
@@ -294,7 +309,8 @@ def run_case(case: FlightCase, out_dir: str | Path, resume: bool = True,
     clock["verification"] = time.perf_counter()
     result = CaseResult(case, condition, ident, verif, path, structures, estimates, metrics,
                         verification, truth_derivatives(generator, condition, structure),
-                        _durations(clock), dropped, len(finished))
+                        _durations(clock), dropped, len(finished),
+                        truth_equivalent_delays(generator, condition, delayed))
     atomic_write(directory / "result.json",
                  json.dumps(_jsonable(result.as_dict()), indent=1, default=_json_default))
     if figures:
