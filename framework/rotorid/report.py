@@ -110,7 +110,7 @@ def paper_checks(result) -> list[Check]:
             value = float(estimate.values[i])
             measured = f"{value:.3f} s"
             if name[4:] in truth:
-                measured += f" (truth model's equivalent delay {truth[name[4:]]:.3f} s)"
+                measured += f"; truth model's equivalent delay {truth[name[4:]]:.3f} s"
             checks.append(Check(f"delay on {name[4:]} within {low:g}–{high:g} s", measured,
                                 low <= value <= high))
     for sign in key_derivative_checks(result):
