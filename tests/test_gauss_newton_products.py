@@ -120,3 +120,15 @@ def test_bad_weightings_and_residuals_are_rejected():
     with pytest.raises(DataError, match=r"residuals of maneuver 'b' have shape"):
         simulator.gauss_newton(values, [residuals[0], residuals[1][:5], residuals[2]],
                                np.eye(8))
+
+
+def test_reusing_the_last_simulated_states_changes_nothing():
+    structure, values, maneuvers, simulator, residuals = problem()
+    q = random_weighting(9)
+    reused = simulator.gauss_newton(values, residuals, q)        # problem() simulated values
+    fresh = Simulator(structure, maneuvers).gauss_newton(values, residuals, q)
+    simulator.outputs(values * 1.01)                               # other values in between
+    again = simulator.gauss_newton(values, residuals, q)
+    for a, b, c in zip(reused, fresh, again):
+        assert np.allclose(a, b, rtol=1e-12, atol=1e-12 * np.abs(b).max())
+        assert np.array_equal(b, c)

@@ -218,6 +218,9 @@ class Simulator:
             key = next((dt for dt in groups if abs(dt - m.dt) <= 1e-9 * dt), m.dt)
             groups.setdefault(key, []).append(i)
         self.groups = [_Group(dt, idx, maneuvers.maneuvers, states) for dt, idx in groups.items()]
+        # The companion states of the last parameter vector simulated, per group: an
+        # estimator asks for the sensitivities at the values it has just simulated.
+        self._last_states: tuple[bytes, list] | None = None
 
     def _initial_states(self, initial_states) -> np.ndarray:
         n = len(self.maneuvers)
@@ -291,17 +294,23 @@ class Simulator:
                   else self.structure.as_vector(values))
         outputs: list = [None] * len(self.maneuvers)
         sinks = []
-        for group in self.groups:
+        key = vector.tobytes()
+        reuse = self._last_states is not None and self._last_states[0] == key
+        last_states = []
+        for g, group in enumerate(self.groups):
             maps = discrete_maps(self.structure, vector, group.dt, self.hold,
                                  with_derivatives=make_sink is not None)
             companion = _Companion(maps)
-            states = self._states(maps, companion, group)
+            states = (self._last_states[1][g] if reuse
+                      else self._states(maps, companion, group))
+            last_states.append(states)
             y = self._outputs(maps, companion, group, states)
             for b, (i, n) in enumerate(zip(group.indices, group.lengths)):
                 outputs[i] = y[:n, b]
             if make_sink is not None:
                 sinks.append(make_sink(group))
                 self._sensitivities(maps, companion, group, states, sinks[-1])
+        self._last_states = (key, last_states)
         return outputs, sinks
 
     @staticmethod
