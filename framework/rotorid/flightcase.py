@@ -102,6 +102,8 @@ class FlightCase:
                                           "M_long", "M_lat")
     delay_initial: float = 0.0
     delay_upper: float | None = 0.3
+    delay_starts: int = attrs.field(default=1, validator=attrs.validators.ge(1))
+    delay_seed: int = 0
     quick_settings: Mapping = attrs.field(factory=dict, converter=dict)
     is_quick: bool = False
 
@@ -126,11 +128,15 @@ class FlightCase:
         quick = _table(mapping, "quick", source)
         for table, keys, label in ((reduction, _REDUCTION_KEYS, "reduction"),
                                    (quick, _QUICK_KEYS, "quick"),
-                                   (delays, {"derivatives", "initial", "upper"}, "delays")):
+                                   (delays, {"derivatives", "initial", "upper", "starts",
+                                             "seed"}, "delays")):
             extra = set(table) - keys
             if extra:
                 raise DataFileError(f"{source}: [{label}] unknown key(s) {sorted(extra)}; "
                                     f"known: {', '.join(sorted(keys))}")
+        if int(delays.get("starts", 1)) < 1:
+            raise DataFileError(f"{source}: [delays] starts must be at least 1 (the fit from "
+                                f"the initial delays), got {delays['starts']}")
         defaults = cls(name="defaults")
         kwargs = dict(
             name=str(mapping["name"]), description=str(mapping.get("description", "")),
@@ -146,6 +152,8 @@ class FlightCase:
             delay_derivatives=tuple(delays.get("derivatives", defaults.delay_derivatives)),
             delay_initial=float(delays.get("initial", defaults.delay_initial)),
             delay_upper=delays.get("upper", defaults.delay_upper),
+            delay_starts=int(delays.get("starts", defaults.delay_starts)),
+            delay_seed=int(delays.get("seed", defaults.delay_seed)),
             quick_settings=quick)
         if "criteria" in reduction:
             kwargs["criteria"] = _criteria(reduction.pop("criteria"), source)

@@ -28,7 +28,8 @@ import numpy as np
 
 from .data import ManeuverSet
 from .equivalent_delays import ROTOR_DERIVATIVES, EquivalentDelays, equivalent_delays
-from .errors import DataError, EstimationError, IdentifiabilityWarning, RotoridError, StudyError
+from .errors import (DataError, EstimationError, IdentifiabilityWarning, RotoridError,
+                     SimulationDivergedError, StudyError)
 from .estimation import Estimate
 from .executors import check_executor, failure_error, run_tasks
 from .flightcase import FlightCase
@@ -357,9 +358,7 @@ def _with_delays(case: FlightCase, selected: ReductionStep, ident, estimator, di
     values = selected.estimate.as_mapping()
     dropped: list[str] = []
     while True:
-        start = {**{n: values[n] for n in delayed.parameter_names if n in values},
-                 **{d.delay_name: case.delay_initial for d in delayed.free_delays}}
-        estimate = estimator.estimate(delayed, ident, start=start)
+        estimate = best_delayed_fit(case, estimator, delayed, ident, values)
         worst = _undetermined_delay(estimate, threshold)
         if worst is None:
             break
@@ -370,6 +369,40 @@ def _with_delays(case: FlightCase, selected: ReductionStep, ident, estimator, di
                                               "dropped": dropped,
                                               "estimate": estimate.as_dict()}), indent=1))
     return delayed, estimate, tuple(dropped)
+
+
+def best_delayed_fit(case: FlightCase, estimator, delayed: ModelStructure, ident,
+                     values: Mapping[str, float]) -> Estimate:
+    """The delayed structure fitted from ``values`` (derivatives) with the delays at the case's
+    initial value and, with ``[delays] starts = N`` > 1, from N − 1 more delay vectors drawn
+    uniformly in [0, upper] (generator seeded with ``[delays] seed``); the fit with the lowest
+    det R is kept and its notes say which start it came from.
+
+    Delays make the cost multi-modal: one start can settle in a local minimum that another
+    avoids (docs/study.md, quick 70 kt run).
+    """
+    names = [d.delay_name for d in delayed.free_delays]
+    upper = 0.3 if case.delay_upper is None else float(case.delay_upper)
+    rng = np.random.default_rng(case.delay_seed)
+    starts = [np.full(len(names), case.delay_initial)]
+    starts += [rng.uniform(0.0, upper, len(names)) for _ in range(case.delay_starts - 1)]
+    base = {n: values[n] for n in delayed.parameter_names if n in values}
+    best, best_index = None, 0
+    for index, delays in enumerate(starts):
+        try:
+            estimate = estimator.estimate(delayed, ident,
+                                          start={**base, **dict(zip(names, delays))})
+        except SimulationDivergedError:
+            if index == 0:
+                raise
+            continue                      # a random start the data cannot bring back
+        if best is None or estimate.cost < best.cost:
+            best, best_index = estimate, index
+    if len(starts) == 1:
+        return best
+    return attrs.evolve(best, notes=best.notes + (
+        f"best of {len(starts)} delay starts: start {best_index} "
+        f"({'initial values' if best_index == 0 else 'random'})",))
 
 
 def _undetermined_delay(estimate: Estimate, threshold: float) -> str | None:
