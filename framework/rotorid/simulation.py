@@ -295,14 +295,14 @@ class Simulator:
         outputs: list = [None] * len(self.maneuvers)
         sinks = []
         key = vector.tobytes()
-        reuse = self._last_states is not None and self._last_states[0] == key
+        cached = self._last_states            # read once: another thread may replace it
+        reuse = cached is not None and cached[0] == key
         last_states = []
         for g, group in enumerate(self.groups):
             maps = discrete_maps(self.structure, vector, group.dt, self.hold,
                                  with_derivatives=make_sink is not None)
             companion = _Companion(maps)
-            states = (self._last_states[1][g] if reuse
-                      else self._states(maps, companion, group))
+            states = cached[1][g] if reuse else self._states(maps, companion, group)
             last_states.append(states)
             y = self._outputs(maps, companion, group, states)
             for b, (i, n) in enumerate(zip(group.indices, group.lengths)):
