@@ -115,7 +115,8 @@ def _distinct_integrals(a: np.ndarray, s: np.ndarray):
     """:func:`_integrals` computed once for the nominal direction 0 and for the directions
     that change A or a sub-interval; the others (control gains, outputs) share direction 0's.
     """
-    changed = np.flatnonzero(np.any(a[1:] != a[:1], axis=(1, 2)) | np.any(s[1:] != s[:1], axis=1))
+    changed = np.flatnonzero(np.any(a[1:] != a[:1], axis=(1, 2))
+                             | np.any(s[1:] != s[:1], axis=1))
     distinct = np.concatenate([[0], changed + 1])
     if distinct.size == a.shape[0]:
         return _integrals(a, s)

@@ -29,7 +29,7 @@ import numpy as np
 from . import blas
 from .data import ManeuverSet
 from .discretisation import DiscreteMaps, discrete_maps
-from .errors import DataError, SimulationDivergedError
+from .errors import DataError, SimulationDivergedError, StructureError
 from .executors import cpu_count
 from .structure import ModelStructure
 
@@ -421,56 +421,43 @@ class _DirectTerm:
     """The output maps' own parameter derivatives applied to the lagged sources, mapped by M.
 
     ``weights`` (K, P·8) from :func:`_tap_weights`; only its non-zero (parameter, output)
-    columns are evaluated. Every such column adds M[:, output] times its value to its
-    parameter's sensitivities. Unless M is the identity (where each column touches one
-    output), the sensitivities run with the parameters reordered (``order``): those with a
-    direct term first, so that the mapped term is added to a contiguous slice.
+    columns are evaluated. A parameter enters one equation row, so it has at most one such
+    column (its acceleration); the column adds M[:, output] times its value to the
+    parameter's sensitivities. Unless M is the identity (where a column touches one output),
+    the sensitivities run with the parameters reordered (``order``): those with a direct term
+    first, so that the mapped term is added to a contiguous slice.
     """
 
     def __init__(self, weights: np.ndarray, output_map: np.ndarray, n_parameters: int):
         columns = _nonzero_columns(weights)
-        self.weights = weights[:, columns]
         parameters, self.outputs = np.divmod(columns, 8)
+        if np.unique(parameters).size != parameters.size:
+            raise StructureError("a parameter enters more than one output equation directly")
+        self.weights = weights[:, columns]
         self.identity = output_map.shape == (8, 8) and np.array_equal(output_map, np.eye(8))
+        self.parameters = parameters
+        self.order = np.arange(n_parameters)
         if self.identity:
-            self.order = np.arange(n_parameters)
-            self.parameters = parameters
             return
-        leading = np.unique(parameters)
-        self.order = np.concatenate([leading, np.setdiff1d(np.arange(n_parameters), leading)])
-        self.parameters = np.searchsorted(leading, parameters)       # positions in ``order``
+        # _nonzero_columns returns the columns in increasing order, so the parameters are
+        # sorted and occupy positions 0 … C − 1 once moved to the front.
+        self.order = np.concatenate([parameters, np.setdiff1d(self.order, parameters)])
         self.mapped = output_map[:, self.outputs]                   # (m, C)
         # Rows of M the term reaches: with a factor from :func:`weighting_factor` that puts
         # the direct outputs first, only the first few.
         self.rows = int(np.max(np.flatnonzero(np.any(self.mapped != 0, axis=1)),
                                initial=-1)) + 1
-        # Columns in layers without a repeated parameter (in practice one layer: a derivative
-        # feeds one acceleration), each added at once.
-        rank = np.zeros(columns.size, dtype=int)
-        seen: dict[int, int] = {}
-        for c, parameter in enumerate(self.parameters):
-            rank[c] = seen.get(int(parameter), 0)
-            seen[int(parameter)] = rank[c] + 1
-        self.layers = []
-        for r in range(int(rank.max(initial=-1)) + 1):
-            layer = np.flatnonzero(rank == r)
-            layer = layer[np.argsort(self.parameters[layer])]
-            positions = self.parameters[layer]
-            contiguous = np.array_equal(positions, np.arange(positions.size))
-            self.layers.append((layer, slice(0, positions.size) if contiguous else positions))
 
     def add(self, block: np.ndarray, lagged: np.ndarray) -> None:
         """Add the term to ``block`` (L, m, B, P); ``lagged`` (L, B, K) sources of the block."""
         if not self.parameters.size:
             return
         values = lagged @ self.weights                              # (L, B, C)
-        if self.identity:                                           # (output, parameter) unique
+        if self.identity:
             block[:, self.outputs, :, self.parameters] += values.transpose(2, 0, 1)
             return
-        rows = self.rows
-        for layer, where in self.layers:
-            block[:, :rows, :, where] += (self.mapped[None, :rows, None, layer]
-                                          * values[:, None, :, layer])
+        rows, count = self.rows, self.parameters.size
+        block[:, :rows, :, :count] += self.mapped[None, :rows, None, :] * values[:, None, :, :]
 
 
 class _DenseSink:
