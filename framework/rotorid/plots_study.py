@@ -9,7 +9,6 @@
 
 from __future__ import annotations
 
-import io
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -28,13 +27,11 @@ _STYLES = ("-", "--", "-.", ":")
 
 def save_figure(figure, stem: str | Path, formats: tuple[str, ...] = ("png", "svg"),
                 dpi: int = 110) -> list[Path]:
-    """Write ``figure`` as ``<stem>.png`` and ``<stem>.svg`` atomically; returns the paths."""
-    written = []
-    for fmt in formats:
-        buffer = io.BytesIO()
-        figure.savefig(buffer, format=fmt, dpi=dpi)
-        written.append(atomic_write(Path(f"{stem}.{fmt}"), buffer.getvalue()))
-    return written
+    """Write ``figure`` as ``<stem>.<format>`` for each of ``formats``, atomically; returns the
+    paths."""
+    return [atomic_write(Path(f"{stem}.{fmt}"),
+                         lambda handle, fmt=fmt: figure.savefig(handle, format=fmt, dpi=dpi))
+            for fmt in formats]
 
 
 def plot_rmse_path(path: ReductionPath, title: str = "Model reduction"):

@@ -35,10 +35,10 @@ from .plots_frequency import plot_bode, plot_error
 from .plots_study import plot_rmse_path, plot_time_histories, save_figure
 from .study import KEY_DERIVATIVES, MODELS
 from .units import unit_system
-from .verification import envelopes_by_name, error_db_deg, parse_pair
+from .verification import (COHERENCE_THRESHOLD, COST_ENVELOPES, envelopes_by_name,
+                           error_db_deg, parse_pair)
 
 #: Envelope plugins that are costs, not bounds: not drawn in the error plots.
-COST_ENVELOPES = ("mismatch-cost",)
 #: The on-axis pairs the paper requires inside the MUAD bounds with delays.
 ON_AXIS_PAIRS = ("q/long", "p/lat", "r/ped", "az/coll")
 #: The off-axis pairs whose phase error the delays should reduce.
@@ -59,7 +59,7 @@ class Check:
 
 
 # ----------------------------------------------------------------- measured claims
-def mean_phase_error(item, threshold: float = 0.8) -> float | None:
+def mean_phase_error(item, threshold: float = COHERENCE_THRESHOLD) -> float | None:
     """Mean |∠ε| in deg over the points where the truth's coherence ≥ ``threshold``."""
     _, phase = error_db_deg(item.error)
     with np.errstate(invalid="ignore"):
@@ -69,9 +69,7 @@ def mean_phase_error(item, threshold: float = 0.8) -> float | None:
 
 def _verified_pair(result, label: str, pair: str):
     verification = result.verification.get(label)
-    if verification is None:
-        return None
-    return next((p for p in verification.pairs if p.pair == pair), None)
+    return None if verification is None else verification.get(pair)
 
 
 def paper_checks(result) -> list[Check]:
@@ -95,10 +93,10 @@ def paper_checks(result) -> list[Check]:
         item = _verified_pair(result, "with delays", pair)
         check = None if item is None else item.checks.get("muad")
         if check is None or check.passed is None:
-            checks.append(Check(f"{pair} with delays inside MUAD (γ² ≥ 0.8)",
+            checks.append(Check(f"{pair} with delays inside MUAD (γ² ≥ {COHERENCE_THRESHOLD:g})",
                                 "not verified" if check is None else check.status, None))
             continue
-        checks.append(Check(f"{pair} with delays inside MUAD (γ² ≥ 0.8)",
+        checks.append(Check(f"{pair} with delays inside MUAD (γ² ≥ {COHERENCE_THRESHOLD:g})",
                             f"{check.n_inside}/{check.n_used} points inside, worst margin "
                             f"{check.worst_margin_db:+.2f} dB / {check.worst_margin_deg:+.1f}°",
                             bool(check.passed)))
@@ -186,7 +184,7 @@ def key_derivative_rows(result) -> list[list[str]]:
 
 def verification_rows(result) -> list[list[str]]:
     """Per sweep pair and model: coherent points, MUAD/AEE status, worst margins, J."""
-    rows = [["pair", "model", "points γ² ≥ 0.8", "MUAD", "worst margin dB / deg", "AEE",
+    rows = [["pair", "model", f"points γ² ≥ {COHERENCE_THRESHOLD:g}", "MUAD", "worst margin dB / deg", "AEE",
              "J (mismatch)", "mean |∠ε| deg"]]
     for label in MODELS:
         verification = result.verification.get(label)
@@ -234,11 +232,12 @@ def case_figures(result, figures_dir: Path) -> dict[str, list[str]]:
     figure = plot_rmse_path(result.path, title=f"{name}: RMSE versus removed parameters")
     save_figure(figure, figures_dir / "rmse")
     written["reduction"].append("rmse.png")
-    for maneuver in result.identification:
-        if maneuver.metadata.get("kind") != "2311":
-            continue
-        single = ManeuverSet([maneuver], hold=result.identification.hold)
-        simulated = {label: result.simulated(label, single)[0] for label in MODELS}
+    doublets = [m for m in result.identification if m.metadata.get("kind") == "2311"]
+    outputs = ({label: result.simulated(label, ManeuverSet(doublets,
+                                                           hold=result.identification.hold))
+                for label in MODELS} if doublets else {})
+    for index, maneuver in enumerate(doublets):
+        simulated = {label: outputs[label][index] for label in MODELS}
         figure = plot_time_histories(maneuver, simulated,
                                      title=f"{name}: 2311 input on {maneuver.metadata.get('axis')}"
                                            f" ({maneuver.name})")

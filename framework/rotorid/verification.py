@@ -38,6 +38,9 @@ from .metrics import TimeDomainMetrics, time_domain_metrics
 
 #: Default coherence threshold of the checks (the paper's and the project's strict value).
 COHERENCE_THRESHOLD = 0.8
+#: Envelopes that score a whole pair (a cost) instead of bounding ε point by point; error
+#: plots leave them out.
+COST_ENVELOPES = ("mismatch-cost",)
 #: Model-to-truth output RMS ratio above which a simulated sweep counts as drifting.
 DRIFT_RATIO = 10.0
 #: Growth of the unstable mode over the longest sweep above which the model's open-loop
@@ -414,11 +417,15 @@ class VerificationResult:
     notes: tuple[str, ...] = attrs.field(default=(), converter=tuple)
 
     def __getitem__(self, pair: str) -> PairVerification:
-        for item in self.pairs:
-            if item.pair == pair:
-                return item
-        raise VerificationError(f"pair {pair!r} was not verified; verified pairs: "
-                                f"{', '.join(p.pair for p in self.pairs)}")
+        item = self.get(pair)
+        if item is None:
+            raise VerificationError(f"pair {pair!r} was not verified; verified pairs: "
+                                    f"{', '.join(p.pair for p in self.pairs)}")
+        return item
+
+    def get(self, pair: str) -> PairVerification | None:
+        """The verification of ``pair``, or ``None`` when it was not verified."""
+        return next((item for item in self.pairs if item.pair == pair), None)
 
     def average_cost(self, envelope: str = "mismatch-cost", analytic: bool = False
                      ) -> float | None:

@@ -133,12 +133,6 @@ def _check_units(structure, result: Mapping, sweeps, path: Path) -> None:
                             f"{expected!r}; convert the sweep files first")
 
 
-def _save_figure(figure, path: Path) -> None:
-    from ..io import atomic_write
-
-    atomic_write(path, lambda handle: figure.savefig(handle, format="png", dpi=110))
-
-
 def run(args) -> int:
     import matplotlib
 
@@ -146,8 +140,10 @@ def run(args) -> int:
 
     from ..io import atomic_write
     from ..plots_frequency import plot_bode, plot_error
+    from ..plots_study import save_figure
     from ..plugins import create
-    from ..verification import PAPER_PAIRS, envelopes_by_name, primary_axis, verify_model
+    from ..verification import (COST_ENVELOPES, PAPER_PAIRS, envelopes_by_name, primary_axis,
+                                verify_model)
 
     model, result_path, locations = _split(args.files)
     result = _read_result(result_path)
@@ -170,12 +166,12 @@ def run(args) -> int:
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    shown = [e for name, e in envelopes.items() if name != "mismatch-cost"]
+    shown = [e for name, e in envelopes.items() if name not in COST_ENVELOPES]
     for item in () if args.no_figures else verification.pairs:
         stem = item.pair.replace("/", "_")
-        _save_figure(plot_error(item, shown), out / f"error_{stem}.png")
-        _save_figure(plot_bode(item, structure.units.label(item.truth.output)),
-                     out / f"bode_{stem}.png")
+        save_figure(plot_error(item, shown), out / f"error_{stem}", formats=("png",))
+        save_figure(plot_bode(item, structure.units.label(item.truth.output)),
+                    out / f"bode_{stem}", formats=("png",))
     summary = verification.summary()
     summary["result"] = str(result_path)
     summary["sweeps"] = list(sweeps.names)
