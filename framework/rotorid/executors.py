@@ -57,7 +57,8 @@ def run_tasks(function: Callable, tasks: Mapping[Hashable, Task], executor=None,
     Args:
         function: a module-level function (it is pickled to the workers).
         tasks: key → ``(args, kwargs)``; results come back in this order.
-        executor: ``None``, ``"process"`` or an Executor (see the module docstring).
+        executor: ``None``, ``"process"`` (a single task then runs in this process) or an
+            Executor (see the module docstring).
         label: names a task in failure messages, e.g. ``lambda k: f"case {k}"``.
 
     Returns:
@@ -65,6 +66,8 @@ def run_tasks(function: Callable, tasks: Mapping[Hashable, Task], executor=None,
         line naming the task and the error for those that raised or whose worker died.
     """
     check_executor(executor)
+    if executor == "process" and len(tasks) <= 1:
+        executor = None                          # a pool would only add start-up time
     if executor == "process":
         with ProcessPoolExecutor(max_workers=max(1, min(len(tasks), cpu_count()))) as pool:
             return run_tasks(function, tasks, pool, label)

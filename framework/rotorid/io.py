@@ -1,4 +1,4 @@
-"""Atomic file writing, shared by every writer in rotorid.
+"""Atomic file writing, shared by every writer in rotorid, and JSON-ready values.
 
 A reader never sees a half-written file: the content goes to a temporary file in the target's
 directory, is flushed to disk, and only then replaces the target with :func:`os.replace`.
@@ -6,10 +6,11 @@ directory, is flushed to disk, and only then replaces the target with :func:`os.
 
 from __future__ import annotations
 
+import math
 import os
 import stat
 import uuid
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import BinaryIO
 
@@ -49,3 +50,15 @@ def atomic_write(path: str | os.PathLike, content: bytes | str | Callable[[Binar
         temporary.unlink(missing_ok=True)
         raise
     return target
+
+
+def jsonable(value):
+    """``value`` with every non-finite float replaced by ``None`` (JSON has no inf or NaN),
+    through nested mappings, lists and tuples."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, Mapping):
+        return {k: jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    return value

@@ -28,7 +28,7 @@ from .data import ManeuverSet
 from .errors import DataError, IdentifiabilityWarning
 from .estimation import _frozen_array
 from .executors import failure_error, run_tasks
-from .io import atomic_write
+from .io import atomic_write, jsonable
 from .plugins import create
 from .structure import ModelStructure
 
@@ -120,29 +120,29 @@ class MonteCarloResult:
 
     def summary(self) -> dict:
         """Per parameter: mean, std, mean CR, ratio, coverages, truth; and the overall figures."""
-        rows = {}
-        for i, name in enumerate(self.parameter_names):
-            rows[name] = {key: _number(value[i]) for key, value in (
-                ("mean", self.mean), ("std", self.std), ("mean_cramer_rao",
-                                                         self.mean_cramer_rao),
-                ("ratio", self.ratio), ("coverage_mean", self.coverage("mean")),
-                ("coverage_truth", self.coverage("truth")), ("truth", self.truth),
-                ("reference", self.reference))}
-        finite = np.isfinite(self.ratio)
-        return {"case": self.case, "runs": self.runs, "converged": int(self.converged.sum()),
-                "failed": len(self.failures), "units": self.units,
-                "interval_cramer_rao": INTERVAL, "nominal_coverage": NOMINAL_COVERAGE,
-                "median_ratio": _number(np.median(self.ratio[finite])) if finite.any()
-                else None,
-                "mean_coverage_mean": _number(np.nanmean(self.coverage("mean"))),
-                "ratio_band": self.ratio_band, "coverage_band": self.coverage_band,
-                "parameters": rows}
+        ratio, coverage_mean = self.ratio, self.coverage("mean")
+        columns = {"mean": self.mean, "std": self.std, "mean_cramer_rao": self.mean_cramer_rao,
+                   "ratio": ratio, "coverage_mean": coverage_mean,
+                   "coverage_truth": self.coverage("truth"), "truth": self.truth,
+                   "reference": self.reference}
+        rows = {name: {key: float(column[i]) for key, column in columns.items()}
+                for i, name in enumerate(self.parameter_names)}
+        finite = np.isfinite(ratio)
+        return jsonable({
+            "case": self.case, "runs": self.runs, "converged": int(self.converged.sum()),
+            "failed": len(self.failures), "units": self.units,
+            "interval_cramer_rao": INTERVAL, "nominal_coverage": NOMINAL_COVERAGE,
+            "median_ratio": float(np.median(ratio[finite])) if finite.any() else None,
+            "mean_coverage_mean": float(np.nanmean(coverage_mean)),
+            "ratio_band": self.ratio_band, "coverage_band": self.coverage_band,
+            "parameters": rows})
 
     def as_dict(self) -> dict:
         """The ``montecarlo.json`` record: the summary and every run."""
         return {**self.summary(), "seeds": list(self.seeds),
                 "parameter_names": list(self.parameter_names),
-                "estimates": _rows(self.estimates), "cramer_rao": _rows(self.cramer_rao),
+                "estimates": jsonable(self.estimates.tolist()),
+                "cramer_rao": jsonable(self.cramer_rao.tolist()),
                 "run_converged": self.converged.tolist(),
                 "failures": {str(k): v for k, v in self.failures.items()}}
 
@@ -165,15 +165,6 @@ class MonteCarloResult:
                      f"{summary['mean_coverage_mean']:.1%} (honest: {NOMINAL_COVERAGE:.1%} ± "
                      f"{self.coverage_band:.1%})")
         return "\n".join(lines)
-
-
-def _number(value) -> float | None:
-    value = float(value)
-    return value if math.isfinite(value) else None
-
-
-def _rows(array: np.ndarray) -> list:
-    return [[_number(v) for v in row] for row in array]
 
 
 def _cell(value, width: int, spec: str = ".4g") -> str:

@@ -118,6 +118,12 @@ def paper_checks(result) -> list[Check]:
     return checks
 
 
+def claims_tally(checks: Sequence[Check]) -> tuple[list[Check], list[Check]]:
+    """(decided, failed): the checks with a verdict, and those that do not hold."""
+    decided = [c for c in checks if c.passed is not None]
+    return decided, [c for c in decided if not c.passed]
+
+
 def key_derivative_checks(result):
     """Sign checks of the key derivatives of the model with delays."""
     estimate = result.estimates["with delays"]
@@ -391,12 +397,12 @@ def write_study_report(results: Mapping[str, object], out_dir: str | Path) -> Pa
     sections = []
     for name, result in results.items():
         checks = paper_checks(result)
-        decided = [c for c in checks if c.passed is not None]
+        decided, failed = claims_tally(checks)
         rows.append([name, result.condition.describe(),
                      f"{result.path.selected.n_parameters} ({len(result.path.removed)})",
                      f"{result.estimates['no delays'].rmse:.4f}",
                      f"{result.estimates['with delays'].rmse:.4f}", _delays_text(result),
-                     f"{sum(c.passed for c in decided)}/{len(decided)}"])
+                     f"{len(decided) - len(failed)}/{len(decided)}"])
         link = f"{html.escape(name)}/report.html"
         sections.append(f"<h2><a href=\"{link}\">Case {html.escape(name)}</a></h2>"
                         + _images(["rmse.png"], prefix=f"{html.escape(name)}/figures/")

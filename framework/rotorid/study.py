@@ -33,7 +33,7 @@ from .errors import (DataError, EstimationError, IdentifiabilityWarning, Rotorid
 from .estimation import Estimate
 from .executors import check_executor, failure_error, run_tasks
 from .flightcase import FlightCase
-from .io import atomic_write
+from .io import atomic_write, jsonable
 from .metrics import TimeDomainMetrics, time_domain_metrics
 from .modelfile import parse_model
 from .plugins import create, notify
@@ -200,7 +200,7 @@ def _step_file(directory: Path, index: int) -> Path:
 def _save_step(directory: Path, step: ReductionStep) -> None:
     removal = None if step.removal is None else attrs.asdict(step.removal)
     record = {"index": step.index, "removal": removal, "estimate": step.estimate.as_dict()}
-    atomic_write(_step_file(directory, step.index), json.dumps(_jsonable(record), indent=1))
+    atomic_write(_step_file(directory, step.index), json.dumps(jsonable(record), indent=1))
 
 
 def _load_steps(directory: Path, base: ModelStructure) -> list[ReductionStep]:
@@ -222,19 +222,9 @@ def _load_steps(directory: Path, base: ModelStructure) -> list[ReductionStep]:
     return steps
 
 
-def _jsonable(value):
-    if isinstance(value, float) and not np.isfinite(value):
-        return None
-    if isinstance(value, Mapping):
-        return {k: _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
-    return value
-
-
 def _check_configuration(directory: Path, case: FlightCase, resume: bool) -> None:
     marker = directory / "case.json"
-    settings = json.dumps(_jsonable(case.as_dict()), sort_keys=True)
+    settings = json.dumps(jsonable(case.as_dict()), sort_keys=True)
     if marker.is_file() and resume and marker.read_text() != settings:
         raise RotoridError(f"{directory} holds results of a different configuration of case "
                            f"{case.name}; choose another --out directory or run without "
@@ -313,7 +303,7 @@ def run_case(case: FlightCase, out_dir: str | Path, resume: bool = True,
                         _durations(clock), dropped, len(finished),
                         truth_equivalent_delays(generator, condition, delayed))
     atomic_write(directory / "result.json",
-                 json.dumps(_jsonable(result.as_dict()), indent=1, default=_json_default))
+                 json.dumps(jsonable(result.as_dict()), indent=1, default=_json_default))
     if figures:
         from .report import write_case_outputs
 
@@ -365,7 +355,7 @@ def _with_delays(case: FlightCase, selected: ReductionStep, ident, estimator, di
         dropped.append(worst[4:])
         delayed = delayed.without_delay(worst[4:])
         values = estimate.as_mapping()
-    atomic_write(saved, json.dumps(_jsonable({"selected_step": selected.index,
+    atomic_write(saved, json.dumps(jsonable({"selected_step": selected.index,
                                               "dropped": dropped,
                                               "estimate": estimate.as_dict()}), indent=1))
     return delayed, estimate, tuple(dropped)
@@ -478,10 +468,9 @@ class Study:
         self.out_dir.mkdir(parents=True, exist_ok=True)
         options = dict(out_dir=self.out_dir, resume=self.resume, progress=self.progress,
                        figures=self.figures)
-        executor = None if self.executor == "process" and len(self.cases) == 1 else self.executor
         results, failures = run_tasks(run_case_task,
                                       {c.name: ((c,), options) for c in self.cases},
-                                      executor, label=lambda name: f"case {name}")
+                                      self.executor, label=lambda name: f"case {name}")
         if failures:
             raise failure_error("cases", results, failures, self.out_dir)
         if self.figures:

@@ -25,7 +25,7 @@ import attrs
 
 from .errors import DataError
 from .flightcase import FlightCase
-from .io import atomic_write
+from .io import atomic_write, jsonable
 
 #: Name of the built-in case family on the command line.
 FAMILY = "speed-sweep"
@@ -113,8 +113,7 @@ class SweepPoint:
     def as_dict(self) -> dict:
         return {"case": self.case, "airspeed_kt": self.airspeed_kt, "units": self.units,
                 "values": dict(self.values),
-                "cramer_rao": {k: (v if math.isfinite(v) else None)
-                               for k, v in self.cramer_rao.items()},
+                "cramer_rao": jsonable(dict(self.cramer_rao)),
                 "truth": dict(self.truth)}
 
     @classmethod

@@ -62,10 +62,9 @@ def expand_cases(names, speeds: str | None = None, template: str = "hover"):
 
 def claims_summary(result) -> str:
     """One line: how many of the paper's claims hold for a case, and which do not."""
-    from ..report import paper_checks
+    from ..report import claims_tally, paper_checks
 
-    decided = [c for c in paper_checks(result) if c.passed is not None]
-    failed = [c for c in decided if not c.passed]
+    decided, failed = claims_tally(paper_checks(result))
     line = f"paper's claims: {len(decided) - len(failed)}/{len(decided)} hold"
     if failed:
         line += "; not: " + "; ".join(f"{c.claim} ({c.measured})" for c in failed)
