@@ -127,3 +127,19 @@ def test_case_monte_carlo_needs_generated_data_and_two_runs(tmp_path, problem):
         case_monte_carlo(case, 3, tmp_path / "out")
     with pytest.raises(DataError, match="at least 2 runs"):
         case_monte_carlo(case, 1, tmp_path / "out")
+
+
+def test_flying_only_the_identification_maneuvers_gives_the_same_maneuvers(tmp_path):
+    """case_monte_carlo flies only the identification kinds: each maneuver is its own row of
+    the batch and its noise is seeded by its name, so it equals the full set's."""
+    source = rotorid.create("data-sources", "helisim")
+    settings = {"condition": "hover", "duration_scale": 0.3, "seed": 4, "axes": ["long"],
+                "directions": [1]}
+    everything, _ = source.generate_into(settings, tmp_path / "all")
+    multisteps, _ = source.generate_into({**settings, "kinds": ["3211", "2311"]},
+                                         tmp_path / "multisteps")
+    by_name = {m.name: m for m in everything}
+    assert len(multisteps) < len(everything)
+    for m in multisteps:
+        assert np.array_equal(by_name[m.name].outputs, m.outputs)
+        assert np.array_equal(by_name[m.name].inputs, m.inputs)

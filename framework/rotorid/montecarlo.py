@@ -173,13 +173,9 @@ def _cell(value, width: int, spec: str = ".4g") -> str:
 
 # ----------------------------------------------------------------- runs
 def estimate_run(structure: ModelStructure, data: Callable[[int], ManeuverSet], seed: int,
-                 estimator: str, options: Mapping, start, kinds) -> tuple:
-    """One Monte Carlo run (a task): ``(values, cramer_rao, converged)`` on ``data(seed)``,
-    keeping the maneuvers whose metadata ``kind`` is in ``kinds`` (all if ``None``)."""
+                 estimator: str, options: Mapping, start) -> tuple:
+    """One Monte Carlo run (a task): ``(values, cramer_rao, converged)`` on ``data(seed)``."""
     maneuvers = data(seed)
-    if kinds is not None:
-        maneuvers = ManeuverSet([m for m in maneuvers if m.metadata.get("kind") in kinds],
-                                hold=maneuvers.hold)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IdentifiabilityWarning)
         result = create("estimators", estimator, **options).estimate(structure, maneuvers,
@@ -190,8 +186,8 @@ def estimate_run(structure: ModelStructure, data: Callable[[int], ManeuverSet], 
 def monte_carlo(structure: ModelStructure, data: Callable[[int], ManeuverSet],
                 seeds: Sequence[int], *, estimator: str = "output-error",
                 estimator_options: Mapping | None = None, start=None,
-                truth: Mapping[str, float] | None = None, reference=None, kinds=None,
-                executor=None, case: str = "") -> MonteCarloResult:
+                truth: Mapping[str, float] | None = None, reference=None, executor=None,
+                case: str = "") -> MonteCarloResult:
     """Estimate ``structure`` on ``data(seed)`` for every seed, through ``executor``.
 
     Args:
@@ -202,7 +198,6 @@ def monte_carlo(structure: ModelStructure, data: Callable[[int], ManeuverSet],
         start: start values of every run (name → value or a vector; default the structure's).
         truth: true values by name, where known.
         reference: the estimate being checked (vector), e.g. the study's; NaN if ``None``.
-        kinds: maneuver kinds to keep from each data set (``None``: all).
         executor: ``None``, ``"process"`` or an Executor (see :mod:`rotorid.executors`).
 
     Failed runs are recorded in ``failures`` and left out of the statistics; if every run
@@ -210,8 +205,7 @@ def monte_carlo(structure: ModelStructure, data: Callable[[int], ManeuverSet],
     """
     names = structure.parameter_names
     options = dict(estimator_options or {})
-    tasks = {int(s): ((structure, data, int(s), estimator, options, start, kinds), {})
-             for s in seeds}
+    tasks = {int(s): ((structure, data, int(s), estimator, options, start), {}) for s in seeds}
     results, failures = run_tasks(estimate_run, tasks, executor,
                                   label=lambda s: f"case {case} run with seed {s}")
     if not results:
@@ -247,7 +241,10 @@ def case_monte_carlo(case, runs: int, out_dir: str | Path, *, seed: int | None =
                         f"(source 'helisim')")
     study = run_case(case, out_dir, resume=True, progress=progress, figures=False)
     directory = Path(out_dir) / case.name
-    settings = {k: v for k, v in case.data.items() if k != "source"}
+    # Only the identification maneuvers are flown and given noise: each maneuver is its own
+    # row of the flight and its noise is seeded by its name, so they equal the study's.
+    settings = {**{k: v for k, v in case.data.items() if k != "source"},
+                "kinds": list(case.identification_kinds)}
     data = generator.noise_realisations(settings, directory / "montecarlo-data")
     first = int(case.data.get("seed", 0) if seed is None else seed)
     estimate = study.estimates["with delays"]
@@ -255,7 +252,7 @@ def case_monte_carlo(case, runs: int, out_dir: str | Path, *, seed: int | None =
         study.structures["with delays"], data, range(first, first + runs),
         estimator=case.estimator, estimator_options=case.estimator_options,
         start=estimate.start, truth=study.truth_derivatives, reference=estimate.values,
-        kinds=case.identification_kinds, executor=executor, case=case.name)
+        executor=executor, case=case.name)
     write_monte_carlo(result, directory)
     return result
 
