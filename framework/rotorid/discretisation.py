@@ -115,18 +115,12 @@ def _distinct_integrals(a: np.ndarray, s: np.ndarray):
     """:func:`_integrals` computed once for the nominal direction 0 and for the directions
     that change A or a sub-interval; the others (control gains, outputs) share direction 0's.
     """
-    changed = np.flatnonzero(np.any(a[1:] != a[:1], axis=(1, 2))
-                             | np.any(s[1:] != s[:1], axis=1))
-    distinct = np.concatenate([[0], changed + 1])
-    if distinct.size == a.shape[0]:
-        return _integrals(a, s)
-    parts = _integrals(a[distinct], s[distinct])
-    full = []
-    for part in parts:
-        out = np.repeat(part[:1], a.shape[0], axis=0)
-        out[distinct] = part
-        full.append(out)
-    return tuple(full)
+    changed = (np.any(a != a[:1], axis=(1, 2)) | np.any(s != s[:1], axis=1))
+    changed[0] = True
+    distinct = np.flatnonzero(changed)
+    source = np.cumsum(changed) - 1          # direction → its row among the distinct ones
+    source[~changed] = 0
+    return tuple(part[source] for part in _integrals(a[distinct], s[distinct]))
 
 
 @attrs.frozen(eq=False)

@@ -29,6 +29,7 @@ import scipy.optimize
 
 from .errors import StructureError
 from .structure import STATES
+from .transfer import state_response
 
 #: The roll/pitch terms that carry the rotor's delays: (derivative, row state, column).
 ROTOR_TERMS = (("M_q", "q", "q"), ("M_p", "q", "p"), ("M_long", "q", "long"),
@@ -75,10 +76,8 @@ def _truth_response(full, omega: np.ndarray) -> np.ndarray:
     """(F, 2, 2) responses of q, p (rows) to long, lat (columns) of the full model."""
     q, p = _indices(full, ("q", "p"), "full")
     long, lat = (i - len(full.states) for i in _indices(full, ("long", "lat"), "full"))
-    a, b = np.asarray(full.A, float), np.asarray(full.B, float)
-    identity = np.eye(a.shape[0])
-    response = np.linalg.solve(1j * omega[:, None, None] * identity - a, b[:, [long, lat]])
-    return response[:, [q, p], :]
+    b = np.asarray(full.B, float)[:, [long, lat]]
+    return state_response(np.asarray(full.A, float), b, omega)[:, [q, p], :]
 
 
 class _Fit:
@@ -89,32 +88,25 @@ class _Fit:
             raise StructureError(f"the residualised linear model must have the states "
                                  f"{', '.join(STATES)}, got {residualised.states}")
         self.omega = omega
-        self.a = np.asarray(residualised.A, float)
+        a = np.asarray(residualised.A, float)
         long, lat = (i - 8 for i in _indices(residualised, ("long", "lat"), "residualised"))
-        self.b = np.asarray(residualised.B, float)[:, [long, lat]]
+        b = np.asarray(residualised.B, float)[:, [long, lat]]
         self.rows = {"q": STATES.index("q"), "p": STATES.index("p")}
         self.columns = {"q": STATES.index("q"), "p": STATES.index("p"), "long": 0, "lat": 1}
         self.delayed = [name for name in ROTOR_DERIVATIVES if name in delayed]
-        self.start_gains = np.array([self._entry(row, column) for _, row, column in ROTOR_TERMS])
-
-    def _entry(self, row: str, column: str) -> float:
-        i, j = self.rows[row], self.columns[column]
-        return self.a[i, j] if column in ("q", "p") else self.b[i, j]
+        self.start_gains = np.array([(a if column in ("q", "p") else b)[
+            self.rows[row], self.columns[column]] for _, row, column in ROTOR_TERMS])
+        # Per frequency, once: the fitted entries are overwritten at every evaluation.
+        self.a = np.repeat(a[None].astype(complex), omega.size, axis=0)
+        self.b = np.repeat(b[None].astype(complex), omega.size, axis=0)
 
     def response(self, gains: np.ndarray, delays: Mapping[str, float]) -> np.ndarray:
         """(F, 2, 2) responses of q, p to long, lat."""
-        n_f = self.omega.size
-        a = np.repeat(self.a[None].astype(complex), n_f, axis=0)
-        b = np.repeat(self.b[None].astype(complex), n_f, axis=0)
         for gain, (name, row, column) in zip(gains, ROTOR_TERMS):
             term = gain * np.exp(-1j * self.omega * delays.get(name, 0.0))
-            i, j = self.rows[row], self.columns[column]
-            if column in ("q", "p"):
-                a[:, i, j] = term
-            else:
-                b[:, i, j] = term
-        response = np.linalg.solve(1j * self.omega[:, None, None] * np.eye(8) - a, b)
-        return response[:, [self.rows["q"], self.rows["p"]], :]
+            target = self.a if column in ("q", "p") else self.b
+            target[:, self.rows[row], self.columns[column]] = term
+        return state_response(self.a, self.b, self.omega)[:, [self.rows["q"], self.rows["p"]], :]
 
 
 def equivalent_delays(full, residualised, delayed: Iterable[str] = ROTOR_DERIVATIVES,
@@ -159,15 +151,14 @@ def equivalent_delays(full, residualised, delayed: Iterable[str] = ROTOR_DERIVAT
     lower = np.concatenate([np.full(n_gains, -np.inf), np.zeros(len(fit.delayed))])
     upper_bounds = np.concatenate([np.full(n_gains, np.inf), np.full(len(fit.delayed), upper)])
     best = None
-    for start in DELAY_STARTS:
+    for start in DELAY_STARTS if fit.delayed else DELAY_STARTS[:1]:
         x0 = np.concatenate([fit.start_gains, np.full(len(fit.delayed), start)])
         result = scipy.optimize.least_squares(residuals, x0, bounds=(lower, upper_bounds),
                                               x_scale="jac", xtol=1e-12, ftol=1e-12)
         if best is None or result.cost < best.cost:
             best = result
     gains, delays = unpack(best.x)
-    error = residuals(best.x)
     return EquivalentDelays(
         delays={n: float(v) for n, v in delays.items()},
         gains={name: float(g) for g, (name, _, _) in zip(gains, ROTOR_TERMS)},
-        relative_rms=float(np.sqrt(np.mean(error**2) * 2)), band=(float(low), float(high)))
+        relative_rms=float(np.sqrt(np.mean(best.fun**2) * 2)), band=(float(low), float(high)))

@@ -42,8 +42,15 @@ def frequency_response(structure: ModelStructure, values, omega) -> np.ndarray:
             b[:, eq, src - 8] += term
             if out >= 0:
                 d[:, out, src - 8] += term
-    resolvent = np.linalg.solve(1j * omega[:, None, None] * np.eye(8) - a, b)
-    return c @ resolvent + d
+    return c @ state_response(a, b, omega) + d
+
+
+def state_response(a: np.ndarray, b: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """(jωI − A)⁻¹B: state responses to the inputs, (F, n, m), for A (n, n) or (F, n, n) and
+    B (n, m) or (F, n, m) (per frequency when they carry delays)."""
+    identity = np.eye(np.shape(a)[-1])
+    return np.linalg.solve(1j * omega[:, None, None] * identity - a,
+                           np.broadcast_to(b, (omega.size, *np.shape(b)[-2:])))
 
 
 def pair_response(structure: ModelStructure, values, omega, output: str,
@@ -57,4 +64,4 @@ def pair_response(structure: ModelStructure, values, omega, output: str,
     return response[:, OUTPUTS.index(output), CONTROLS.index(control)]
 
 
-__all__ = ["frequency_response", "pair_response", "STATES"]
+__all__ = ["frequency_response", "pair_response", "state_response", "STATES"]

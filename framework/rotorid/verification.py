@@ -670,17 +670,16 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
     return attrs.evolve(result, notes=[*notes, *result.notes])
 
 
-def segmented_simulation(structure, values, maneuvers, segment: float,
-                         lead: float = 0.0) -> list[np.ndarray]:
+def segmented_simulation(structure, values, maneuvers, segment: float) -> list[np.ndarray]:
     """Outputs simulated in segments restarted from the data's state.
 
-    Each maneuver is cut into segments of ``segment`` s. A segment is simulated from
-    ``lead`` s before its start, starting from the state at that instant: measured q θ p φ r
-    and u v w integrated from the measured specific forces
-    (:func:`rotorid.equation_error.reconstructed_states`); the lead-in is discarded and the
-    segments joined. Delayed terms see trim before each restart, and the reconstructed
-    velocities carry integration error, so the restarts are approximate: on noise-free data
-    of the model itself they reproduce its plain simulation to a few per cent (tested).
+    Each maneuver is cut into segments of ``segment`` s (a remainder shorter than two samples
+    joins the segment before it). A segment is simulated from the state at its start:
+    measured q θ p φ r and u v w integrated from the measured specific forces
+    (:func:`rotorid.equation_error.reconstructed_states`), and the segments are joined.
+    Delayed terms see trim before each restart, and the reconstructed velocities carry
+    integration error, so the restarts are approximate: on noise-free data of the model
+    itself they reproduce its plain simulation to a few per cent (tested).
     Returns one (N_i, 8) array per maneuver.
     """
     from .data import Maneuver, ManeuverSet
@@ -689,24 +688,20 @@ def segmented_simulation(structure, values, maneuvers, segment: float,
 
     if not segment > 0:
         raise VerificationError(f"segment must be a positive duration in s, got {segment!r}")
-    pieces, kept = [], []          # kept: per maneuver, (lead-in, kept samples) per piece
+    pieces, counts = [], []              # counts: the number of pieces of each maneuver
     for m in maneuvers:
         states = reconstructed_states(structure, m)
         step = max(2, int(round(segment / m.dt)))
-        back = int(round(lead / m.dt))
-        kept.append([])
-        for start in range(0, m.n_samples, step):
-            first = max(0, start - back)
-            stop = min(m.n_samples, start + step)
-            if stop - first < 2:
-                first = max(0, stop - 2)
-            pieces.append(Maneuver(f"{m.name}#{start}", m.time[first:stop],
+        starts = list(range(0, m.n_samples, step))
+        if len(starts) > 1 and m.n_samples - starts[-1] < 2:
+            starts.pop()
+        for first, stop in zip(starts, starts[1:] + [m.n_samples]):
+            pieces.append(Maneuver(f"{m.name}#{first}", m.time[first:stop],
                                    m.inputs[first:stop], m.outputs[first:stop],
                                    units=m.units, initial_state=states[first]))
-            kept[-1].append((start - first, stop - start))
+        counts.append(len(starts))
     simulated = iter(simulate(structure, values, ManeuverSet(pieces, hold=maneuvers.hold)))
-    return [np.concatenate([next(simulated)[skip:skip + keep] for skip, keep in layout])
-            for layout in kept]
+    return [np.concatenate([next(simulated) for _ in range(count)]) for count in counts]
 
 
 def _stability_notes(eigenvalues: np.ndarray) -> list[str]:
