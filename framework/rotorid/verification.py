@@ -647,8 +647,8 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
         envelopes = envelopes_by_name(tuple(envelopes))
     eigenvalues = np.linalg.eigvals(structure.matrices(values)[0])
     growth = float(np.max(eigenvalues.real))
-    notes = _stability_notes(eigenvalues)
     longest = max(m.duration for m in sweeps)
+    notes = _stability_notes(eigenvalues, growth * longest)
     drifts = growth * longest > math.log(DRIFT_LIMIT)
     comparison = "apparent" if drifts and segment is None else "simulated"
     if segment is None and drifts:
@@ -704,11 +704,12 @@ def segmented_simulation(structure, values, maneuvers, segment: float) -> list[n
     return [np.concatenate([next(simulated) for _ in range(count)]) for count in counts]
 
 
-def _stability_notes(eigenvalues: np.ndarray) -> list[str]:
-    """A note listing the unstable eigenvalues of A (delays set to zero), if any."""
+def _stability_notes(eigenvalues: np.ndarray, growth_over_sweep: float) -> list[str]:
+    """A note listing the unstable eigenvalues of A (delays set to zero), if any, and how
+    much their mode grows over the longest sweep (``growth_over_sweep`` = σ·T)."""
     unstable = eigenvalues[eigenvalues.real > 1e-9]
     if not unstable.size:
         return []
     shown = ", ".join(f"{v.real:.3g}{v.imag:+.3g}j" for v in unstable if v.imag >= 0)
     return [f"the model is unstable (eigenvalues {shown} 1/s, delays ignored): its open-loop "
-            f"simulation of a long sweep drifts"]
+            f"response grows e^{growth_over_sweep:.1f}-fold over the longest sweep"]
