@@ -20,10 +20,11 @@ from collections.abc import Mapping
 import attrs
 
 from .derivatives import EQUATION_OF_LETTER, parse_name
-from .units import CHANNEL_KINDS, unit_system
+from .units import CHANNEL_KINDS, channel_scale, unit_system
 
-#: name → (hover, 70 kt) reference values in SI-rad units; None where nothing is published.
-REFERENCE_SI: dict[str, tuple[float | None, float | None]] = {
+#: name → (hover, 70 kt) reference values in SI-rad units (derivatives without a published
+#: value are absent).
+REFERENCE_SI: dict[str, tuple[float, float]] = {
     "X_u": (-0.02, -0.0295),
     "Z_w": (-0.32, -0.79),
     "M_u": (0.10, 0.032),
@@ -51,11 +52,11 @@ def regime_of(airspeed_kt: float) -> str | None:
 
 
 def derivative_scale(name: str, units: str) -> float:
-    """Factor turning an SI-rad value of derivative ``name`` into ``units`` (states only)."""
+    """Factor turning an SI-rad value of derivative ``name`` into ``units`` (states only):
+    A′ = s_row·A/s_column as in :func:`rotorid.units.convert_state_space`."""
     letter, variable = parse_name(name)
-    system = unit_system(units)
-    row_kind = CHANNEL_KINDS[EQUATION_OF_LETTER[letter]]
-    return system.factor(row_kind) / system.factor(CHANNEL_KINDS[variable])
+    row, column = channel_scale((EQUATION_OF_LETTER[letter], variable), unit_system(units))
+    return float(row / column)
 
 
 def derivative_unit(name: str, units: str) -> str:
@@ -113,8 +114,8 @@ def check_signs(names, identified: Mapping[str, tuple[float, float]], airspeed_k
     for name in names:
         reference = None
         if regime is not None and name in REFERENCE_SI:
-            value = REFERENCE_SI[name][0 if regime == "hover" else 1]
-            reference = None if value is None else value * derivative_scale(name, units)
+            reference = (REFERENCE_SI[name][0 if regime == "hover" else 1]
+                         * derivative_scale(name, units))
         linearised = None if truth is None else truth.get(name)
         if (name, regime) in SIGN_UNCHECKED:
             expected, basis = None, f"{regime} reference ≈ 0"
