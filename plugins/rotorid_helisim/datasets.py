@@ -33,7 +33,7 @@ from rotorid.units import KNOT
 from rotorid_signals.signals import Multistep, Sweep
 
 from .loops import AXES, LoopDesign, design_loops, quasi_steady_model
-from .sensors import SensorNoise, noise_generator, perturbations
+from .sensors import SensorNoise, perturbations, with_noise
 
 KINDS = ("3211", "2311", "sweep")
 #: Flight conditions by name: airspeed in kt.
@@ -257,9 +257,8 @@ def fly_jobs(plant, jobs, progress=None, plant_id: str = "", with_record: bool =
     by_job = {id(job): [] for job in jobs}
     for row, ((job, spec), loop) in enumerate(zip(rows, gains)):
         n = counts[row]
-        outputs = perturbations(record.measurements[row, :n], trim_outputs[id(job)])
-        outputs = outputs + job.config.noise.draw(n, noise_generator(job.config.seed,
-                                                                     spec.name))
+        outputs = with_noise(perturbations(record.measurements[row, :n], trim_outputs[id(job)]),
+                             job.config.noise, job.config.seed, spec.name)
         metadata = _metadata(job, spec, loop, plant_id, plant.state_names)
         metadata["excursion"] = excursion(record.states[row, :n], job.trim_state,
                                           plant.state_names)

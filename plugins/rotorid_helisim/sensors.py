@@ -68,6 +68,11 @@ def noise_generator(seed: int, name: str) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence([int(seed), zlib.crc32(name.encode())]))
 
 
+def with_noise(outputs: np.ndarray, noise: SensorNoise, seed: int, name: str) -> np.ndarray:
+    """``outputs`` (N, 8) plus the sensor noise of maneuver ``name`` under data-set ``seed``."""
+    return outputs + noise.draw(outputs.shape[0], noise_generator(seed, name))
+
+
 def perturbations(measurements, trim_outputs) -> np.ndarray:
     """Total SI outputs (N, 8) → perturbations from trim in flight-test units (N, 8)."""
     scale = channel_scale(OUTPUT_CHANNELS, FLIGHT_TEST)
@@ -89,8 +94,7 @@ class NoiseRealisations:
 
     def __call__(self, seed: int) -> ManeuverSet:
         """The data set with noise seed ``seed``."""
-        maneuvers = [attrs.evolve(m, outputs=m.outputs + self.noise.draw(
-                         m.n_samples, noise_generator(seed, m.name)),
-                         metadata={**m.metadata, "seed": int(seed)})
+        maneuvers = [attrs.evolve(m, outputs=with_noise(m.outputs, self.noise, seed, m.name),
+                                  metadata={**m.metadata, "seed": int(seed)})
                      for m in self.clean]
         return ManeuverSet(maneuvers, hold=self.clean.hold)
