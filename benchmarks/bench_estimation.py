@@ -50,12 +50,11 @@ import scipy.optimize  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from hover_reference import NOISE, closed_loop_maneuvers, true_structure  # noqa: E402
-
 import rotorid  # noqa: E402
-from rotorid.equation_error import equation_error_start  # noqa: E402
+from hover_reference import NOISE, closed_loop_maneuvers, true_structure  # noqa: E402
 from rotorid.errors import IdentifiabilityWarning, SimulationDivergedError  # noqa: E402
-from rotorid.simulation import Simulator  # noqa: E402
+from rotorid.estimation.equation_error import equation_error_start  # noqa: E402
+from rotorid.simulation.simulator import Simulator  # noqa: E402
 
 #: Residual (in noise standard deviations) returned for a diverging candidate simulation.
 DIVERGED_RESIDUAL = 1e6

@@ -56,11 +56,10 @@ import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 import scipy.signal  # noqa: E402
-from rotorid_signals.signals import Multistep  # noqa: E402
-
 from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure  # noqa: E402
-from rotorid.simulation import Simulator  # noqa: E402
-from rotorid.structure import PAPER_DELAYED  # noqa: E402
+from rotorid.model.structure import PAPER_DELAYED  # noqa: E402
+from rotorid.simulation.simulator import Simulator  # noqa: E402
+from rotorid_signals.signals import Multistep  # noqa: E402
 
 DT = 0.02
 DURATION = 15.0

@@ -27,8 +27,8 @@ def main() -> None:
 
     import rotorid
     from rotorid.errors import IdentifiabilityWarning
-    from rotorid.flightcase import FlightCase
-    from rotorid.study import base_structure, load_data, run_case
+    from rotorid.study.case import FlightCase
+    from rotorid.study.pipeline import base_structure, load_data, run_case
 
     case = FlightCase.load(args.case)
     case = case.quick() if args.quick else case

@@ -21,7 +21,7 @@ import numpy as np
 
 
 def _timed_study(cases, executor):
-    from rotorid.study import Study
+    from rotorid.study.pipeline import Study
 
     with tempfile.TemporaryDirectory() as out:
         start = time.perf_counter()
@@ -37,7 +37,7 @@ def main() -> None:
     args = parser.parse_args()
 
     from rotorid.executors import cpu_count
-    from rotorid.sweep import speed_sweep
+    from rotorid.study.sweep import speed_sweep
 
     cases = speed_sweep(args.speeds)
     cases = cases if args.full else tuple(case.quick() for case in cases)

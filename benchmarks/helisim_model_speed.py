@@ -13,7 +13,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
 from rotorid_helisim.model import Bo105Model
 from rotorid_helisim.parameters import Bo105Config
 from rotorid_helisim.trim import trim

@@ -13,10 +13,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
 from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
-from rotorid.discretisation import discrete_maps
-from rotorid.simulation import simulate
+from rotorid.simulation.discretisation import discrete_maps
+from rotorid.simulation.simulator import simulate
 from rotorid.units import FLIGHT_TEST, convert_state_space
 
 A_SI = np.array([

@@ -6,10 +6,9 @@ import sys
 from pathlib import Path
 
 import pytest
-
 import rotorid
-from rotorid import cli
-from rotorid.commands import plugins as plugins_command
+from rotorid.cli import main as cli
+from rotorid.cli.commands import plugins as plugins_command
 from rotorid.errors import DataFileError
 
 SCRIPT = shutil.which("rotorid", path=str(Path(sys.executable).parent))
@@ -53,7 +52,7 @@ def test_a_rotorid_error_is_one_line_on_stderr():
     assert result.stdout == ""
     assert result.stderr.splitlines() == [
         "rotorid plugins: error: unknown plugin family 'estimator'; families: estimators, "
-        "reduction-criteria, validation-envelopes, data-sources, input-signals"]
+        "reduction-criteria, validation-envelopes, data-sources, input-signals, commands"]
 
 
 def test_usage_errors_exit_non_zero_without_traceback():

@@ -4,11 +4,10 @@ import json
 
 import numpy as np
 import pytest
-from rotorid_files.formats import read_maneuver, write_maneuver
-
 import rotorid
-from rotorid import cli
-from rotorid.modelfile import load_model
+from rotorid.cli import main as cli
+from rotorid.model.modelfile import load_model
+from rotorid_files.formats import read_maneuver, write_maneuver
 
 MODEL = """
 units = "flight-test"

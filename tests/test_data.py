@@ -3,8 +3,13 @@
 import attrs
 import numpy as np
 import pytest
-
-from rotorid.data import ALL_CHANNELS, INPUT_CHANNELS, OUTPUT_CHANNELS, Maneuver, ManeuverSet
+from rotorid.data import (
+    ALL_CHANNELS,
+    INPUT_CHANNELS,
+    OUTPUT_CHANNELS,
+    Maneuver,
+    ManeuverSet,
+)
 from rotorid.errors import DataError, StructureError
 
 

@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 import rotorid
 from rotorid.errors import DataFileError
-from rotorid.flightcase import FlightCase
-from rotorid.study import best_delayed_fit
-
-from test_output_error import (SMALL_TRUTH, doublet_maneuvers, small_structure,
-                               with_outputs)
+from rotorid.study.case import FlightCase
+from rotorid.study.pipeline import best_delayed_fit
+from test_output_error import (
+    SMALL_TRUTH,
+    doublet_maneuvers,
+    small_structure,
+    with_outputs,
+)
 
 DELAYS = ("L_lat", "M_long", "L_p", "M_q")
 

@@ -2,9 +2,8 @@
 
 import attrs
 import pytest
-
-from rotorid.derivatives import Delay, Derivative, Sign, parse_name
 from rotorid.errors import DerivativeError, RotoridError
+from rotorid.model.derivatives import Delay, Derivative, Sign, parse_name
 
 
 @pytest.mark.parametrize("name, letter, variable", [

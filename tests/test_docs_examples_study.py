@@ -13,12 +13,10 @@ from pathlib import Path
 import matplotlib
 import numpy as np
 import pytest
-
 import rotorid
-from rotorid import Derivative, Delay, FlightCondition, ModelStructure
-from rotorid.estimation import Estimate
-from rotorid.flightcase import FlightCase
-
+from rotorid import Delay, Derivative, FlightCondition, ModelStructure
+from rotorid.estimation.estimate import Estimate
+from rotorid.study.case import FlightCase
 from test_output_error import doublet_maneuvers, with_outputs
 
 matplotlib.use("Agg")

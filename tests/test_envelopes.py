@@ -4,11 +4,10 @@ from importlib.metadata import entry_points
 
 import numpy as np
 import pytest
-
 import rotorid_envelopes.plugin as envelope_plugin
 from rotorid.errors import VerificationError
-from rotorid.plugins import create, new_plugin_manager, registry
-from rotorid.verification import ValidationEnvelope, wrap180
+from rotorid.plugin.manager import create, new_plugin_manager, registry
+from rotorid.verification.compare import ValidationEnvelope, wrap180
 
 # reference/validation.md §1.4: ω, mag upper, mag lower, phase upper (no delay, delay),
 # phase lower (no delay, delay).

@@ -13,13 +13,12 @@ import math
 import attrs
 import numpy as np
 import pytest
+import rotorid
 import scipy.interpolate
 import scipy.signal
-
-import rotorid
-from rotorid.equivalent_delays import equivalent_delays
 from rotorid.errors import StructureError
-from rotorid.structure import STATES
+from rotorid.model.structure import STATES
+from rotorid.verification.equivalent_delays import equivalent_delays
 
 CONTROLS = ("long", "lat", "coll", "ped")
 

@@ -7,15 +7,13 @@ from pathlib import Path
 import attrs
 import numpy as np
 import pytest
-
 from rotorid import Derivative, ModelStructure
-from rotorid.cli import main
+from rotorid.cli.main import main
 from rotorid.errors import DataError, PluginError, StudyError
 from rotorid.executors import connect_dask, open_executor
-from rotorid.flightcase import FlightCase
-from rotorid.study import MODELS, Study
-from rotorid.sweep import case_name, parse_speeds, speed_sweep
-
+from rotorid.study.case import FlightCase
+from rotorid.study.pipeline import MODELS, Study
+from rotorid.study.sweep import case_name, parse_speeds, speed_sweep
 from test_output_error import doublet_maneuvers, with_outputs
 from test_reduction_study import HOVER, TRUE, files_case
 
@@ -28,7 +26,7 @@ def tiny_sweep():
 
 
 def run_study(out, executor=None, cases=None):
-    return Study(cases or tiny_sweep(), out, executor=executor, figures=False,
+    return Study(cases or tiny_sweep(), out, executor=executor,
                  progress=None).run()
 
 
@@ -99,7 +97,7 @@ def test_a_failed_case_is_named_with_its_step_and_the_finished_cases_are_kept(tm
     missing = attrs.evolve(good, name="missing", data={
         "source": "files", "identification": str(tmp_path / "nowhere")})
     with pytest.raises(StudyError) as caught:
-        Study([good, bad], tmp_path / "out", figures=False, progress=fail_at_second_step).run()
+        Study([good, bad], tmp_path / "out", progress=fail_at_second_step).run()
     error = caught.value
     assert list(error.results) == ["own"] and list(error.failures) == ["bad"]
     assert "case bad failed after “reduction step 1" in str(error)
@@ -107,7 +105,7 @@ def test_a_failed_case_is_named_with_its_step_and_the_finished_cases_are_kept(tm
     assert (tmp_path / "out" / "own" / "result.json").is_file()
 
     with pytest.raises(StudyError) as caught:
-        Study([good, missing], tmp_path / "pool", executor="process", figures=False,
+        Study([good, missing], tmp_path / "pool", executor="process",
               progress=None).run()
     assert list(caught.value.results) == ["own"]
     assert "case missing failed after “data: files" in caught.value.failures["missing"]
@@ -188,8 +186,8 @@ def test_montecarlo_command_repeats_the_final_estimation(tmp_path, capsys):
 
 
 def test_sweep_figure_marks_removed_derivatives_and_round_trips(tmp_path):
-    from rotorid.plots_sweep import plot_speed_sweep
-    from rotorid.sweep import SweepPoint, load_sweep_summary, write_sweep_summary
+    from rotorid.report.plots.sweep import plot_speed_sweep
+    from rotorid.study.sweep import SweepPoint, load_sweep_summary, write_sweep_summary
 
     points = [SweepPoint("speed-000kt", 0.0, {"M_q": -2.4, "tau_M_q": 0.15},
                          {"M_q": 0.01, "tau_M_q": float("inf")}, {"M_q": -3.5}),

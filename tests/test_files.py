@@ -8,14 +8,18 @@ import zipfile
 import numpy as np
 import pytest
 import scipy.io
-
 from rotorid.data import ALL_CHANNELS, Maneuver, ManeuverSet
 from rotorid.errors import DataError, DataFileError, MissingFileError, StructureError
 from rotorid.io import atomic_write
-from rotorid.plugins import create
-from rotorid.structure import OUTPUTS
+from rotorid.model.structure import OUTPUTS
+from rotorid.plugin.manager import create
 from rotorid.units import FLIGHT_TEST, channel_scale
-from rotorid_files.formats import FileSource, convert_units, read_maneuver, write_maneuver
+from rotorid_files.formats import (
+    FileSource,
+    convert_units,
+    read_maneuver,
+    write_maneuver,
+)
 
 FORMATS = ("csv", "npz", "mat")
 METADATA = {"condition": "hover", "kind": "3211", "axis": "long", "direction": -1,

@@ -2,12 +2,9 @@
 
 import numpy as np
 import pytest
-from scipy import signal
-from sweeps import DT, analytic, log_sweep, respond
-
 from rotorid.data import Maneuver, ManeuverSet
 from rotorid.errors import VerificationError
-from rotorid.frequency import (
+from rotorid.verification.frequency import (
     Spectra,
     cross_spectra,
     default_windows,
@@ -18,6 +15,8 @@ from rotorid.frequency import (
     moving_inputs,
     response_from_maneuvers,
 )
+from scipy import signal
+from sweeps import DT, analytic, log_sweep, respond
 
 ROLL = ([20.0], [1.0, 4.0])          # p/lat-like first-order rate response
 PITCH = ([8.0], [1.0, 2.0, 4.0])     # second order, ζ = 0.5, ω_n = 2 rad/s
@@ -180,7 +179,7 @@ def test_maneuver_front_end_conditioning_and_errors():
 
 def test_noise_free_output_fully_coherent_with_two_inputs_does_not_break_conditioning():
     """A simulated model output is an exact linear function of its inputs."""
-    from rotorid.frequency import cross_spectra, miso_response
+    from rotorid.verification.frequency import cross_spectra, miso_response
 
     rng = np.random.default_rng(3)
     n, dt = 4000, 0.02

@@ -8,12 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from rotorid import Maneuver, ManeuverSet, ModelStructure
 from rotorid.errors import DataError
-from rotorid.models import LinearModel, gauss_newton_products
-from rotorid.simulation import Simulator, weighting_factor
-
+from rotorid.estimation.models import LinearModel, gauss_newton_products
+from rotorid.simulation.simulator import Simulator, weighting_factor
 from test_simulation import CONDITION, multistep_inputs, stable_values
 
 DELAYS = {"tau_L_lat": 0.061, "tau_M_q": 0.013, "tau_X_long": 0.005}
@@ -55,7 +53,7 @@ def explicit_products(simulator, values, residuals, q):
 @pytest.mark.parametrize("zero", [(), (1, 6)])
 @pytest.mark.parametrize("cores", [1, 2])
 def test_products_match_the_explicit_sums(hold, zero, cores, monkeypatch):
-    monkeypatch.setattr("rotorid.simulation.cpu_count", lambda: cores)
+    monkeypatch.setattr("rotorid.simulation.simulator.cpu_count", lambda: cores)
     _, values, _, simulator, residuals = problem(hold)
     q = random_weighting(5, zero)
     f, g = simulator.gauss_newton(values, residuals, q)
@@ -68,9 +66,9 @@ def test_products_match_the_explicit_sums(hold, zero, cores, monkeypatch):
 def test_background_thread_gives_identical_sums(monkeypatch):
     _, values, _, simulator, residuals = problem()
     q = random_weighting(6)
-    monkeypatch.setattr("rotorid.simulation.cpu_count", lambda: 1)
+    monkeypatch.setattr("rotorid.simulation.simulator.cpu_count", lambda: 1)
     serial = simulator.gauss_newton(values, residuals, q)
-    monkeypatch.setattr("rotorid.simulation.cpu_count", lambda: 2)
+    monkeypatch.setattr("rotorid.simulation.simulator.cpu_count", lambda: 2)
     threaded = simulator.gauss_newton(values, residuals, q)
     assert np.array_equal(serial[0], threaded[0]) and np.array_equal(serial[1], threaded[1])
 

@@ -5,19 +5,24 @@ import math
 
 import numpy as np
 import pytest
-from scipy.signal import coherence
-
-from rotorid.cli import main
+from rotorid.cli.main import main
 from rotorid.errors import DataError
 from rotorid.units import KNOT
 from rotorid_files.formats import read_maneuver
 from rotorid_helisim import source as source_module
-from rotorid_helisim.datasets import (AMPLITUDE, STEP_WIDTH, DataSetConfig, Job, fly_jobs,
-                                      maneuver_specs)
+from rotorid_helisim.datasets import (
+    AMPLITUDE,
+    STEP_WIDTH,
+    DataSetConfig,
+    Job,
+    fly_jobs,
+    maneuver_specs,
+)
 from rotorid_helisim.linear_plant import LinearHoverPlant
 from rotorid_helisim.sensors import SensorNoise
 from rotorid_helisim.source import HelisimSource, resolve_case
 from rotorid_signals.signals import Multistep, Sweep
+from scipy.signal import coherence
 
 AXES = ("long", "lat", "coll", "ped")
 #: On-axis response of each control: output column in [ax az q θ ay p φ r] (angular rates;

@@ -4,8 +4,6 @@ import math
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
-
 from rotorid.errors import DataError
 from rotorid_helisim import loops
 from rotorid_helisim.datasets import DataSetConfig
@@ -14,6 +12,7 @@ from rotorid_helisim.linear_plant import LinearHoverPlant
 from rotorid_helisim.sensors import SensorNoise
 from rotorid_helisim.source import HelisimSource
 from rotorid_signals.signals import Multistep
+from scipy.integrate import solve_ivp
 
 DT = 0.02
 

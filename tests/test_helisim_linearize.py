@@ -8,13 +8,12 @@ import json
 
 import numpy as np
 import pytest
-from scipy.linalg import expm
-
 from rotorid.units import FOOT
 from rotorid_helisim.linearize import PADFIELD_STATES, jacobians, linearize
 from rotorid_helisim.model import Bo105Model
 from rotorid_helisim.parameters import Bo105Config
 from rotorid_helisim.trim import trim
+from scipy.linalg import expm
 
 REFERENCE_A = np.array([
     [-0.0211, 0.0113, 0.7086, -9.803, -0.017, 0.0183, 0, 0],
@@ -212,7 +211,7 @@ def test_as_dict_and_cli_json(capsys, hover):
     data = json.loads(json.dumps(hover.as_dict()))
     assert data["states"] == list(PADFIELD_STATES)
     assert np.array(data["A"]).shape == (8, 8) and np.array(data["B"]).shape == (8, 4)
-    from rotorid.cli import main
+    from rotorid.cli.main import main
 
     assert main(["linearize", "forward", "--units", "flight-test", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)

@@ -8,7 +8,6 @@ import math
 
 import numpy as np
 import pytest
-
 from rotorid.errors import DataError, StructureError
 from rotorid_helisim import inflow, rotor
 from rotorid_helisim.model import Bo105Model

@@ -5,7 +5,6 @@ import math
 
 import numpy as np
 import pytest
-
 from rotorid.errors import TrimError
 from rotorid.units import KNOT
 from rotorid_helisim.model import Bo105Model
@@ -155,7 +154,7 @@ def test_as_dict_is_json(hover):
 
 
 def test_cli_trim_json(capsys):
-    from rotorid.cli import main
+    from rotorid.cli.main import main
 
     assert main(["trim", "--airspeed-kt", "80", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)

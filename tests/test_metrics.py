@@ -2,10 +2,9 @@
 
 import numpy as np
 import pytest
-
 from rotorid.data import Maneuver, ManeuverSet
 from rotorid.errors import DataError
-from rotorid.metrics import j_rms, rmse, tic, time_domain_metrics
+from rotorid.verification.metrics import j_rms, rmse, tic, time_domain_metrics
 
 
 def test_rmse_and_j_rms_hand_computed():

@@ -4,11 +4,10 @@ import math
 import tomllib
 
 import pytest
-
-from rotorid.derivatives import Delay, Derivative, Sign
 from rotorid.errors import DataFileError, MissingFileError
-from rotorid.modelfile import format_model, load_model, parse_model, save_model
-from rotorid.structure import FlightCondition, ModelStructure
+from rotorid.model.derivatives import Delay, Derivative, Sign
+from rotorid.model.modelfile import format_model, load_model, parse_model, save_model
+from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.units import SI
 
 ISSUE_EXAMPLE = """

@@ -5,13 +5,11 @@ import warnings
 
 import numpy as np
 import pytest
-
 import rotorid
+from hover_reference import closed_loop_maneuvers, true_structure
 from rotorid import Derivative, FlightCondition, Maneuver, ManeuverSet, ModelStructure
 from rotorid.errors import EstimationError, IdentifiabilityWarning
-from rotorid.simulation import simulate
-
-from hover_reference import closed_loop_maneuvers, true_structure
+from rotorid.simulation.simulator import simulate
 
 HOVER = FlightCondition.from_airspeed(0.0)
 SMALL_TRUTH = {"X_u": -0.02, "X_q": 0.6, "X_long": -0.1, "Z_w": -0.32, "Z_coll": -1.2,
@@ -254,9 +252,13 @@ def test_diverging_start_values_fall_back_to_the_initial_values():
 def test_predicted_cost_change_matches_the_observed_one_near_the_minimum():
     """The convergence test's Gauss-Newton prediction −(2GᵀΔ + ΔᵀFΔ)/N of the relative
     change of det R agrees with the change a simulated step actually gives."""
-    from rotorid.models import LinearModel
-    from rotorid_output_error.levenberg_marquardt import (Problem, Settings, _bounded_step,
-                                                          predicted_change)
+    from rotorid.estimation.models import LinearModel
+    from rotorid_output_error.levenberg_marquardt import (
+        Problem,
+        Settings,
+        _bounded_step,
+        predicted_change,
+    )
 
     structure = small_structure()
     truth = structure.as_vector({**SMALL_TRUTH, "tau_L_lat": 0.07, "tau_M_long": 0.05})
@@ -284,7 +286,7 @@ def test_a_converged_fit_reports_the_information_at_its_final_values():
     outputs = simulate(structure, result.values, data)
     residuals = [m.outputs - y for m, y in zip(data, outputs)]
     q = np.linalg.inv(sum(e.T @ e for e in residuals) / sum(len(e) for e in residuals))
-    from rotorid.models import LinearModel
+    from rotorid.estimation.models import LinearModel
 
     fresh, _ = LinearModel(structure).gauss_newton(result.values, data, residuals, q)
     assert np.allclose(result.information, fresh, rtol=1e-6)

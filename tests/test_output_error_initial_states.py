@@ -4,15 +4,18 @@ import warnings
 
 import numpy as np
 import pytest
-
 from rotorid import ManeuverSet
 from rotorid.errors import EstimationError, IdentifiabilityWarning
-from rotorid.models import LinearModel, finite_difference_sensitivities
-from rotorid.simulation import simulate
+from rotorid.estimation.models import LinearModel, finite_difference_sensitivities
+from rotorid.simulation.simulator import simulate
 from rotorid_output_error.augment import WithInitialStates
-
-from test_output_error import (SMALL_TRUTH, Pendulum, doublet_maneuvers, estimator,
-                               small_structure)
+from test_output_error import (
+    SMALL_TRUTH,
+    Pendulum,
+    doublet_maneuvers,
+    estimator,
+    small_structure,
+)
 
 #: initial perturbation states u w q θ v p φ r (ft/s, deg/s, deg) scaled per maneuver
 X0_PATTERN = np.array([4.0, -1.5, 2.0, 1.5, -3.0, 3.0, 2.0, -1.0])

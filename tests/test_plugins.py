@@ -10,11 +10,16 @@ from importlib.metadata import entry_points
 from pathlib import Path
 
 import pytest
-
-from rotorid import hookspecs
 from rotorid.errors import PluginError
-from rotorid.hookspecs import PluginDescriptor, hookimpl
-from rotorid.plugins import FAMILIES, create, new_plugin_manager, notify, registry
+from rotorid.plugin import hookspecs
+from rotorid.plugin.hookspecs import PluginDescriptor, hookimpl
+from rotorid.plugin.manager import (
+    FAMILIES,
+    create,
+    new_plugin_manager,
+    notify,
+    registry,
+)
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "hooks.md"
 ENTRY_POINTS = sorted(entry_points(group=hookspecs.PROJECT), key=lambda e: e.name)

@@ -9,9 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from rotorid.modelfile import parse_model
-from rotorid.plugins import create, new_plugin_manager
+from rotorid.model.modelfile import parse_model
+from rotorid.plugin.manager import create, new_plugin_manager
 from rotorid_files.formats import read_maneuver
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -4,15 +4,13 @@ import json
 
 import numpy as np
 import pytest
-
 import rotorid
 from rotorid import Derivative, FlightCondition, ModelStructure
-from rotorid.flightcase import FlightCase
-from rotorid.hookspecs import hookimpl
-from rotorid.plugins import get_plugin_manager
-from rotorid.reduction import ReductionPath, reduce
-from rotorid.study import load_data, run_case
-
+from rotorid.estimation.reduction import ReductionPath, reduce
+from rotorid.plugin.hookspecs import hookimpl
+from rotorid.plugin.manager import get_plugin_manager
+from rotorid.study.case import FlightCase
+from rotorid.study.pipeline import load_data, run_case
 from test_output_error import doublet_maneuvers, with_outputs
 
 HOVER = FlightCondition.from_airspeed(0.0)
@@ -115,8 +113,7 @@ def files_case(tmp_path, data) -> FlightCase:
 def test_study_on_flight_data_files_writes_results_and_resumes(tmp_path, data):
     case = files_case(tmp_path, data)
     messages = []
-    first = run_case(case, tmp_path / "out", progress=lambda c, m: messages.append(m),
-                     figures=False)
+    first = run_case(case, tmp_path / "out", progress=lambda c, m: messages.append(m))
     record = json.loads((tmp_path / "out" / "own" / "result.json").read_text())
     assert record["reduction"]["removed"] == list(first.path.removed)
     assert set(record["selected_structure"]) == set(TRUE)
@@ -129,8 +126,7 @@ def test_study_on_flight_data_files_writes_results_and_resumes(tmp_path, data):
     assert first.time_metrics["with delays"].rmse <= first.time_metrics["no delays"].rmse * 1.01
 
     again = []
-    second = run_case(case, tmp_path / "out", progress=lambda c, m: again.append(m),
-                      figures=False)
+    second = run_case(case, tmp_path / "out", progress=lambda c, m: again.append(m))
     assert any("resuming after" in m for m in again)
     assert first.resumed_steps == 0 and second.resumed_steps == len(first.path.steps)
     assert not any(m.startswith("reduction step") for m in again)
@@ -146,10 +142,9 @@ def test_an_interrupted_study_resumes_from_its_finished_steps(tmp_path, data):
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        run_case(case, tmp_path / "out", progress=interrupt_at_third_step, figures=False)
+        run_case(case, tmp_path / "out", progress=interrupt_at_third_step)
     resumed = []
-    result = run_case(case, tmp_path / "out", progress=lambda c, m: resumed.append(m),
-                      figures=False)
+    result = run_case(case, tmp_path / "out", progress=lambda c, m: resumed.append(m))
     assert any("resuming after 3 finished" in m for m in resumed)
     assert set(result.path.selected.structure.names) == set(TRUE)
 

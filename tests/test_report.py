@@ -9,10 +9,14 @@ import xml.etree.ElementTree as ElementTree
 
 import numpy as np
 import pytest
-
-from rotorid.cli import main
-from rotorid.expectations import check_signs, derivative_scale, derivative_unit, regime_of
-from rotorid.report import mean_phase_error
+from rotorid.cli.main import main
+from rotorid.report.html import mean_phase_error
+from rotorid.study.expectations import (
+    check_signs,
+    derivative_scale,
+    derivative_unit,
+    regime_of,
+)
 
 
 def test_derivative_scales_are_the_unit_ratios():
@@ -121,9 +125,9 @@ def test_the_full_study_reproduces_the_papers_claims(tmp_path):
     flap time constant (τ_f = 16/(γΩ) = 0.071 s, truth-model.md §9, the scale of the lag that
     equivalent delays stand in for) of the truth model's own equivalent delay, fitted
     independently in the frequency domain to its full linearisation with the same delays
-    (rotorid.equivalent_delays); M_q's within 0.04 s."""
-    from rotorid.report import paper_checks
-    from rotorid.study import Study
+    (rotorid.verification.equivalent_delays); M_q's within 0.04 s."""
+    from rotorid.report.html import paper_checks
+    from rotorid.study.pipeline import Study
 
     results = Study(["hover", "forward"], tmp_path, executor="process", progress=None,
                     figures=False).run()

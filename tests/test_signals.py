@@ -4,9 +4,8 @@ import math
 
 import numpy as np
 import pytest
-
 from rotorid.errors import DataError
-from rotorid.plugins import create, registry
+from rotorid.plugin.manager import create, registry
 from rotorid_signals.signals import Multistep, Sweep
 
 

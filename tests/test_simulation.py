@@ -10,11 +10,10 @@
 import numpy as np
 import pytest
 import scipy.linalg
-
-from rotorid import Maneuver, ManeuverSet, ModelStructure, FlightCondition
+from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
 from rotorid.errors import DataError, SimulationDivergedError, StructureError
-from rotorid.simulation import Simulator, simulate, sensitivities
-from rotorid.transfer import frequency_response, pair_response
+from rotorid.simulation.simulator import Simulator, sensitivities, simulate
+from rotorid.simulation.transfer import frequency_response, pair_response
 
 DAMPING = {"X_u": -0.5, "Z_w": -0.8, "M_q": -2.0, "L_p": -4.0, "N_r": -1.0, "Y_v": -0.3,
            "L_lat": 1.0, "M_long": 0.5, "N_ped": 0.8, "Z_coll": -1.2}

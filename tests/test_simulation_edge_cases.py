@@ -4,11 +4,10 @@ and the interval integrals of the discretisation against the block matrix expone
 import numpy as np
 import pytest
 import scipy.linalg
-
 from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
-from rotorid.discretisation import EQUATION_ROWS, _integrals
 from rotorid.errors import StructureError
-from rotorid.simulation import Simulator
+from rotorid.simulation.discretisation import EQUATION_ROWS, _integrals
+from rotorid.simulation.simulator import Simulator
 
 CONDITION = FlightCondition.from_airspeed(40.0)
 

@@ -6,12 +6,24 @@ import math
 import attrs
 import numpy as np
 import pytest
-
-from rotorid.derivatives import Delay, Derivative
 from rotorid.errors import DerivativeError, StructureError
-from rotorid.structure import CONTROLS, OUTPUTS, PAPER_DELAYED, STATES, FlightCondition, \
-    ModelStructure
-from rotorid.units import FLIGHT_TEST, FOOT, KNOT, SI, channel_scale, convert_state_space
+from rotorid.model.derivatives import Delay, Derivative
+from rotorid.model.structure import (
+    CONTROLS,
+    OUTPUTS,
+    PAPER_DELAYED,
+    STATES,
+    FlightCondition,
+    ModelStructure,
+)
+from rotorid.units import (
+    FLIGHT_TEST,
+    FOOT,
+    KNOT,
+    SI,
+    channel_scale,
+    convert_state_space,
+)
 
 # The hand-derived case: U0 = 100 ft/s, V0 = 2 ft/s, W0 = 8 ft/s, Θ0 = 5°, Φ0 = -3°.
 U0_FT, V0_FT, W0_FT = 100.0, 2.0, 8.0

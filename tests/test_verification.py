@@ -6,15 +6,14 @@ matplotlib.use("Agg")
 
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
-from sweeps import DT, analytic, log_sweep, respond  # noqa: E402
-
 import rotorid_envelopes.plugin as envelope_plugin  # noqa: E402
 from rotorid.data import Maneuver, ManeuverSet  # noqa: E402
 from rotorid.errors import VerificationError  # noqa: E402
-from rotorid.frequency import log_grid  # noqa: E402
-from rotorid.plots_frequency import plot_bode, plot_error  # noqa: E402
-from rotorid.plugins import create, new_plugin_manager  # noqa: E402
-from rotorid.verification import compare_sweeps, parse_pair  # noqa: E402
+from rotorid.plugin.manager import create, new_plugin_manager  # noqa: E402
+from rotorid.report.plots.frequency import plot_bode, plot_error  # noqa: E402
+from rotorid.verification.compare import compare_sweeps, parse_pair  # noqa: E402
+from rotorid.verification.frequency import log_grid  # noqa: E402
+from sweeps import DT, analytic, log_sweep, respond  # noqa: E402
 
 OMEGA = log_grid(0.3, 15.0, 100)
 PITCH = ([30.0], [1.0, 3.0])      # q/long
@@ -150,8 +149,8 @@ def test_documented_example_runs():
 def _pitch_structures():
     """A truth with 0.08 s delays on the pitch and roll control derivatives, and the same
     model without them (flight-test units, hover)."""
-    from rotorid.derivatives import Delay, Derivative
-    from rotorid.structure import FlightCondition, ModelStructure
+    from rotorid.model.derivatives import Delay, Derivative
+    from rotorid.model.structure import FlightCondition, ModelStructure
 
     def build(delay):
         delayed = None if delay is None else Delay(delay, fixed=True)
@@ -164,7 +163,7 @@ def _pitch_structures():
 
 @pytest.fixture(scope="module")
 def simulated_sweeps():
-    from rotorid.simulation import simulate
+    from rotorid.simulation.simulator import simulate
 
     truth, _ = _pitch_structures()
     rng = np.random.default_rng(12)
@@ -184,7 +183,7 @@ def simulated_sweeps():
 
 
 def test_verify_model_with_and_without_delays(simulated_sweeps, envelopes):
-    from rotorid.verification import verify_model
+    from rotorid.verification.compare import verify_model
 
     truth, no_delay = _pitch_structures()
     pairs = ["q/long", "p/long"]
@@ -201,7 +200,7 @@ def test_verify_model_with_and_without_delays(simulated_sweeps, envelopes):
 
 
 def test_unstable_or_drifting_models_are_flagged(simulated_sweeps, envelopes, case):
-    from rotorid.verification import verify_model
+    from rotorid.verification.compare import verify_model
 
     truth, _ = _pitch_structures()
     unstable = truth.fixing("M_q", 0.05)  # pitch divergence, e-folding in 20 s
@@ -236,9 +235,9 @@ def _write_result(path, delays):
 def test_verify_command_writes_checks_and_figures(simulated_sweeps, tmp_path, capsys):
     import json
 
-    from rotorid.cli import main
-    from rotorid.modelfile import save_model
-    from rotorid.plugins import create
+    from rotorid.cli.main import main
+    from rotorid.model.modelfile import save_model
+    from rotorid.plugin.manager import create
 
     _, no_delay = _pitch_structures()
     save_model(no_delay.without("L_long"), tmp_path / "model.toml")  # reduced away, re-added
@@ -273,9 +272,9 @@ def test_verify_command_writes_checks_and_figures(simulated_sweeps, tmp_path, ca
 def test_paper_story_on_the_truth_model(envelopes):
     """Hover data from the nonlinear truth model (quick records): the model identified with
     the paper's delays verifies better on the sweeps than the one without (paper figs. 4–5)."""
-    from rotorid.plugins import create
-    from rotorid.structure import FlightCondition, ModelStructure
-    from rotorid.verification import verify_model
+    from rotorid.model.structure import FlightCondition, ModelStructure
+    from rotorid.plugin.manager import create
+    from rotorid.verification.compare import verify_model
 
     data = create("data-sources", "helisim").generate({"condition": "hover", "quick": True})
     identification = data.select(lambda m: m.metadata.get("kind") != "sweep")

@@ -2,16 +2,19 @@
 
 import numpy as np
 import pytest
+from rotorid.data import Maneuver, ManeuverSet
+from rotorid.model.derivatives import Derivative
+from rotorid.model.structure import FlightCondition, ModelStructure
+from rotorid.simulation.simulator import simulate
+from rotorid.simulation.transfer import frequency_response
+from rotorid.verification.compare import compare_sweeps, verify_model
+from rotorid.verification.frequency import (
+    apparent_response,
+    log_grid,
+    response_from_maneuvers,
+)
 from scipy import signal
 from sweeps import DT, log_sweep
-
-from rotorid.data import Maneuver, ManeuverSet
-from rotorid.derivatives import Derivative
-from rotorid.frequency import apparent_response, log_grid, response_from_maneuvers
-from rotorid.simulation import simulate
-from rotorid.structure import FlightCondition, ModelStructure
-from rotorid.transfer import frequency_response
-from rotorid.verification import compare_sweeps, verify_model
 
 OMEGA = log_grid(0.5, 12.0, 60)
 Q = 2   # output column of q
@@ -116,8 +119,8 @@ def test_apparent_comparison_needs_the_analytic_response(closed_loop_sweep):
 
 
 def test_default_grid_starts_at_the_lowest_frequency_the_sweeps_excite():
-    from rotorid.frequency import default_windows, lowest_frequency
-    from rotorid.verification import default_omega
+    from rotorid.verification.compare import default_omega
+    from rotorid.verification.frequency import default_windows, lowest_frequency
 
     n = 5000                                  # 100 s: the window limit is about 0.25 rad/s
     time = np.arange(n) * DT

@@ -2,13 +2,11 @@
 
 import numpy as np
 import pytest
-
+from hover_reference import closed_loop_maneuvers, true_structure
 from rotorid import ManeuverSet
 from rotorid.errors import VerificationError
-from rotorid.simulation import simulate
-from rotorid.verification import DRIFT_LIMIT, segmented_simulation, verify_model
-
-from hover_reference import closed_loop_maneuvers, true_structure
+from rotorid.simulation.simulator import simulate
+from rotorid.verification.compare import DRIFT_LIMIT, segmented_simulation, verify_model
 
 
 @pytest.fixture(scope="module")

@@ -12,12 +12,12 @@ The estimator. Each force/moment equation of the 6-DoF structure is one linear r
 
 over the states and controls z = (u w q θ v p φ r, long lat coll ped). The rates and
 attitudes are measured; u, v, w are reconstructed by integrating the force equations
-(:func:`rotorid.equation_error.reconstructed_states`). Each equation is written per sample
+(:func:`rotorid.estimation.equation_error.reconstructed_states`). Each equation is written per sample
 interval: the rate's change over dt against the interval's mean states and the control held
 over it. That is exact for zero-order-hold controls, where a central difference of the rates
 would smear every control step over two samples. Per equation k with regressor matrix
 X_k and residual variance σ_k², the estimate is θ_k = (X_kᵀX_k)⁻¹X_kᵀy_k and the information
-matrix is F_k = X_kᵀX_k/σ_k²; :func:`rotorid.estimation.statistics` turns the block-diagonal F
+matrix is F_k = X_kᵀX_k/σ_k²; :func:`rotorid.estimation.estimate.statistics` turns the block-diagonal F
 into Cramér-Rao bounds, insensitivities and correlations, exactly as for the built-in
 output-error estimator. The cost is det R of the equation residuals, the RMSE their root mean
 square (ft/s² and deg/s² in flight-test units).
@@ -61,14 +61,13 @@ from pathlib import Path
 
 import attrs
 import numpy as np
-
 import rotorid
-from rotorid.equation_error import reconstructed_states
 from rotorid.errors import EstimationError
-from rotorid.estimation import Estimate, statistics
-from rotorid.flightcase import FlightCase
-from rotorid.structure import CONTROLS, STATES, ModelStructure
-from rotorid.study import KEY_DERIVATIVES, CaseResult, Study, truth_derivatives
+from rotorid.estimation.equation_error import reconstructed_states
+from rotorid.estimation.estimate import Estimate, statistics
+from rotorid.model.structure import CONTROLS, STATES, ModelStructure
+from rotorid.study.case import FlightCase
+from rotorid.study.pipeline import KEY_DERIVATIVES, CaseResult, Study, truth_derivatives
 
 NAME = "ls-equation-error"
 #: Measured left-hand side of each equation: a specific force, or a rate to differentiate.
@@ -275,7 +274,7 @@ derivatives = []    # equation error does not estimate delays
 def run_case_with_plugin(out_dir, seed: int = 0) -> CaseResult:
     """The flight case above, run by the Study with the new estimator."""
     case = FlightCase.from_mapping(tomllib.loads(CASE), "custom_estimator.py").with_seed(seed)
-    result = Study([case], out_dir, resume=False, figures=False).run()[case.name]
+    result = Study([case], out_dir, resume=False).run()[case.name]
     path = result.path
     print(f"\nCase {case.name}: {len(path.steps)} reduction steps, selected step "
           f"{path.selected_index} with {path.selected.n_parameters} derivatives "

@@ -1,6 +1,6 @@
 """Identify a nonlinear model of one's own: longitudinal fixed-wing aircraft, RK4.
 
-The output-error estimator works on the small model protocol of :mod:`rotorid.models`; this
+The output-error estimator works on the small model protocol of :mod:`rotorid.estimation.models`; this
 example implements it for a rigid aircraft in the vertical plane (a light single-engine
 aeroplane near 50 m/s) with nonlinear aerodynamics, and identifies six aerodynamic
 coefficients from two simulated elevator maneuvers with sensor noise.
@@ -31,7 +31,6 @@ import argparse
 import math
 
 import numpy as np
-
 import rotorid
 from rotorid import Maneuver, ManeuverSet
 

@@ -63,12 +63,11 @@ import sys
 from pathlib import Path
 
 import numpy as np
-
 import rotorid
 from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS
-from rotorid.flightcase import FlightCase
 from rotorid.io import atomic_write
-from rotorid.study import CaseResult
+from rotorid.study.case import FlightCase
+from rotorid.study.pipeline import CaseResult
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 

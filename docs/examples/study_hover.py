@@ -46,8 +46,9 @@ import math
 import os
 from collections import defaultdict
 
-from rotorid.flightcase import FlightCase
-from rotorid.study import MODELS, CaseResult, Study
+from rotorid.report.html import StudyReport
+from rotorid.study.case import FlightCase
+from rotorid.study.pipeline import MODELS, CaseResult, Study
 
 #: Envelopes whose pass/fail the summary shows per pair.
 ENVELOPES = ("muad", "aee")
@@ -71,7 +72,8 @@ def build_case(name: str, quick: bool, seed: int | None = None) -> FlightCase:
 def run_study(case: FlightCase, out_dir, figures: bool = True,
               resume: bool = False) -> CaseResult:
     """Run one case through the Study (progress lines go to stderr); return its result."""
-    study = Study([case], out_dir, resume=resume, figures=figures)
+    study = Study([case], out_dir, resume=resume,
+                  report_writer=StudyReport() if figures else None)
     return study.run()[case.name]
 
 
@@ -108,7 +110,7 @@ def structure_summary(result: CaseResult) -> str:
 
 def delay_summary(result: CaseResult) -> str:
     """Estimated delays with Cramér-Rao bounds, in brackets the truth model's equivalent delays
-    (``rotorid.equivalent_delays``), and the delays dropped as undetermined."""
+    (``rotorid.verification.equivalent_delays``), and the delays dropped as undetermined."""
     estimate = result.estimates["with delays"]
     truth = {} if result.truth_delays is None else result.truth_delays.delays
     lines = ["Time delays (s)" + ("   [truth model's equivalent delay]" if truth else "")]

@@ -8,9 +8,8 @@ The public API is importable from the package top level::
 
 from importlib.metadata import PackageNotFoundError, version
 
-from .data import Maneuver, ManeuverSet
-from .derivatives import Delay, Derivative, Sign
-from .errors import (
+from rotorid.data import Maneuver, ManeuverSet
+from rotorid.errors import (
     ConvergenceWarning,
     DataError,
     DataFileError,
@@ -24,12 +23,19 @@ from .errors import (
     SimulationDivergedError,
     StructureError,
 )
-from .hookspecs import PluginDescriptor, hookimpl
-from .plugins import create, get_plugin_manager, registry
-from .simulation import Simulator, sensitivities, simulate
-from .structure import CONTROLS, OUTPUTS, STATES, FlightCondition, ModelStructure
-from .transfer import frequency_response
-from .units import FLIGHT_TEST, SI, UnitSystem, unit_system
+from rotorid.model.derivatives import Delay, Derivative, Sign
+from rotorid.model.structure import (
+    CONTROLS,
+    OUTPUTS,
+    STATES,
+    FlightCondition,
+    ModelStructure,
+)
+from rotorid.plugin.hookspecs import PluginDescriptor, hookimpl
+from rotorid.plugin.manager import create, get_plugin_manager, registry
+from rotorid.simulation.simulator import Simulator, sensitivities, simulate
+from rotorid.simulation.transfer import frequency_response
+from rotorid.units import FLIGHT_TEST, SI, UnitSystem, unit_system
 
 try:
     __version__ = version("rotorid")

@@ -15,9 +15,9 @@ from collections.abc import Iterable, Mapping
 import attrs
 import numpy as np
 
-from .errors import DataError
-from .structure import CONTROLS, OUTPUTS
-from .units import unit_system
+from rotorid.errors import DataError
+from rotorid.model.structure import CONTROLS, OUTPUTS
+from rotorid.units import unit_system
 
 INPUT_CHANNELS = CONTROLS
 OUTPUT_CHANNELS = OUTPUTS

@@ -22,7 +22,7 @@ import os
 from collections.abc import Callable, Hashable, Iterator, Mapping
 from concurrent.futures import Executor, ProcessPoolExecutor
 
-from .errors import PluginError, StudyError
+from rotorid.errors import PluginError, StudyError
 
 #: Executor names accepted by the commands (``--executor``).
 KINDS = ("serial", "process", "dask")

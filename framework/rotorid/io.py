@@ -14,7 +14,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import BinaryIO
 
-from .errors import MissingFileError
+from rotorid.errors import MissingFileError
 
 
 def atomic_write(path: str | os.PathLike, content: bytes | str | Callable[[BinaryIO], object]

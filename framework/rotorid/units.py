@@ -17,7 +17,7 @@ import math
 import attrs
 import numpy as np
 
-from .errors import StructureError
+from rotorid.errors import StructureError
 
 FOOT = 0.3048  #: metres per foot (exact)
 KNOT = 1852.0 / 3600.0  #: metres per second per knot (exact)

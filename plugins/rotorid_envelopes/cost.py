@@ -21,8 +21,7 @@ from __future__ import annotations
 
 import attrs
 import numpy as np
-
-from rotorid.verification import (
+from rotorid.verification.compare import (
     EnvelopeBounds,
     EnvelopeCheck,
     error_db_deg,

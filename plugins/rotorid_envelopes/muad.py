@@ -10,8 +10,11 @@ from __future__ import annotations
 
 import attrs
 import numpy as np
-
-from rotorid.verification import COHERENCE_THRESHOLD, EnvelopeBounds, check_bounds
+from rotorid.verification.compare import (
+    COHERENCE_THRESHOLD,
+    EnvelopeBounds,
+    check_bounds,
+)
 
 from .tomlfile import PACKAGE_DIR, load_definition, omega_range, require
 
@@ -108,5 +111,5 @@ class MuadEnvelope:
             extrapolated=(omega < low * (1 - 1e-9)) | (omega > high * (1 + 1e-9)))
 
     def check(self, error, coherence, omega):
-        """Hold ``ε`` against the bounds (see :func:`rotorid.verification.check_bounds`)."""
+        """Hold ``ε`` against the bounds (see :func:`rotorid.verification.compare.check_bounds`)."""
         return check_bounds(self, error, coherence, omega)

@@ -1,6 +1,6 @@
 """Registers the ``muad``, ``aee`` and ``mismatch-cost`` envelopes (cheap to import)."""
 
-from rotorid.hookspecs import PluginDescriptor, hookimpl
+from rotorid.plugin.hookspecs import PluginDescriptor, hookimpl
 
 
 def _muad(**options):

@@ -13,9 +13,12 @@ from __future__ import annotations
 
 import attrs
 import numpy as np
-
 from rotorid.errors import VerificationError
-from rotorid.verification import COHERENCE_THRESHOLD, EnvelopeBounds, check_bounds
+from rotorid.verification.compare import (
+    COHERENCE_THRESHOLD,
+    EnvelopeBounds,
+    check_bounds,
+)
 
 from .tomlfile import PACKAGE_DIR, load_definition, omega_range, require
 
@@ -112,5 +115,5 @@ class TableEnvelope:
                               interpolate(self.phase_upper), outside, self.available)
 
     def check(self, error, coherence, omega):
-        """Hold ``ε`` against the table (see :func:`rotorid.verification.check_bounds`)."""
+        """Hold ``ε`` against the table (see :func:`rotorid.verification.compare.check_bounds`)."""
         return check_bounds(self, error, coherence, omega)

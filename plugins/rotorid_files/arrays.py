@@ -14,7 +14,6 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
-
 from rotorid.errors import DataFileError
 
 from .records import assemble, columns_of, encode_value, header_of, vector

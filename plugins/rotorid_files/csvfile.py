@@ -24,7 +24,6 @@ import re
 from pathlib import Path
 
 import numpy as np
-
 from rotorid.data import ALL_CHANNELS
 from rotorid.errors import DataFileError
 

@@ -13,11 +13,10 @@ from collections.abc import Iterable
 from pathlib import Path
 
 import attrs
-
 from rotorid.data import HOLDS, OUTPUT_CHANNELS, Maneuver, ManeuverSet
 from rotorid.errors import DataError, DataFileError, MissingFileError
 from rotorid.io import atomic_write
-from rotorid.structure import STATES
+from rotorid.model.structure import STATES
 from rotorid.units import channel_scale, unit_system
 
 from . import arrays, csvfile

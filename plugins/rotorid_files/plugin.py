@@ -1,6 +1,6 @@
 """Registers the ``files`` data source (cheap to import; the readers load on use)."""
 
-from rotorid.hookspecs import PluginDescriptor, hookimpl
+from rotorid.plugin.hookspecs import PluginDescriptor, hookimpl
 
 
 def _make_source(**options):

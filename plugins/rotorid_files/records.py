@@ -14,7 +14,6 @@ from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
-
 from rotorid.data import ALL_CHANNELS, INPUT_CHANNELS, OUTPUT_CHANNELS, Maneuver
 from rotorid.errors import DataError, DataFileError, RotoridError
 from rotorid.units import unit_system

@@ -26,7 +26,6 @@ from collections.abc import Mapping
 
 import attrs
 import numpy as np
-
 from rotorid.data import Maneuver, ManeuverSet
 from rotorid.errors import DataError
 from rotorid.units import KNOT

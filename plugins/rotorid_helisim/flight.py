@@ -21,7 +21,6 @@ from collections.abc import Callable
 
 import attrs
 import numpy as np
-
 from rotorid.errors import DataError, SimulationDivergedError
 
 from .loops import feedback

@@ -23,7 +23,6 @@ import math
 
 import attrs
 import numpy as np
-
 from rotorid.units import G_SI
 
 #: Hover A, rows/columns [u w q θ v p φ r] (truth-model.md §6), SI.

@@ -16,9 +16,14 @@ from __future__ import annotations
 
 import attrs
 import numpy as np
-
 from rotorid.errors import StructureError
-from rotorid.units import FLIGHT_TEST, SI, channel_scale, convert_state_space, unit_system
+from rotorid.units import (
+    FLIGHT_TEST,
+    SI,
+    channel_scale,
+    convert_state_space,
+    unit_system,
+)
 
 from .model import ROTOR, Bo105Model
 from .parameters import BLADE_ANGLES, STICKS

@@ -31,7 +31,6 @@ import math
 
 import attrs
 import numpy as np
-
 from rotorid.errors import StructureError
 from rotorid.units import G_SI
 

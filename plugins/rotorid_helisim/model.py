@@ -15,7 +15,6 @@ Controls are stick positions in % of travel, ``[long, lat, coll, ped]``. See doc
 from __future__ import annotations
 
 import numpy as np
-
 from rotorid.errors import DataError
 
 from . import airframe, inflow, rotor

@@ -21,7 +21,6 @@ import math
 
 import attrs
 import numpy as np
-
 from rotorid.errors import StructureError
 
 #: Names of the four blade angles, in the order of every blade-angle array.

@@ -21,7 +21,6 @@ from collections.abc import Mapping
 
 import attrs
 import numpy as np
-
 from rotorid.data import OUTPUT_CHANNELS, ManeuverSet
 from rotorid.errors import DataError
 from rotorid.units import FLIGHT_TEST, channel_scale

@@ -13,7 +13,6 @@ from pathlib import Path
 
 import attrs
 import numpy as np
-
 from rotorid.data import ManeuverSet
 from rotorid.errors import DataError
 

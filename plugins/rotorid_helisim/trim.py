@@ -20,7 +20,6 @@ import math
 
 import attrs
 import numpy as np
-
 from rotorid.errors import TrimError
 from rotorid.units import KNOT
 

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import attrs
 import numpy as np
-
 from rotorid.data import ManeuverSet
-from rotorid.models import finite_difference_sensitivities
-from rotorid.simulation import Simulator
-from rotorid.structure import STATES
+from rotorid.estimation.models import finite_difference_sensitivities
+from rotorid.model.structure import STATES
+from rotorid.simulation.simulator import Simulator
 
 
 class WithOutputBiases:
@@ -68,7 +67,7 @@ class WithInitialStates:
     maneuvers and states in one batched simulation.
 
     Args:
-        model: a :class:`rotorid.models.LinearModel`.
+        model: a :class:`rotorid.estimation.models.LinearModel`.
         maneuver_names: names of the maneuvers, in the order of the fitted sets.
     """
 

@@ -15,14 +15,18 @@ from collections.abc import Callable, Mapping
 
 import attrs
 import numpy as np
-
 from rotorid import blas
 from rotorid.data import ManeuverSet
 from rotorid.errors import EstimationError, SimulationDivergedError
-from rotorid.estimation import Estimate, statistics
-from rotorid.models import LinearModel, as_model, gauss_newton_products, measured_outputs
-from rotorid.structure import ModelStructure
-from rotorid.plugins import notify
+from rotorid.estimation.estimate import Estimate, statistics
+from rotorid.estimation.models import (
+    LinearModel,
+    as_model,
+    gauss_newton_products,
+    measured_outputs,
+)
+from rotorid.model.structure import ModelStructure
+from rotorid.plugin.manager import notify
 
 from .augment import WithInitialStates, WithOutputBiases
 from .levenberg_marquardt import Problem, Settings, run

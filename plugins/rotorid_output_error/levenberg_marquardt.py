@@ -26,9 +26,8 @@ from collections.abc import Callable
 
 import attrs
 import numpy as np
-
 from rotorid.errors import SimulationDivergedError
-from rotorid.models import gauss_newton_products
+from rotorid.estimation.models import gauss_newton_products
 
 _MAX_LAMBDA = 1e12
 #: Simulated outputs beyond this multiple of the largest measured value count as divergence.

@@ -1,6 +1,6 @@
 """Registers the ``output-error`` estimator (cheap to import; the estimator loads on use)."""
 
-from rotorid.hookspecs import PluginDescriptor, hookimpl
+from rotorid.plugin.hookspecs import PluginDescriptor, hookimpl
 
 
 def _make_estimator(**options):

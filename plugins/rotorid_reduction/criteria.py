@@ -11,11 +11,10 @@ import math
 
 import attrs
 import numpy as np
-
-from rotorid.derivatives import parse_name
 from rotorid.errors import DerivativeError, EstimationError
-from rotorid.estimation import Estimate
-from rotorid.reduction import Removal
+from rotorid.estimation.estimate import Estimate
+from rotorid.estimation.reduction import Removal
+from rotorid.model.derivatives import parse_name
 
 
 def _is_derivative(name: str) -> bool:

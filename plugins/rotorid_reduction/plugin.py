@@ -1,6 +1,6 @@
 """Registers the ``insensitivity`` and ``cramer-rao`` reduction criteria (cheap to import)."""
 
-from rotorid.hookspecs import PluginDescriptor, hookimpl
+from rotorid.plugin.hookspecs import PluginDescriptor, hookimpl
 
 
 def _insensitivity(**options):

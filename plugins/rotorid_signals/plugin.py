@@ -1,6 +1,6 @@
 """Registers the built-in input signals (cheap to import; the signal classes load on use)."""
 
-from rotorid.hookspecs import PluginDescriptor, hookimpl
+from rotorid.plugin.hookspecs import PluginDescriptor, hookimpl
 
 
 def _multistep(kind):

@@ -21,7 +21,6 @@ import math
 
 import attrs
 import numpy as np
-
 from rotorid.errors import DataError
 
 #: Multistep sequences: (width in step units, sign) per pulse.

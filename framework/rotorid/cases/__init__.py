@@ -1,1 +1,0 @@
-"""Built-in flight cases, declared as TOML data (see :mod:`rotorid.flightcase`)."""

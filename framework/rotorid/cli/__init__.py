@@ -1,0 +1,1 @@
+"""The ``rotorid`` command."""

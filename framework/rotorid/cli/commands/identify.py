@@ -1,0 +1,131 @@
+"""``rotorid identify``: estimate the parameters of a model file from maneuver files.
+
+Usage::
+
+    rotorid identify MODEL.toml DATA... [--estimator output-error] [--out result.json]
+                     [--outputs ax,az,...] [--noise full|diagonal] [--max-iterations N]
+                     [--enforce-signs] [--output-biases] [--initial-states]
+                     [--hold zoh|foh] [--quiet]
+
+``MODEL.toml`` is a model file (:mod:`rotorid.model.modelfile`); its initial values are the start
+values (all zero: the estimator chooses its own start, see docs/estimation.md). DATA are
+maneuver files (CSV, NPZ, MAT), directories or glob patterns of the ``files`` data source; they
+are converted to the model's unit system. The report goes to stdout; stderr gets one line per
+accepted iteration (unless ``--quiet``) and one line per warning (an unidentifiable parameter
+combination, for instance). The estimate is written atomically as JSON (the format of
+:meth:`rotorid.estimation.estimate.Estimate.as_dict`, plus ``structure``: the model file's path relative
+to the JSON file, so that ``rotorid verify RESULT.json SWEEPS...`` finds it).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import warnings
+from pathlib import Path
+
+NAME = "identify"
+HELP = ("estimate the derivatives and delays of a model file from maneuver files; print the "
+        "report and write the estimate as JSON")
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("model", metavar="MODEL.toml", help="model file")
+    parser.add_argument("data", nargs="+", metavar="DATA",
+                        help="maneuver files (CSV/NPZ/MAT), directories or glob patterns")
+    parser.add_argument("--estimator", default="output-error",
+                        help="estimator plugin (default output-error; see `rotorid plugins`)")
+    parser.add_argument("--out", default="result.json", metavar="RESULT.json",
+                        help="where to write the estimate (default ./result.json)")
+    parser.add_argument("--outputs", default=None, metavar="ax,az,...",
+                        help="comma-separated outputs used in the cost (default: all of the "
+                             "model's)")
+    parser.add_argument("--noise", choices=("full", "diagonal"), default=None,
+                        help="noise covariance R: full (default) or diagonal")
+    parser.add_argument("--max-iterations", type=int, default=None, metavar="N",
+                        help="iteration limit of the final run (default: the estimator's)")
+    parser.add_argument("--enforce-signs", action="store_true",
+                        help="use the derivatives' sign priors as bounds")
+    parser.add_argument("--output-biases", action="store_true",
+                        help="estimate one constant bias per maneuver and output")
+    parser.add_argument("--initial-states", action="store_true",
+                        help="estimate the initial perturbation state of every maneuver")
+    parser.add_argument("--hold", choices=("zoh", "foh"), default="zoh",
+                        help="input hold between samples (default zoh)")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no progress lines on stderr")
+
+
+def _options(args) -> dict:
+    """Estimator options the user set explicitly (the estimator's defaults stand otherwise)."""
+    from rotorid.errors import EstimationError
+
+    options: dict = {}
+    if args.outputs is not None:
+        outputs = tuple(o.strip() for o in args.outputs.split(",") if o.strip())
+        if not outputs:
+            raise EstimationError("--outputs names no output; give e.g. --outputs q,theta,p")
+        options["outputs"] = outputs
+    if args.noise is not None:
+        options["noise"] = args.noise
+    if args.max_iterations is not None:
+        if args.max_iterations < 1:
+            raise EstimationError(f"--max-iterations must be at least 1, got "
+                                  f"{args.max_iterations}")
+        options["max_iterations"] = args.max_iterations
+    if args.enforce_signs:
+        options["enforce_signs"] = True
+    if args.output_biases:
+        options["output_biases"] = True
+    if args.initial_states:
+        options["initial_states"] = True
+    if not args.quiet:
+        options["callback"] = _print_progress
+    return options
+
+
+def _print_progress(stage: str, record) -> None:
+    """One stderr line per accepted iteration: stage, iteration, cost det R, RMSE."""
+    print(f"[{stage}] iteration {record.iteration:3d}  cost {record.cost:.6g}  "
+          f"RMSE {record.rmse:.5g}", file=sys.stderr, flush=True)
+
+
+def _estimator(name: str, options: dict):
+    from rotorid.errors import EstimationError
+    from rotorid.plugin.manager import create
+
+    try:
+        return create("estimators", name, **options)
+    except TypeError as error:
+        raise EstimationError(f"estimator {name!r} does not accept the options "
+                              f"{', '.join(sorted(options))}: {error}") from None
+
+
+def _record(estimate, model_path: Path, out: Path) -> dict:
+    record = estimate.as_dict()
+    record["structure"] = os.path.relpath(model_path.resolve(), out.resolve().parent)
+    return record
+
+
+def run(args) -> int:
+    from rotorid.cli.commands.simulate import _load_inputs
+    from rotorid.errors import MissingFileError, RotoridWarning
+    from rotorid.io import atomic_write
+    from rotorid.model.modelfile import load_model
+
+    structure = load_model(args.model)
+    out = Path(args.out)
+    if not out.parent.is_dir():
+        raise MissingFileError(f"cannot write {out}: directory {out.parent} does not exist")
+    estimator = _estimator(args.estimator, _options(args))
+    maneuvers = _load_inputs(args.data, args.hold, structure.units.name)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RotoridWarning)
+        estimate = estimator.estimate(structure, maneuvers)
+    for warning in caught:
+        print(f"rotorid identify: warning: {warning.message}", file=sys.stderr)
+    atomic_write(out, json.dumps(_record(estimate, Path(args.model), out), indent=2))
+    print(estimate.report())
+    print(f"estimate written to {out}")
+    return 0

@@ -1,0 +1,106 @@
+"""``rotorid simulate``: outputs of a linear model driven by recorded inputs.
+
+Usage::
+
+    rotorid simulate MODEL.toml INPUTS... --values VALUES.json --out DIR [--format csv|npz|mat]
+
+``MODEL.toml`` is a model file (:mod:`rotorid.model.modelfile`). INPUTS are maneuver files,
+directories or glob patterns (the ``files`` data source); their inputs drive the model and
+their outputs are replaced by the simulation. ``VALUES.json`` holds the parameter values:
+
+* a flat mapping ``{"L_p": -4.1, "tau_L_lat": 0.05}`` (free derivatives by name, delays as
+  ``tau_<derivative>``; parameters not listed keep the model file's initial values), or
+* an estimate written by ``rotorid identify`` (``{"parameters": {"L_p": {"value": …}},
+  "delays": {"L_lat": {"value": …}}, "fixed": {…}}``): free derivatives it does not list were
+  removed by the reduction, and its delays are added to the model.
+
+Without ``--values`` the model file's initial values are simulated. Each maneuver is written
+atomically to ``DIR/<name>.<format>`` with the inputs and metadata of its source file. A model
+that diverges stops the command with a one-line error.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from pathlib import Path
+
+NAME = "simulate"
+HELP = ("simulate a linear model over recorded inputs and write the simulated outputs as "
+        "maneuver files")
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("model", metavar="MODEL.toml", help="model file")
+    parser.add_argument("inputs", nargs="+", metavar="INPUTS",
+                        help="maneuver files, directories or glob patterns")
+    parser.add_argument("--values", metavar="VALUES.json",
+                        help="parameter values: a flat name→value JSON mapping or an estimate "
+                             "written by `rotorid identify` (default: the model's initial "
+                             "values)")
+    parser.add_argument("--out", required=True, metavar="DIR",
+                        help="output directory (created if needed)")
+    parser.add_argument("--format", choices=("csv", "npz", "mat"), default="csv",
+                        help="format of the written maneuver files (default csv)")
+    parser.add_argument("--hold", choices=("zoh", "foh"), default="zoh",
+                        help="input hold between samples (default zoh)")
+
+
+def read_values(path: Path, structure):
+    """The structure and the parameter vector that ``path`` (a values JSON file) describes."""
+    from rotorid.cli.commands.verify import model_from_result
+    from rotorid.errors import DataFileError, MissingFileError
+
+    if not path.is_file():
+        raise MissingFileError(f"values file {path} does not exist")
+    try:
+        content = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        raise DataFileError(f"values file {path} is not valid JSON: {error}") from None
+    if not isinstance(content, Mapping):
+        raise DataFileError(f"values file {path} must hold a JSON object (name → value, or an "
+                            f"estimate with a 'parameters' table)")
+    if isinstance(content.get("parameters"), Mapping):
+        structure, values = model_from_result(structure, content, path)
+        return structure, structure.as_vector(values)
+    bad = [name for name, value in content.items()
+           if not isinstance(value, (int, float)) or isinstance(value, bool)]
+    if bad:
+        raise DataFileError(f"values file {path}: {', '.join(sorted(bad))} must be numbers; "
+                            f"give a flat name → value mapping or an estimate with a "
+                            f"'parameters' table")
+    return structure, structure.as_vector(content)
+
+
+def _load_inputs(locations, hold: str, units: str):
+    from rotorid.data import ManeuverSet
+    from rotorid.errors import DataFileError
+    from rotorid.plugin.manager import create
+
+    source = create("data-sources", "files", hold=hold, units=units)
+    maneuvers = []
+    for location in locations:
+        maneuvers.extend(source.load(location))
+    names = [m.name for m in maneuvers]
+    repeated = sorted({n for n in names if names.count(n) > 1})
+    if repeated:
+        raise DataFileError(f"maneuver name(s) {', '.join(repeated)} appear in more than one "
+                            f"input; each maneuver must have a unique name")
+    return ManeuverSet(maneuvers, hold=hold)
+
+
+def run(args) -> int:
+    from rotorid.model.modelfile import load_model
+    from rotorid.plugin.manager import create
+    from rotorid.simulation.simulator import simulated_maneuvers
+
+    structure = load_model(args.model)
+    values = None
+    if args.values is not None:
+        structure, values = read_values(Path(args.values), structure)
+    maneuvers = _load_inputs(args.inputs, args.hold, structure.units.name)
+    simulated = simulated_maneuvers(structure, values, maneuvers)
+    paths = create("data-sources", "files", hold=args.hold).save(simulated, args.out, format=args.format)
+    print(f"simulated {len(paths)} maneuver(s) with {structure.n_parameters} parameters; "
+          f"wrote {Path(args.out)}")
+    return 0

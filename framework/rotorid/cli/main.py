@@ -1,0 +1,71 @@
+"""The ``rotorid`` command.
+
+Built-in subcommands live one per module in :mod:`rotorid.cli.commands`; each module defines
+``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``. Plugins add their own
+through the ``rotorid_commands`` hook. Errors that rotorid raises on purpose are printed as one
+line on stderr with exit status 2; they never show a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import pkgutil
+import sys
+
+from rotorid import __version__
+from rotorid.cli import commands
+from rotorid.errors import PluginError, RotoridError
+from rotorid.plugin.manager import registry
+
+
+def _command_modules():
+    for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda i: i.name):
+        if not info.name.startswith("_"):
+            yield importlib.import_module(f"{commands.__name__}.{info.name}")
+
+
+def _subcommands():
+    """(name, help, command) of every built-in and plugin subcommand, sorted by name."""
+    found = {module.NAME: (module.HELP, module) for module in _command_modules()}
+    for name, registered in registry("commands").items():
+        if name in found:
+            raise PluginError(f"plugin {registered.provider!r} registers the command {name!r}, "
+                              f"which rotorid itself provides; rename the plugin's command")
+        found[name] = (registered.summary, registered.descriptor.factory())
+    return [(name, *found[name]) for name in sorted(found)]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every subcommand (built-in and registered by plugins)."""
+    parser = argparse.ArgumentParser(
+        prog="rotorid",
+        description="Time-domain system identification of helicopter flight dynamics.")
+    parser.add_argument("--version", action="version", version=f"rotorid {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, summary, implementation in _subcommands():
+        command = sub.add_parser(name, help=summary, description=summary)
+        implementation.add_arguments(command)
+        command.set_defaults(run=implementation.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the console script; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "run", None):
+        parser.print_help()
+        return 1
+    try:
+        return int(args.run(args) or 0)
+    except (RotoridError, OSError) as error:
+        print(f"rotorid {args.command}: error: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"rotorid {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

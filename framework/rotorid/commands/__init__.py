@@ -1,1 +1,0 @@
-"""Subcommands of the ``rotorid`` command, one module each (see :mod:`rotorid.cli`)."""

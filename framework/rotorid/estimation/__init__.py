@@ -1,0 +1,1 @@
+"""Estimation: the model protocol, estimates and their statistics, equation-error starts and the reduction loop."""

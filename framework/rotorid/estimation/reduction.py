@@ -1,0 +1,207 @@
+"""Stepwise model reduction (the framework owns the loop; criteria are plugins).
+
+The paper's procedure: converge the fully populated structure, remove the one parameter the
+criteria point at, restart the remaining parameters from their initial values, repeat, and
+watch the RMSE. Criteria are asked in order; the first that proposes a removal wins
+(insensitivity first, then Cramér-Rao bounds). With ``continue_to_zero`` the loop goes on once
+the criteria are satisfied, removing by the last criterion's ranking, until no derivative is
+left: that gives the RMSE-versus-removals curve.
+
+Selection rules:
+
+* ``"lowest-rmse"`` (the paper's): the most reduced structure whose RMSE is within
+  ``rmse_tolerance`` (relative) of the lowest RMSE on the path. With an estimator that reaches
+  the optimum from any start, the RMSE is flat while redundant parameters go and rises once
+  necessary ones do; the tolerance turns "lowest" into "lowest, up to estimation noise".
+* ``"first-rise"``: the structure before the first step whose RMSE rises by more than
+  ``rmse_tolerance`` over its predecessor.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Protocol, runtime_checkable
+
+import attrs
+import numpy as np
+
+from rotorid.errors import EstimationError
+from rotorid.estimation.estimate import Estimate
+from rotorid.model.structure import ModelStructure
+
+RULES = ("lowest-rmse", "first-rise")
+
+
+@attrs.frozen
+class Removal:
+    """A criterion's proposal: remove ``parameter`` because ``metric`` exceeds ``threshold``."""
+
+    parameter: str
+    criterion: str
+    metric: float
+    threshold: float
+    reason: str
+
+
+@runtime_checkable
+class ReductionCriterion(Protocol):
+    """What a reduction-criterion plugin builds."""
+
+    name: str
+
+    def rank(self, estimate: Estimate) -> Removal | None:
+        """The worst removable parameter by this criterion's metric, threshold ignored."""
+
+    def propose(self, estimate: Estimate) -> Removal | None:
+        """The parameter to remove next, or ``None`` when the criterion is satisfied."""
+
+
+@attrs.frozen(eq=False)
+class ReductionStep:
+    """One structure on the reduction path and its estimate.
+
+    ``removal`` is what was removed to get here (``None`` for the full structure).
+    """
+
+    index: int
+    removal: Removal | None
+    estimate: Estimate
+    structure: ModelStructure
+
+    @property
+    def n_parameters(self) -> int:
+        return len(self.structure.parameter_names)
+
+    @property
+    def rmse(self) -> float:
+        return self.estimate.rmse
+
+    @property
+    def cost(self) -> float:
+        return self.estimate.cost
+
+    def summary(self) -> dict:
+        removal = self.removal
+        return {"step": self.index, "n_parameters": self.n_parameters,
+                "removed": None if removal is None else removal.parameter,
+                "criterion": None if removal is None else removal.criterion,
+                "metric": None if removal is None else _finite(removal.metric),
+                "reason": None if removal is None else removal.reason,
+                "rmse": self.rmse, "cost": self.cost,
+                "iterations": self.estimate.iterations, "converged": self.estimate.converged}
+
+
+def _finite(value: float):
+    return float(value) if np.isfinite(value) else None
+
+
+@attrs.frozen(eq=False)
+class ReductionPath:
+    """Every step of a reduction and the structure the selection rule picked."""
+
+    steps: tuple[ReductionStep, ...] = attrs.field(converter=tuple)
+    rule: str = "lowest-rmse"
+    rmse_tolerance: float = 0.01
+
+    @property
+    def selected_index(self) -> int:
+        rmse = np.array([s.rmse for s in self.steps])
+        if self.rule == "lowest-rmse":
+            ok = np.flatnonzero(rmse <= rmse.min() * (1.0 + self.rmse_tolerance))
+            return int(ok.max())
+        for k in range(1, len(self.steps)):
+            if rmse[k] > rmse[k - 1] * (1.0 + self.rmse_tolerance):
+                return k - 1
+        return len(self.steps) - 1
+
+    @property
+    def selected(self) -> ReductionStep:
+        return self.steps[self.selected_index]
+
+    @property
+    def removed(self) -> tuple[str, ...]:
+        """Parameters removed up to the selected structure, in order."""
+        return tuple(s.removal.parameter for s in self.steps[1: self.selected_index + 1])
+
+    def rmse_curve(self) -> tuple[np.ndarray, np.ndarray]:
+        """Number of removed parameters (K,) and RMSE (K,)."""
+        return (np.arange(len(self.steps)), np.array([s.rmse for s in self.steps]))
+
+
+def _propose(criteria, estimate: Estimate, continue_to_zero: bool) -> Removal | None:
+    for criterion in criteria:
+        removal = criterion.propose(estimate)
+        if removal is not None:
+            return removal
+    if continue_to_zero:
+        return criteria[-1].rank(estimate)
+    return None
+
+
+def reduce(structure: ModelStructure, maneuvers, estimator, criteria: Sequence, *,
+           continue_to_zero: bool = False, warm_start: bool = False, rule: str = "lowest-rmse",
+           rmse_tolerance: float = 0.01, finished: Sequence[ReductionStep] = (),
+           on_step: Callable[[ReductionStep], None] | None = None,
+           case: str = "") -> ReductionPath:
+    """Run the reduction loop.
+
+    Args:
+        structure: the starting (usually fully populated) structure, without delays.
+        maneuvers: identification maneuvers.
+        estimator: an estimator plugin object (``estimate(structure, maneuvers, start=...)``).
+        criteria: reduction-criterion objects, asked in order.
+        continue_to_zero: keep removing after the criteria are satisfied.
+        warm_start: restart from the previous values instead of the initial values (a
+            documented speed-up; the paper restarts from the initial values).
+        finished: steps already computed (resume); they must be a prefix of this run.
+        on_step: called after every step (progress, persistence); the
+            ``rotorid_reduction_step`` hook fires too, with ``case``.
+    """
+    from rotorid.plugin.manager import notify
+
+    def record(step: ReductionStep) -> None:
+        steps.append(step)
+        notify("rotorid_reduction_step", case=case, step=step)
+        if on_step is not None:
+            on_step(step)
+
+    if rule not in RULES:
+        raise EstimationError(f"unknown selection rule {rule!r}; use {' or '.join(RULES)}")
+    if not criteria:
+        raise EstimationError("model reduction needs at least one criterion")
+    if structure.free_delays:
+        raise EstimationError("reduce the structure without delays; the delays are added "
+                              "after selection (the paper's two-step approach)")
+    steps = list(finished)
+    if not steps:
+        record(ReductionStep(0, None, estimator.estimate(structure, maneuvers), structure))
+    while steps[-1].structure.free_derivatives:
+        last = steps[-1]
+        removal = _propose(criteria, last.estimate, continue_to_zero)
+        if removal is None:
+            break
+        reduced = last.structure.without(removal.parameter)
+        start = None
+        if warm_start:
+            previous = last.estimate.as_mapping()
+            start = {n: previous[n] for n in reduced.parameter_names}
+        estimate = (estimator.estimate(reduced, maneuvers, start=start)
+                    if reduced.parameter_names else _empty_estimate(reduced, maneuvers))
+        record(ReductionStep(len(steps), removal, estimate, reduced))
+    return ReductionPath(steps, rule, rmse_tolerance)
+
+
+def _empty_estimate(structure: ModelStructure, maneuvers) -> Estimate:
+    """The 'estimate' of a structure with no parameter left: its plain simulation."""
+    from rotorid.simulation.simulator import simulate
+
+    outputs = simulate(structure, None, maneuvers)
+    residuals = np.concatenate([m.outputs - y for m, y in zip(maneuvers, outputs)])
+    r = residuals.T @ residuals / len(residuals)
+    return Estimate(estimator="none", parameter_names=(), values=[], start=[], cramer_rao=[],
+                    insensitivity=[], correlation=np.zeros((0, 0)), information=np.zeros((0, 0)),
+                    noise_covariance=r, output_names=structure.outputs,
+                    cost=float(np.linalg.det(r)), rmse=float(np.sqrt(np.mean(residuals**2))),
+                    cost_history=(), rmse_history=(), iterations=0, converged=True,
+                    stop_reason="no parameter left", n_samples=len(residuals),
+                    units=structure.units.name)

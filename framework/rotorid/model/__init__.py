@@ -1,0 +1,1 @@
+"""Model structures: derivatives, flight conditions, known terms and model files."""

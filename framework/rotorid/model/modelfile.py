@@ -1,0 +1,222 @@
+"""Model files: a flight condition and a model structure declared in TOML.
+
+Example (flight-test units; derivative values in the structure's units)::
+
+    units = "flight-test"            # or "si"
+
+    [condition]                      # airspeed_kt, or u0_mps/v0_mps/w0_mps (or *_fps)
+    airspeed_kt = 0.0
+    theta0_deg = 0.0
+    phi0_deg = 0.0
+
+    [structure]
+    populate = "six-dof"             # all 60 derivatives, free, starting at 0; or "none"
+    remove = ["X_v", "Y_p"]          # only with populate = "six-dof"
+
+    [derivatives.L_lat]              # settings of one derivative (added when populate = "none")
+    initial = 1.0                    # start value
+    sign = "positive"                # sign prior: "negative", "positive" or "none"
+    delay = { initial = 0.05 }       # or a number (initial, s); keys initial, upper, fixed
+
+    [derivatives.M_w]
+    fixed = 0.0                      # a known value, not estimated
+
+:func:`load_model` reads a file, :func:`parse_model` an already parsed mapping,
+:func:`save_model` writes a structure back (atomically) so that loading it gives an equal
+structure.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+
+from rotorid.errors import DataFileError, MissingFileError, RotoridError
+from rotorid.io import atomic_write
+from rotorid.model.derivatives import Derivative
+from rotorid.model.structure import FlightCondition, ModelStructure
+
+POPULATE = ("six-dof", "none")
+_TOP_KEYS = ("units", "condition", "structure", "derivatives")
+_STRUCTURE_KEYS = ("populate", "remove")
+_DERIVATIVE_KEYS = ("initial", "sign", "delay", "fixed")
+_DELAY_KEYS = {"initial": "number", "upper": "number", "fixed": "boolean"}
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _require(kind: str, value, where: str):
+    ok = {"number": _is_number(value), "boolean": isinstance(value, bool),
+          "string": isinstance(value, str), "table": isinstance(value, Mapping)}[kind]
+    if not ok:
+        raise DataFileError(f"{where} must be a {kind}, got {value!r}")
+    return value
+
+
+def _check_keys(table: Mapping, known, where: str) -> None:
+    unknown = [key for key in table if key not in known]
+    if unknown:
+        raise DataFileError(f"{where}: unknown key {unknown[0]!r}; known keys: "
+                            f"{', '.join(known)}")
+
+
+def _delay(value, where: str):
+    if value is None or _is_number(value):
+        return value
+    _require("table", value, where)
+    _check_keys(value, _DELAY_KEYS, where)
+    for key, kind in _DELAY_KEYS.items():
+        if key in value:
+            _require(kind, value[key], f"{where}.{key}")
+    return dict(value)
+
+
+def _derivative(name: str, settings, where: str) -> Derivative:
+    _require("table", settings, where)
+    _check_keys(settings, _DERIVATIVE_KEYS, where)
+    if "fixed" in settings and "initial" in settings:
+        raise DataFileError(f"{where}: give 'initial' (a start value) or 'fixed' (a known "
+                            f"value), not both")
+    value = settings.get("fixed", settings.get("initial", 0.0))
+    _require("number", value, f"{where}.{'fixed' if 'fixed' in settings else 'initial'}")
+    sign = _require("string", settings.get("sign", "none"), f"{where}.sign")
+    return Derivative(name, initial=value, sign=sign, fixed="fixed" in settings,
+                      delay=_delay(settings.get("delay"), f"{where}.delay"))
+
+
+def _structure(mapping: Mapping, source: str) -> ModelStructure:
+    _require("table", mapping, f"{source}: a model file")
+    _check_keys(mapping, _TOP_KEYS, source)
+    units = _require("string", mapping.get("units", "flight-test"), f"{source}: units")
+    if "condition" not in mapping:
+        raise DataFileError(f"{source}: missing [condition] table (e.g. airspeed_kt = 0.0)")
+    condition = _require("table", mapping["condition"], f"{source}: [condition]")
+    for key, value in condition.items():
+        _require("number", value, f"{source}: [condition] {key}")
+    settings = _require("table", mapping.get("structure", {}), f"{source}: [structure]")
+    _check_keys(settings, _STRUCTURE_KEYS, f"{source}: [structure]")
+    populate = _require("string", settings.get("populate", "six-dof"),
+                        f"{source}: [structure] populate")
+    if populate not in POPULATE:
+        raise DataFileError(f"{source}: [structure] populate = {populate!r}; use "
+                            f"{' or '.join(map(repr, POPULATE))}")
+    remove = settings.get("remove", [])
+    if not isinstance(remove, list) or not all(isinstance(n, str) for n in remove):
+        raise DataFileError(f"{source}: [structure] remove must be a list of derivative names")
+    twice = sorted({n for n in remove if remove.count(n) > 1})
+    if twice:
+        raise DataFileError(f"{source}: [structure] remove lists {', '.join(twice)} twice")
+    declared = _require("table", mapping.get("derivatives", {}), f"{source}: [derivatives]")
+    derivatives = [_derivative(name, value, f"{source}: [derivatives.{name}]")
+                   for name, value in declared.items()]
+    condition = FlightCondition.from_mapping(condition)
+    if populate == "none":
+        if remove:
+            raise DataFileError(f"{source}: [structure] remove needs populate = 'six-dof'; "
+                                f"with 'none', declare only the derivatives you want")
+        return ModelStructure(condition, derivatives, units)
+    both = sorted(set(remove) & set(declared))
+    if both:
+        raise DataFileError(f"{source}: {', '.join(both)} both removed and declared in "
+                            f"[derivatives]; keep one")
+    structure = ModelStructure.six_dof(condition, units).without(*remove)
+    for derivative in derivatives:
+        structure = structure.replacing(derivative)
+    return structure
+
+
+def parse_model(mapping: Mapping, source: str = "<string>") -> ModelStructure:
+    """The structure declared by a parsed model file (see the module docstring).
+
+    ``source`` names the file in error messages. Unknown keys, wrong types and contradictory
+    settings raise :class:`~rotorid.errors.DataFileError` naming the key and the source.
+    """
+    try:
+        return _structure(mapping, source)
+    except DataFileError:
+        raise
+    except RotoridError as error:
+        raise DataFileError(f"{source}: {error}") from None
+
+
+def load_model(path: str | os.PathLike) -> ModelStructure:
+    """The structure declared by the TOML model file ``path``."""
+    path = Path(path)
+    if not path.is_file():
+        raise MissingFileError(f"model file {path} does not exist")
+    try:
+        mapping = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        raise DataFileError(f"{path}: not a valid TOML file: {error}") from None
+    return parse_model(mapping, source=str(path))
+
+
+# ----------------------------------------------------------------- writing
+def _number(value: float) -> str:
+    return repr(float(value))
+
+
+def _degrees(radians: float) -> float:
+    """A degree value that converts back to exactly ``radians`` where one exists (it does for
+    every attitude that was itself given in degrees), so saved files load back unchanged."""
+    guess = math.degrees(radians)
+    for candidate in (guess, math.nextafter(guess, math.inf), math.nextafter(guess, -math.inf)):
+        if math.radians(candidate) == radians:
+            return candidate
+    return guess
+
+
+def _derivative_lines(derivative: Derivative) -> list[str]:
+    lines = [f"[derivatives.{derivative.name}]"]
+    if derivative.fixed:
+        lines.append(f"fixed = {_number(derivative.initial)}")
+    elif derivative.initial != 0.0:
+        lines.append(f"initial = {_number(derivative.initial)}")
+    if derivative.sign.value != "none":
+        lines.append(f'sign = "{derivative.sign.value}"')
+    delay = derivative.delay
+    if delay is not None:
+        fields = [f"initial = {_number(delay.initial)}"]
+        if delay.upper is not None:
+            fields.append(f"upper = {_number(delay.upper)}")
+        if delay.fixed:
+            fields.append("fixed = true")
+        lines.append(f"delay = {{ {', '.join(fields)} }}")
+    return lines
+
+
+def format_model(structure: ModelStructure) -> str:
+    """The model file text of ``structure``: ``populate = "six-dof"`` with a ``remove`` list
+    when its derivatives keep the six-DoF order, else ``populate = "none"`` with every
+    derivative listed; derivative tables only where settings differ from the defaults."""
+    c = structure.condition
+    lines = [f"# rotorid model: {structure.describe()}",
+             f'units = "{structure.units.name}"', "", "[condition]",
+             f"u0_mps = {_number(c.u0)}", f"v0_mps = {_number(c.v0)}",
+             f"w0_mps = {_number(c.w0)}", f"theta0_deg = {_number(_degrees(c.theta0))}",
+             f"phi0_deg = {_number(_degrees(c.phi0))}", "", "[structure]"]
+    full = ModelStructure.six_dof(c, structure.units).names
+    kept = set(structure.names)
+    if [n for n in full if n in kept] == list(structure.names):
+        lines.append('populate = "six-dof"')
+        removed = [f'"{n}"' for n in full if n not in kept]
+        rows = [", ".join(removed[i:i + 8]) for i in range(0, len(removed), 8)]
+        lines.append("remove = [" + "".join(f"\n    {row}," for row in rows)
+                     + ("\n]" if rows else "]"))
+        listed = [d for d in structure.derivatives if d != Derivative(d.name)]
+    else:
+        lines.append('populate = "none"')
+        listed = list(structure.derivatives)
+    for derivative in listed:
+        lines += ["", *_derivative_lines(derivative)]
+    return "\n".join(lines) + "\n"
+
+
+def save_model(structure: ModelStructure, path: str | os.PathLike) -> Path:
+    """Write ``structure`` to the TOML model file ``path`` atomically; return the path."""
+    return atomic_write(path, format_model(structure))

@@ -1,0 +1,437 @@
+"""Flight condition and the linear 6-DoF model structure.
+
+The structure is the paper's coupled rigid-body model about straight trimmed flight::
+
+    states   x = [u w q theta v p phi r]
+    controls u = [long lat coll ped]
+    outputs  y = [ax az q theta ay p phi r]
+
+    u' = ΣX·z − W0·q + V0·r − g·cosΘ0·θ
+    v' = ΣY·z − U0·r + W0·p + g·cosΘ0·cosΦ0·φ − g·sinΘ0·sinΦ0·θ
+    w' = ΣZ·z − V0·p + U0·q − g·cosΦ0·sinΘ0·θ − g·sinΦ0·cosΘ0·φ
+    p' = ΣL·z     q' = ΣM·z     r' = ΣN·z        (L, N inertia-coupled)
+    θ' = q·cosΦ0 − r·sinΦ0
+    φ' = p + q·sinΦ0·tanΘ0 + r·cosΦ0·tanΘ0
+    ax = ΣX·z     ay = ΣY·z     az = ΣZ·z
+
+``ΣX·z`` sums the X derivatives times their state or control, each possibly delayed. The
+known gravity and kinematic terms are built here, in the structure's unit system, with the
+deg↔rad factors folded in. Estimable quantities are the free derivatives and free delays; they
+form the parameter vector in :attr:`ModelStructure.parameter_names` order.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+
+import attrs
+import numpy as np
+
+from rotorid.errors import StructureError
+from rotorid.model.derivatives import (
+    CONTROL_VARIABLES,
+    FORCE_MOMENT_LETTERS,
+    STATE_VARIABLES,
+    Delay,
+    Derivative,
+    Sign,
+)
+from rotorid.units import FLIGHT_TEST, KNOT, UnitSystem, unit_system
+
+STATES = ("u", "w", "q", "theta", "v", "p", "phi", "r")
+CONTROLS = CONTROL_VARIABLES
+OUTPUTS = ("ax", "az", "q", "theta", "ay", "p", "phi", "r")
+
+#: Output measuring each force equation's specific force.
+ACCELERATION_OUTPUT = {"u": "ax", "v": "ay", "w": "az"}
+#: The paper's delayed derivatives (τ1 … τ8).
+PAPER_DELAYED = ("L_p", "L_q", "L_long", "L_lat", "M_p", "M_q", "M_long", "M_lat")
+
+
+def _finite_float(instance, attribute, value):
+    if not math.isfinite(value):
+        raise StructureError(f"flight condition: {attribute.name} must be finite, got {value!r}")
+
+
+@attrs.frozen
+class FlightCondition:
+    """Trim point of the linear model, in SI: body velocities in m/s, attitudes in rad.
+
+    Use :meth:`from_airspeed` for level flight at a given airspeed and trim attitude.
+    """
+
+    u0: float = attrs.field(default=0.0, converter=float, validator=_finite_float)
+    v0: float = attrs.field(default=0.0, converter=float, validator=_finite_float)
+    w0: float = attrs.field(default=0.0, converter=float, validator=_finite_float)
+    theta0: float = attrs.field(default=0.0, converter=float, validator=_finite_float)
+    phi0: float = attrs.field(default=0.0, converter=float, validator=_finite_float)
+
+    def __attrs_post_init__(self):
+        for name in ("theta0", "phi0"):
+            if abs(getattr(self, name)) >= math.pi / 2:
+                raise StructureError(
+                    f"flight condition: |{name}| must be below 90° (given in rad: "
+                    f"{getattr(self, name)}); did you pass degrees? use from_airspeed(theta0_deg=...)"
+                )
+
+    @classmethod
+    def from_airspeed(cls, airspeed_kt: float = 0.0, theta0_deg: float = 0.0,
+                      phi0_deg: float = 0.0) -> "FlightCondition":
+        """Level flight at ``airspeed_kt`` with the fuselage pitched ``theta0_deg``.
+
+        In level flight the velocity vector is horizontal, so U0 = V·cosΘ0 and W0 = V·sinΘ0
+        (zero sideslip, V0 = 0).
+        """
+        if not math.isfinite(airspeed_kt) or airspeed_kt < 0:
+            raise StructureError(f"airspeed must be a finite number ≥ 0 kt, got {airspeed_kt!r}")
+        speed = airspeed_kt * KNOT
+        theta0 = math.radians(theta0_deg)
+        return cls(speed * math.cos(theta0), 0.0, speed * math.sin(theta0), theta0,
+                   math.radians(phi0_deg))
+
+    @classmethod
+    def from_mapping(cls, settings: Mapping) -> "FlightCondition":
+        """Build from a model file's ``[condition]`` table.
+
+        Keys: ``airspeed_kt`` or body velocities ``u0_mps v0_mps w0_mps`` / ``u0_fps v0_fps
+        w0_fps``; attitudes ``theta0_deg phi0_deg``.
+        """
+        known = {"airspeed_kt", "theta0_deg", "phi0_deg", "u0_mps", "v0_mps", "w0_mps",
+                 "u0_fps", "v0_fps", "w0_fps"}
+        unknown = set(settings) - known
+        if unknown:
+            raise StructureError(
+                f"[condition]: unknown key(s) {sorted(unknown)}; known: {sorted(known)}"
+            )
+        theta = settings.get("theta0_deg", 0.0)
+        phi = settings.get("phi0_deg", 0.0)
+        body = [k for k in settings if k[:2] in ("u0", "v0", "w0")]
+        if "airspeed_kt" in settings:
+            if body:
+                raise StructureError("[condition]: give airspeed_kt or body velocities, not both")
+            return cls.from_airspeed(settings["airspeed_kt"], theta, phi)
+        velocity = {}
+        for axis in ("u0", "v0", "w0"):
+            si, ft = settings.get(f"{axis}_mps"), settings.get(f"{axis}_fps")
+            if si is not None and ft is not None:
+                raise StructureError(f"[condition]: give {axis}_mps or {axis}_fps, not both")
+            velocity[axis] = si if si is not None else (ft * 0.3048 if ft is not None else 0.0)
+        return cls(theta0=math.radians(theta), phi0=math.radians(phi), **velocity)
+
+    @property
+    def airspeed_kt(self) -> float:
+        """Total airspeed in knots."""
+        return math.sqrt(self.u0**2 + self.v0**2 + self.w0**2) / KNOT
+
+    def describe(self) -> str:
+        """One-line summary, e.g. ``70.0 kt, Θ0 = 1.2°, Φ0 = -1.5°``."""
+        return (f"{self.airspeed_kt:.1f} kt, Θ0 = {math.degrees(self.theta0):.2f}°, "
+                f"Φ0 = {math.degrees(self.phi0):.2f}°")
+
+
+def _unique_derivatives(instance, attribute, value):
+    seen = set()
+    for d in value:
+        if not isinstance(d, Derivative):
+            raise StructureError(f"structure derivatives must be Derivative objects, got {d!r}")
+        if d.name in seen:
+            raise StructureError(f"derivative {d.name} is declared twice in the structure")
+        seen.add(d.name)
+
+
+@attrs.frozen
+class TermTable:
+    """The derivative terms of a structure evaluated at one parameter vector.
+
+    Every array has one entry per derivative of the structure (free and fixed), shape ``(K,)``:
+
+    - ``equation``: row in the state vector (index into :data:`STATES`) the term drives;
+    - ``source``: column in ``[x; u]`` (0–7 states in :data:`STATES` order, 8–11 controls);
+    - ``gain``: derivative value; ``delay``: delay in s (0 where none);
+    - ``output``: row in :data:`OUTPUTS` of the specific force the term also feeds, −1 if none.
+    """
+
+    equation: np.ndarray
+    source: np.ndarray
+    gain: np.ndarray
+    delay: np.ndarray
+    output: np.ndarray
+
+
+@attrs.frozen
+class ModelStructure:
+    """A frozen linear model structure: flight condition, derivatives and unit system.
+
+    Build the paper's fully populated structure with :meth:`six_dof`, then shape it with
+    :meth:`without`, :meth:`fixing`, :meth:`with_delays` and :meth:`with_initial`; each returns
+    a new structure.
+    """
+
+    condition: FlightCondition
+    derivatives: tuple[Derivative, ...] = attrs.field(converter=tuple,
+                                                      validator=_unique_derivatives)
+    units: UnitSystem = attrs.field(default=FLIGHT_TEST, converter=unit_system)
+
+    states = STATES
+    controls = CONTROLS
+    outputs = OUTPUTS
+
+    # ----------------------------------------------------------------- constructors
+    @classmethod
+    def six_dof(cls, condition: FlightCondition, units: str | UnitSystem = FLIGHT_TEST,
+                signs: Mapping[str, str] | None = None) -> "ModelStructure":
+        """The fully populated structure: every X Y Z L M N derivative over u v w p q r and
+        the four controls, free, starting at zero (60 parameters).
+
+        ``signs`` optionally attaches sign priors, e.g. ``{"L_p": "negative"}``.
+        """
+        signs = dict(signs or {})
+        derivatives = []
+        for letter in FORCE_MOMENT_LETTERS:
+            for variable in STATE_VARIABLES + CONTROL_VARIABLES:
+                name = f"{letter}_{variable}"
+                derivatives.append(Derivative(name, sign=signs.pop(name, Sign.NONE)))
+        if signs:
+            raise StructureError(f"sign priors given for unknown derivatives: {sorted(signs)}")
+        return cls(condition, derivatives, units)
+
+    # ----------------------------------------------------------------- lookup
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Names of every derivative in the structure, free and fixed."""
+        return tuple(d.name for d in self.derivatives)
+
+    def derivative(self, name: str) -> Derivative:
+        """The derivative called ``name``; a clear error lists what the structure has."""
+        for d in self.derivatives:
+            if d.name == name:
+                return d
+        from rotorid.model.derivatives import parse_name
+
+        parse_name(name)  # raises for names that are not derivative names at all
+        raise StructureError(
+            f"derivative {name} is not in this structure ({len(self.derivatives)} derivatives: "
+            f"{', '.join(self.names)})"
+        )
+
+    @property
+    def free_derivatives(self) -> tuple[Derivative, ...]:
+        return tuple(d for d in self.derivatives if not d.fixed)
+
+    @property
+    def free_delays(self) -> tuple[Derivative, ...]:
+        """Derivatives whose delay is estimated."""
+        return tuple(d for d in self.derivatives if d.delay is not None and not d.delay.fixed)
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """Estimated parameters: free derivatives, then free delays (``tau_<name>``)."""
+        return (tuple(d.name for d in self.free_derivatives)
+                + tuple(d.delay_name for d in self.free_delays))
+
+    @property
+    def n_parameters(self) -> int:
+        return len(self.free_derivatives) + len(self.free_delays)
+
+    def is_delay(self) -> np.ndarray:
+        """Boolean mask over :attr:`parameter_names`: True for delays."""
+        return np.array([False] * len(self.free_derivatives) + [True] * len(self.free_delays),
+                        dtype=bool)
+
+    # ----------------------------------------------------------------- editing
+    def without(self, *names: str) -> "ModelStructure":
+        """Return the structure with the named derivatives removed (their value becomes 0)."""
+        for name in names:
+            self.derivative(name)
+        drop = set(names)
+        return attrs.evolve(self, derivatives=[d for d in self.derivatives if d.name not in drop])
+
+    def replacing(self, derivative: Derivative) -> "ModelStructure":
+        """Return the structure with ``derivative`` replacing the one of the same name,
+        or appended when the structure does not have it yet."""
+        if derivative.name in self.names:
+            items = [derivative if d.name == derivative.name else d for d in self.derivatives]
+        else:
+            items = [*self.derivatives, derivative]
+        return attrs.evolve(self, derivatives=items)
+
+    def fixing(self, name: str, value: float) -> "ModelStructure":
+        """Return the structure with derivative ``name`` fixed at ``value``."""
+        return self.replacing(self.derivative(name).fixed_at(value))
+
+    def with_delays(self, names: Iterable[str] = PAPER_DELAYED, initial: float = 0.0,
+                    upper: float | None = None, missing: str = "skip") -> "ModelStructure":
+        """Return the structure with a free delay on each named derivative.
+
+        ``missing="skip"`` ignores names the structure no longer has (the paper adds delays
+        only to the derivatives that survived reduction); ``"error"`` rejects them.
+        """
+        if missing not in ("skip", "error"):
+            raise StructureError("missing must be 'skip' or 'error'")
+        structure = self
+        for name in names:
+            if name not in self.names:
+                if missing == "error":
+                    self.derivative(name)
+                continue
+            structure = structure.replacing(
+                attrs.evolve(self.derivative(name), delay=Delay(initial, upper)))
+        return structure
+
+    def without_delay(self, name: str) -> "ModelStructure":
+        """Return the structure with the delay of derivative ``name`` removed."""
+        derivative = self.derivative(name)
+        if derivative.delay is None:
+            raise StructureError(f"derivative {name} has no delay to remove")
+        return self.replacing(attrs.evolve(derivative, delay=None))
+
+    def with_initial(self, values: Mapping[str, float]) -> "ModelStructure":
+        """Return the structure with new initial values (derivatives by name, delays by
+        ``tau_<name>``)."""
+        structure = self
+        for key, value in values.items():
+            if key.startswith("tau_"):
+                d = structure.derivative(key[4:])
+                if d.delay is None:
+                    raise StructureError(f"{key}: derivative {d.name} has no delay")
+                new = attrs.evolve(d, delay=attrs.evolve(d.delay, initial=value))
+            else:
+                new = attrs.evolve(structure.derivative(key), initial=value)
+            structure = structure.replacing(new)
+        return structure
+
+    # ----------------------------------------------------------------- parameters
+    def initial_values(self) -> np.ndarray:
+        """Initial parameter vector, shape ``(n_parameters,)``."""
+        return np.array([d.initial for d in self.free_derivatives]
+                        + [d.delay.initial for d in self.free_delays], dtype=float)
+
+    def bounds(self, enforce_signs: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds of the parameter vector, each shape ``(n_parameters,)``.
+
+        Delays are bounded below by 0 (and above by their ``upper``); derivatives are
+        unbounded unless ``enforce_signs`` turns their sign priors into bounds.
+        """
+        lower, upper = [], []
+        for d in self.free_derivatives:
+            lo, hi = -np.inf, np.inf
+            if enforce_signs and d.sign is Sign.NEGATIVE:
+                hi = 0.0
+            if enforce_signs and d.sign is Sign.POSITIVE:
+                lo = 0.0
+            lower.append(lo)
+            upper.append(hi)
+        for d in self.free_delays:
+            lower.append(0.0)
+            upper.append(np.inf if d.delay.upper is None else d.delay.upper)
+        return np.array(lower, dtype=float), np.array(upper, dtype=float)
+
+    def as_vector(self, values) -> np.ndarray:
+        """Parameter vector from an array or a name→value mapping (missing names take their
+        initial value). Rejects wrong lengths, unknown names and non-finite values."""
+        if isinstance(values, Mapping):
+            unknown = set(values) - set(self.parameter_names)
+            if unknown:
+                raise StructureError(
+                    f"values for unknown or non-free parameter(s) {sorted(unknown)}; "
+                    f"free parameters: {', '.join(self.parameter_names)}"
+                )
+            vector = self.initial_values()
+            index = {n: i for i, n in enumerate(self.parameter_names)}
+            for name, value in values.items():
+                vector[index[name]] = float(value)
+        else:
+            vector = np.array(values, dtype=float)
+            if vector.shape != (self.n_parameters,):
+                raise StructureError(
+                    f"parameter vector has shape {vector.shape}; this structure has "
+                    f"{self.n_parameters} free parameters ({', '.join(self.parameter_names)})"
+                )
+        if not np.all(np.isfinite(vector)):
+            bad = [n for n, v in zip(self.parameter_names, vector) if not np.isfinite(v)]
+            raise StructureError(f"non-finite parameter value(s): {', '.join(bad)}")
+        return vector
+
+    def as_mapping(self, values) -> dict[str, float]:
+        """Name→value mapping of a parameter vector."""
+        return dict(zip(self.parameter_names, self.as_vector(values).tolist()))
+
+    # ----------------------------------------------------------------- matrices
+    def known_state_matrix(self) -> np.ndarray:
+        """The gravity and kinematic terms of A, shape (8, 8), in the structure's units."""
+        c = self.condition
+        k = self.units.radian_per_angle
+        g = self.units.g
+        scale = self.units.length_per_metre
+        u0, v0, w0 = c.u0 * scale, c.v0 * scale, c.w0 * scale
+        st, ct = math.sin(c.theta0), math.cos(c.theta0)
+        sp, cp = math.sin(c.phi0), math.cos(c.phi0)
+        i = {s: n for n, s in enumerate(STATES)}
+        a = np.zeros((8, 8))
+        a[i["u"], i["q"]] = -w0 * k
+        a[i["u"], i["r"]] = v0 * k
+        a[i["u"], i["theta"]] = -g * ct * k
+        a[i["v"], i["r"]] = -u0 * k
+        a[i["v"], i["p"]] = w0 * k
+        a[i["v"], i["phi"]] = g * ct * cp * k
+        a[i["v"], i["theta"]] = -g * st * sp * k
+        a[i["w"], i["p"]] = -v0 * k
+        a[i["w"], i["q"]] = u0 * k
+        a[i["w"], i["theta"]] = -g * cp * st * k
+        a[i["w"], i["phi"]] = -g * sp * ct * k
+        a[i["theta"], i["q"]] = cp
+        a[i["theta"], i["r"]] = -sp
+        a[i["phi"], i["p"]] = 1.0
+        a[i["phi"], i["q"]] = sp * st / ct
+        a[i["phi"], i["r"]] = cp * st / ct
+        return a
+
+    def known_output_matrix(self) -> np.ndarray:
+        """The known part of C, shape (8, 8): the measured states q θ p φ r."""
+        c = np.zeros((len(OUTPUTS), len(STATES)))
+        for row, name in enumerate(OUTPUTS):
+            if name in STATES:
+                c[row, STATES.index(name)] = 1.0
+        return c
+
+    def terms(self, values=None) -> TermTable:
+        """Every derivative term at the parameter vector ``values`` (default: initial)."""
+        vector = self.initial_values() if values is None else self.as_vector(values)
+        free = {n: v for n, v in zip(self.parameter_names, vector)}
+        sources = STATES + CONTROLS
+        equation, source, gain, delay, output = [], [], [], [], []
+        for d in self.derivatives:
+            equation.append(STATES.index(d.equation))
+            source.append(sources.index(d.variable))
+            gain.append(d.initial if d.fixed else free[d.name])
+            if d.delay is None:
+                delay.append(0.0)
+            else:
+                delay.append(d.delay.initial if d.delay.fixed else free[d.delay_name])
+            out = ACCELERATION_OUTPUT.get(d.equation)
+            output.append(OUTPUTS.index(out) if out else -1)
+        as_int = lambda x: np.array(x, dtype=int)  # noqa: E731
+        return TermTable(as_int(equation), as_int(source), np.array(gain, dtype=float),
+                         np.array(delay, dtype=float), as_int(output))
+
+    def matrices(self, values=None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """A (8×8), B (8×4), C (8×8), D (8×4) with every delay set to zero."""
+        table = self.terms(values)
+        a = self.known_state_matrix()
+        b = np.zeros((8, 4))
+        c = self.known_output_matrix()
+        d = np.zeros((8, 4))
+        for eq, src, gain, out in zip(table.equation, table.source, table.gain, table.output):
+            target, column = (a, src) if src < 8 else (b, src - 8)
+            target[eq, column] += gain
+            if out >= 0:
+                (c if src < 8 else d)[out, column] += gain
+        return a, b, c, d
+
+    def describe(self) -> str:
+        """Short summary: condition, units, counts."""
+        n_fixed = len(self.derivatives) - len(self.free_derivatives)
+        return (f"ModelStructure({self.condition.describe()}, {self.units.name} units, "
+                f"{len(self.free_derivatives)} free derivatives, {n_fixed} fixed, "
+                f"{len(self.free_delays)} free delays)")

@@ -1,0 +1,124 @@
+"""Plugin discovery: the plugin manager and the registries of named components.
+
+Built-in plugins are registered exactly like third-party ones, through the ``rotorid``
+entry-point group in ``pyproject.toml``. :func:`get_plugin_manager` builds the manager once
+per process; :func:`registry` gives one family's components by name; :func:`create` builds one.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Iterable
+
+import attrs
+import pluggy
+
+from rotorid.errors import PluginError
+from rotorid.plugin import hookspecs
+from rotorid.plugin.hookspecs import PluginDescriptor
+
+#: Plugin families and the registration hook of each.
+FAMILIES = {
+    "estimators": "rotorid_estimators",
+    "reduction-criteria": "rotorid_reduction_criteria",
+    "validation-envelopes": "rotorid_validation_envelopes",
+    "data-sources": "rotorid_data_sources",
+    "input-signals": "rotorid_input_signals",
+    "commands": "rotorid_commands",
+}
+
+
+@attrs.frozen
+class Registered:
+    """A registered component: its descriptor and the plugin that provided it."""
+
+    descriptor: PluginDescriptor
+    provider: str
+
+    @property
+    def name(self) -> str:
+        return self.descriptor.name
+
+    @property
+    def summary(self) -> str:
+        return self.descriptor.summary
+
+
+def new_plugin_manager(extra_plugins: Iterable[object] = (), load_entry_points: bool = True
+                       ) -> pluggy.PluginManager:
+    """A fresh plugin manager with the hookspecs, entry-point plugins and ``extra_plugins``."""
+    manager = pluggy.PluginManager(hookspecs.PROJECT)
+    manager.add_hookspecs(hookspecs)
+    try:
+        if load_entry_points:
+            manager.load_setuptools_entrypoints(hookspecs.PROJECT)
+        for plugin in extra_plugins:
+            manager.register(plugin)
+        manager.check_pending()
+    except ImportError as error:
+        raise PluginError(f"a plugin of the {hookspecs.PROJECT!r} entry-point group cannot be "
+                          f"imported: {error}; fix or uninstall it") from error
+    except pluggy.PluginValidationError as error:
+        raise PluginError(f"plugin {error.plugin!r} is invalid: {error}; fix or uninstall it"
+                          ) from error
+    return manager
+
+
+@functools.lru_cache(maxsize=1)
+def get_plugin_manager() -> pluggy.PluginManager:
+    """The process-wide plugin manager (entry-point plugins loaded, hooks checked)."""
+    return new_plugin_manager()
+
+
+def _descriptors(impl, hook_name: str) -> list:
+    """What one plugin's registration hook returned, as a list; errors name the plugin."""
+    try:
+        result = impl.function() or ()
+        if not isinstance(result, Iterable) or isinstance(result, (str, bytes)):
+            raise PluginError(f"{hook_name} must return an iterable of PluginDescriptor "
+                              f"objects, got {result!r}")
+        return list(result)
+    except PluginError as error:
+        raise PluginError(f"plugin {impl.plugin_name!r}: {error}") from error
+
+
+def registry(family: str, manager: pluggy.PluginManager | None = None) -> dict[str, Registered]:
+    """Components of one family by name, sorted by name.
+
+    Raises :class:`PluginError` for an unknown family, a malformed descriptor, or a name that
+    two providers register (both are named).
+    """
+    if family not in FAMILIES:
+        raise PluginError(f"unknown plugin family {family!r}; families: {', '.join(FAMILIES)}")
+    manager = manager or get_plugin_manager()
+    hook_name = FAMILIES[family]
+    hook = getattr(manager.hook, hook_name)
+    found: dict[str, Registered] = {}
+    for impl in hook.get_hookimpls():
+        for descriptor in _descriptors(impl, hook_name):
+            if not isinstance(descriptor, PluginDescriptor):
+                raise PluginError(f"plugin {impl.plugin_name!r}: {hook_name} must yield "
+                                  f"PluginDescriptor objects, got {descriptor!r}")
+            if descriptor.name in found:
+                raise PluginError(
+                    f"{family} name {descriptor.name!r} is registered twice: by "
+                    f"{found[descriptor.name].provider!r} and by {impl.plugin_name!r}; "
+                    f"uninstall or rename one of them")
+            found[descriptor.name] = Registered(descriptor, impl.plugin_name)
+    return dict(sorted(found.items()))
+
+
+def create(family: str, name: str, manager: pluggy.PluginManager | None = None, **options):
+    """Build the component ``name`` of ``family`` with keyword ``options``."""
+    components = registry(family, manager)
+    if name not in components:
+        known = ", ".join(components) or "none"
+        raise PluginError(f"no {family[:-1] if family.endswith('s') else family} named "
+                          f"{name!r}; available: {known} (see `rotorid plugins`)")
+    return components[name].descriptor.factory(**options)
+
+
+def notify(hook_name: str, manager: pluggy.PluginManager | None = None, **kwargs) -> None:
+    """Call a lifecycle hook on every observer plugin."""
+    manager = manager or get_plugin_manager()
+    getattr(manager.hook, hook_name)(**kwargs)

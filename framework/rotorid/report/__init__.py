@@ -1,0 +1,1 @@
+"""Figures and HTML reports (a leaf: nothing that computes imports it)."""

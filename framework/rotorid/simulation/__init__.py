@@ -1,0 +1,1 @@
+"""Simulation of the delayed linear model: discrete maps, batched simulation with sensitivities, analytic frequency response."""

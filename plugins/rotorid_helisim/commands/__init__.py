@@ -1,0 +1,1 @@
+"""The truth model's own ``rotorid`` subcommands (``trim``, ``linearize``)."""
