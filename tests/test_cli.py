@@ -9,7 +9,7 @@ import pytest
 import rotorid
 from rotorid.cli import main as cli
 from rotorid.cli.commands import plugins as plugins_command
-from rotorid.errors import DataFileError
+from rotorid.errors import DataFileError, ExitStatus, UsageError
 
 SCRIPT = shutil.which("rotorid", path=str(Path(sys.executable).parent))
 
@@ -48,7 +48,7 @@ def test_plugins_of_one_family():
 
 def test_a_rotorid_error_is_one_line_on_stderr():
     result = run("plugins", "--family", "estimator")
-    assert result.returncode == 2
+    assert result.returncode == ExitStatus.ERROR == 3
     assert result.stdout == ""
     assert result.stderr.splitlines() == [
         "rotorid plugins: error: unknown plugin family 'estimator'; families: estimators, "
@@ -57,20 +57,22 @@ def test_a_rotorid_error_is_one_line_on_stderr():
 
 def test_usage_errors_exit_non_zero_without_traceback():
     result = run("no-such-command")
-    assert result.returncode == 2
+    assert result.returncode == ExitStatus.USAGE == 2
     assert "invalid choice: 'no-such-command'" in result.stderr
     assert "Traceback" not in result.stderr
 
 
 def test_no_command_prints_help_and_fails(capsys):
-    assert cli.main([]) == 1
+    assert cli.main([]) == ExitStatus.USAGE
     assert "usage: rotorid" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("error, status", [
-    (DataFileError("data/x.csv, line 7 (row 5), channel 'q': 'abc' is not a number"), 2),
-    (FileNotFoundError(2, "No such file or directory", "results/x"), 2),
-    (KeyboardInterrupt(), 130),
+    (DataFileError("data/x.csv, line 7 (row 5), channel 'q': 'abc' is not a number"),
+     ExitStatus.ERROR),
+    (FileNotFoundError(2, "No such file or directory", "results/x"), ExitStatus.ERROR),
+    (UsageError("--max-iterations must be at least 1, got 0"), ExitStatus.USAGE),
+    (KeyboardInterrupt(), ExitStatus.INTERRUPTED),
 ])
 def test_errors_inside_a_command_become_one_line(monkeypatch, capsys, error, status):
     def failing(args):

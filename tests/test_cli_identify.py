@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import rotorid
 from rotorid.cli import main as cli
+from rotorid.errors import ExitStatus
 from rotorid.model.modelfile import load_model
 from rotorid_files.formats import write_maneuver
 
@@ -124,6 +125,21 @@ def test_max_iterations_limits_the_final_run(case, tmp_path, capsys):
     assert json.loads(out.read_text(encoding="utf-8"))["iterations"] <= 1
 
 
+def test_a_fit_that_does_not_converge_warns_and_strict_makes_it_an_error(case, tmp_path,
+                                                                         capsys):
+    model, data, _ = case
+    out = tmp_path / "stopped.json"
+    argv = ["identify", str(model), str(data), "--out", str(out), "--quiet",
+            "--max-iterations", "1", "--noise", "diagonal"]
+    assert cli.main(argv) == ExitStatus.OK
+    assert json.loads(out.read_text(encoding="utf-8"))["converged"] is False
+    assert "warning: the fit did not converge" in capsys.readouterr().err
+    assert cli.main([*argv, "--strict"]) == ExitStatus.NOT_CONVERGED
+    err = capsys.readouterr().err
+    assert err.startswith("rotorid identify: error: the fit did not converge (")
+    assert out.is_file()
+
+
 def test_warnings_are_one_line_each(case, tmp_path, capsys):
     model, data, _ = case
     out = tmp_path / "long_only.json"
@@ -137,10 +153,9 @@ def test_warnings_are_one_line_each(case, tmp_path, capsys):
     assert "N_ped" in sum(json.loads(out.read_text(encoding="utf-8"))["unidentifiable"], [])
 
 
-def _error_line(argv, capsys):
-    status = cli.main(argv)
+def _error_line(argv, capsys, status=ExitStatus.ERROR):
+    assert cli.main(argv) == status
     err = capsys.readouterr().err.strip()
-    assert status == 2
     assert "\n" not in err and "Traceback" not in err
     return err
 
@@ -159,7 +174,8 @@ def test_bad_inputs_give_one_line_errors(case, tmp_path, capsys):
         ["identify", str(model), str(data), "--outputs", "q,vz", "--out", out, "--quiet"],
         capsys)
     assert "must be at least 1" in _error_line(
-        ["identify", str(model), str(data), "--max-iterations", "0", "--out", out], capsys)
+        ["identify", str(model), str(data), "--max-iterations", "0", "--out", out], capsys,
+        ExitStatus.USAGE)
     assert "directory" in _error_line(
         ["identify", str(model), str(data), "--out", str(tmp_path / "no" / "r.json")], capsys)
     lines = (data / "doublet_long.csv").read_text(encoding="utf-8").splitlines()

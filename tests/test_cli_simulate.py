@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import rotorid
 from rotorid.cli import main as cli
+from rotorid.errors import ExitStatus
 from rotorid.model.modelfile import load_model
 from rotorid_files.formats import read_maneuver, write_maneuver
 
@@ -94,7 +95,7 @@ def test_divergence_is_one_line_error(tmp_path, capsys):
     status = cli.main(["simulate", str(model), str(inputs), "--values", str(values),
                        "--out", str(tmp_path / "out")])
     error = capsys.readouterr().err
-    assert status == 2
+    assert status == ExitStatus.ERROR
     assert error.startswith("rotorid simulate: error: simulation diverged")
     assert len(error.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists()
@@ -111,5 +112,5 @@ def test_bad_values_files_are_named(tmp_path, capsys, content, message):
     values.write_text(content, encoding="utf-8")
     status = cli.main(["simulate", str(model), str(inputs), "--values", str(values),
                        "--out", str(tmp_path / "out")])
-    assert status == 2
+    assert status == ExitStatus.ERROR
     assert message in capsys.readouterr().err

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from rotorid import Derivative, ModelStructure
 from rotorid.cli.main import main
-from rotorid.errors import DataError, PluginError, StudyError
+from rotorid.errors import DataError, ExitStatus, PluginError, StudyError
 from rotorid.executors import connect_dask, open_executor
 from rotorid.study.case import FlightCase
 from rotorid.study.pipeline import MODELS, Study
@@ -128,7 +128,7 @@ def test_an_unreachable_scheduler_is_reported():
     pytest.importorskip("dask.distributed")
     with pytest.raises(PluginError, match="cannot reach the Dask scheduler at 'tcp://127.0.0.1:9'"):
         connect_dask("tcp://127.0.0.1:9", timeout=1.0)
-    assert main(["study", "hover", "--out", "unused", "--executor", "dask"]) == 2
+    assert main(["study", "hover", "--out", "unused", "--executor", "dask"]) == ExitStatus.ERROR
 
 
 def test_speed_lists_and_case_names():
@@ -151,7 +151,7 @@ def test_a_speed_sweep_needs_generated_data(tmp_path):
     template = FlightCase(name="flight", data={"source": "files", "identification": "x"})
     with pytest.raises(DataError, match="needs the 'helisim' data source"):
         speed_sweep([0, 10], template)
-    assert main(["study", "hover", "--speeds", "0,10", "--out", str(tmp_path)]) == 2
+    assert main(["study", "hover", "--speeds", "0,10", "--out", str(tmp_path)]) == ExitStatus.USAGE
 
 
 def test_speed_sweep_command_writes_the_summary(tmp_path, capsys):

@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 import pytest
-from rotorid.errors import TrimError
+from rotorid.errors import ExitStatus, TrimError
 from rotorid.units import KNOT
 from rotorid_helisim.model import Bo105Model
 from rotorid_helisim.parameters import Bo105Config
@@ -159,5 +159,5 @@ def test_cli_trim_json(capsys):
     assert main(["trim", "--airspeed-kt", "80", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["airspeed_kt"] == 80.0 and data["theta_deg"] == pytest.approx(-1.3, abs=0.5)
-    assert main(["trim", "hover", "--airspeed-kt", "3"]) == 2
+    assert main(["trim", "hover", "--airspeed-kt", "3"]) == ExitStatus.ERROR
     assert "exactly one" in capsys.readouterr().err

@@ -8,7 +8,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 import rotorid_envelopes.plugin as envelope_plugin  # noqa: E402
 from rotorid.data import Maneuver, ManeuverSet  # noqa: E402
-from rotorid.errors import VerificationError  # noqa: E402
+from rotorid.errors import ExitStatus, VerificationError  # noqa: E402
 from rotorid.plugin.manager import create, new_plugin_manager  # noqa: E402
 from rotorid.report.plots.frequency import plot_bode, plot_error  # noqa: E402
 from rotorid.verification.compare import compare_sweeps, parse_pair  # noqa: E402
@@ -264,7 +264,7 @@ def test_verify_command_writes_checks_and_figures(simulated_sweeps, tmp_path, ca
     failed = json.loads((tmp_path / "out2" / "verification.json").read_text())
     assert [p["checks"]["muad"]["passed"] for p in failed["pairs"]] == [False, False]
     assert not list((tmp_path / "out2").glob("*.png"))
-    assert main(["verify", str(missing), "--out", str(tmp_path / "out3")]) == 2
+    assert main(["verify", str(missing), "--out", str(tmp_path / "out3")]) == ExitStatus.USAGE
     assert "RESULT.json SWEEPS" in capsys.readouterr().err
 
 

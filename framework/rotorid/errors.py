@@ -7,9 +7,27 @@ catch them all at once; the subclasses also derive from the matching built-in ex
 
 from __future__ import annotations
 
+from enum import IntEnum
+
+
+class ExitStatus(IntEnum):
+    """Exit statuses of the ``rotorid`` command (docs/conventions.md)."""
+
+    OK = 0
+    CHECK_FAILED = 1      #: a verified check failed and ``--strict`` was given
+    USAGE = 2             #: the command line is wrong (argparse's status)
+    ERROR = 3             #: data, model, case or file error: the run could not be done
+    NOT_CONVERGED = 4     #: the fit did not converge and ``--strict`` was given
+    INTERRUPTED = 130     #: stopped with Ctrl-C
+
 
 class RotoridError(Exception):
     """Base class of all rotorid errors."""
+
+
+class UsageError(RotoridError, ValueError):
+    """A command-line argument is missing, contradictory or out of range; the ``rotorid``
+    command exits with :attr:`ExitStatus.USAGE`, like argparse."""
 
 
 class DerivativeError(RotoridError, ValueError):

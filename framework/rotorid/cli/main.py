@@ -3,7 +3,8 @@
 Built-in subcommands live one per module in :mod:`rotorid.cli.commands`; each module defines
 ``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``. Plugins add their own
 through the ``rotorid_commands`` hook. Errors that rotorid raises on purpose are printed as one
-line on stderr with exit status 2; they never show a traceback.
+line on stderr, never with a traceback; the exit status tells usage errors (2) from data and
+model errors (3) (:class:`rotorid.errors.ExitStatus`, docs/conventions.md).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import sys
 
 from rotorid import __version__
 from rotorid.cli import commands
-from rotorid.errors import PluginError, RotoridError
+from rotorid.errors import ExitStatus, PluginError, RotoridError, UsageError
 from rotorid.plugin.manager import registry
 
 
@@ -56,15 +57,15 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if not getattr(args, "run", None):
         parser.print_help()
-        return 1
+        return ExitStatus.USAGE
     try:
-        return int(args.run(args) or 0)
+        return int(args.run(args) or ExitStatus.OK)
     except (RotoridError, OSError) as error:
         print(f"rotorid {args.command}: error: {error}", file=sys.stderr)
-        return 2
+        return ExitStatus.USAGE if isinstance(error, UsageError) else ExitStatus.ERROR
     except KeyboardInterrupt:
         print(f"rotorid {args.command}: interrupted", file=sys.stderr)
-        return 130
+        return ExitStatus.INTERRUPTED
 
 
 if __name__ == "__main__":

@@ -5,7 +5,7 @@ Usage::
     rotorid identify MODEL.toml DATA... [--estimator output-error] [--out result.json]
                      [--outputs ax,az,...] [--noise full|diagonal] [--max-iterations N]
                      [--enforce-signs] [--output-biases] [--initial-states]
-                     [--hold zoh|foh] [--quiet]
+                     [--hold zoh|foh] [--quiet] [--strict]
 
 ``MODEL.toml`` is a model file (:mod:`rotorid.model.modelfile`); its initial values are the start
 values (all zero: the estimator chooses its own start, see docs/estimation.md). DATA are
@@ -55,24 +55,26 @@ def add_arguments(parser) -> None:
                         help="input hold between samples (default zoh)")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress lines on stderr")
+    parser.add_argument("--strict", action="store_true",
+                        help="exit with status 4 when the fit does not converge (the estimate "
+                             "is written all the same)")
 
 
 def _options(args) -> dict:
     """Estimator options the user set explicitly (the estimator's defaults stand otherwise)."""
-    from rotorid.errors import EstimationError
+    from rotorid.errors import UsageError
 
     options: dict = {}
     if args.outputs is not None:
         outputs = tuple(o.strip() for o in args.outputs.split(",") if o.strip())
         if not outputs:
-            raise EstimationError("--outputs names no output; give e.g. --outputs q,theta,p")
+            raise UsageError("--outputs names no output; give e.g. --outputs q,theta,p")
         options["outputs"] = outputs
     if args.noise is not None:
         options["noise"] = args.noise
     if args.max_iterations is not None:
         if args.max_iterations < 1:
-            raise EstimationError(f"--max-iterations must be at least 1, got "
-                                  f"{args.max_iterations}")
+            raise UsageError(f"--max-iterations must be at least 1, got {args.max_iterations}")
         options["max_iterations"] = args.max_iterations
     if args.enforce_signs:
         options["enforce_signs"] = True
@@ -110,7 +112,7 @@ def _record(estimate, model_path: Path, out: Path) -> dict:
 
 def run(args) -> int:
     from rotorid.cli.commands.simulate import _load_inputs
-    from rotorid.errors import MissingFileError, RotoridWarning
+    from rotorid.errors import ExitStatus, MissingFileError, RotoridWarning
     from rotorid.io import atomic_write
     from rotorid.model.modelfile import load_model
 
@@ -128,4 +130,12 @@ def run(args) -> int:
     atomic_write(out, json.dumps(_record(estimate, Path(args.model), out), indent=2))
     print(estimate.report())
     print(f"estimate written to {out}")
-    return 0
+    if estimate.converged:
+        return ExitStatus.OK
+    if args.strict:
+        print(f"rotorid identify: error: the fit did not converge ({estimate.stop_reason})",
+              file=sys.stderr)
+        return ExitStatus.NOT_CONVERGED
+    print(f"rotorid identify: warning: the fit did not converge ({estimate.stop_reason}); "
+          f"--strict makes this an error", file=sys.stderr)
+    return ExitStatus.OK

@@ -44,13 +44,13 @@ def add_executor_arguments(parser, what: str) -> None:
 def expand_cases(names, speeds: str | None = None, template: str = "hover"):
     """Flight cases of the command line (``all`` and ``speed-sweep`` expanded), and the names
     of the speed-sweep cases among them."""
-    from rotorid.errors import DataError
+    from rotorid.errors import UsageError
     from rotorid.study.case import BUILTIN, FlightCase
     from rotorid.study.sweep import DEFAULT_SPEEDS, FAMILY, speed_sweep
 
     if speeds is not None and FAMILY not in names:
-        raise DataError(f"--speeds only applies to the {FAMILY} case family; add {FAMILY} to "
-                        f"the cases")
+        raise UsageError(f"--speeds only applies to the {FAMILY} case family; add {FAMILY} to "
+                         f"the cases")
     cases, swept = [], []
     for name in (list(BUILTIN) if list(names) == ["all"] else names):
         if name == FAMILY:

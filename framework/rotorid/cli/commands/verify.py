@@ -48,13 +48,13 @@ def add_arguments(parser) -> None:
 
 
 def _split(files: list[str]):
-    from rotorid.errors import VerificationError
+    from rotorid.errors import UsageError
 
     model = files[0] if files[0].lower().endswith(".toml") else None
     rest = files[1:] if model else files
     if len(rest) < 2 or not rest[0].lower().endswith(".json"):
-        raise VerificationError("give [MODEL.toml] RESULT.json SWEEPS...: the estimate JSON "
-                                "and at least one sweep file, directory or pattern")
+        raise UsageError("give [MODEL.toml] RESULT.json SWEEPS...: the estimate JSON and at "
+                         "least one sweep file, directory or pattern")
     return model, Path(rest[0]), rest[1:]
 
 
