@@ -20,10 +20,12 @@ from rotorid.errors import (
     PluginError,
     RotoridError,
     RotoridWarning,
+    SignalError,
     SimulationDivergedError,
     StructureError,
 )
 from rotorid.model.derivatives import Delay, Derivative, Sign
+from rotorid.model.signals import ChannelLink, ChannelMap, Signal, SignalSet
 from rotorid.model.structure import (
     CONTROLS,
     OUTPUTS,
@@ -44,6 +46,7 @@ except PackageNotFoundError:  # running from a source tree without installation
 
 __all__ = [
     "CONTROLS", "OUTPUTS", "STATES", "FLIGHT_TEST", "SI",
+    "ChannelLink", "ChannelMap", "Signal", "SignalError", "SignalSet",
     "ConvergenceWarning", "DataError", "DataFileError", "Delay", "Derivative", "DerivativeError",
     "EstimationError", "FlightCondition", "IdentifiabilityWarning", "Maneuver", "ManeuverSet",
     "MissingFileError", "ModelStructure", "PluginDescriptor", "PluginError", "RotoridError",

@@ -38,6 +38,11 @@ class StructureError(RotoridError, ValueError):
     """A model structure or flight condition is invalid or misused."""
 
 
+class SignalError(RotoridError, ValueError):
+    """A named signal, signal set, unit or channel map is invalid (unknown or duplicate name,
+    unknown unit, a unit that does not fit the signal's kind)."""
+
+
 class DataError(RotoridError, ValueError):
     """Maneuver data are malformed (shapes, channels, time base, NaN/inf)."""
 

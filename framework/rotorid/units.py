@@ -7,7 +7,8 @@ Controls are never rescaled by a unit system: they stay in whatever unit the dat
 (% of travel for stick data, rad for blade angles).
 
 Conversions happen here and nowhere else: :func:`channel_scale` gives, per channel, the factor
-that turns an SI-rad value into the target system.
+that turns an SI-rad value into the target system; :data:`UNITS` lists every unit a named signal
+or a data column may carry and :func:`conversion_factor` converts between two of them.
 """
 
 from __future__ import annotations
@@ -17,11 +18,36 @@ import math
 import attrs
 import numpy as np
 
-from rotorid.errors import StructureError
+from rotorid.errors import SignalError, StructureError
 
 FOOT = 0.3048  #: metres per foot (exact)
 KNOT = 1852.0 / 3600.0  #: metres per second per knot (exact)
 G_SI = 9.80665  #: standard gravity, m/s²
+POUND_FORCE = 4.4482216152605  #: newtons per pound-force (exact)
+DEGREE = math.pi / 180.0  #: radians per degree
+
+#: Every unit a named signal or a data column may carry: label → (dimension, SI-rad value of
+#: one unit). ASCII spellings with ``^2`` (``"ft/s^2"``) are accepted for the ``²`` labels.
+UNITS = {
+    "m/s": ("speed", 1.0), "ft/s": ("speed", FOOT), "kt": ("speed", KNOT),
+    "m/s²": ("acceleration", 1.0), "ft/s²": ("acceleration", FOOT), "g": ("acceleration", G_SI),
+    "rad": ("angle", 1.0), "deg": ("angle", DEGREE),
+    "rad/s": ("angular rate", 1.0), "deg/s": ("angular rate", DEGREE),
+    "rad/s²": ("angular acceleration", 1.0), "deg/s²": ("angular acceleration", DEGREE),
+    "%": ("travel", 1.0),
+    "N": ("force", 1.0), "lbf": ("force", POUND_FORCE),
+}
+
+#: Physical kinds of named signals and the dimensions their units may have. A control is a
+#: stick travel (%), a surface or blade deflection (rad, deg) or a force such as thrust.
+KIND_DIMENSIONS = {
+    "velocity": ("speed",),
+    "acceleration": ("acceleration",),
+    "angle": ("angle",),
+    "rate": ("angular rate",),
+    "angular-acceleration": ("angular acceleration",),
+    "control": ("travel", "angle", "force"),
+}
 
 #: Physical kind of every named channel; decides how it scales between unit systems.
 CHANNEL_KINDS = {
@@ -129,3 +155,48 @@ def convert_state_space(a, b, states, controls, target: UnitSystem, source: Unit
     a = np.asarray(a, dtype=float)
     b = np.asarray(b, dtype=float)
     return a * sx[:, None] / sx[None, :], b * sx[:, None] / su[None, :]
+
+
+def canonical_unit(label: str) -> str:
+    """The :data:`UNITS` label of ``label`` (``"ft/s^2"`` → ``"ft/s²"``); unknown labels raise."""
+    unit = str(label).strip().replace("^2", "²")
+    if unit not in UNITS:
+        raise SignalError(f"unknown unit {label!r}; use one of {', '.join(UNITS)}")
+    return unit
+
+
+def unit_fits_kind(unit: str, kind: str) -> bool:
+    """Whether ``unit`` may carry a signal of physical ``kind`` (see :data:`KIND_DIMENSIONS`)."""
+    if kind not in KIND_DIMENSIONS:
+        raise SignalError(f"unknown signal kind {kind!r}; use one of {', '.join(KIND_DIMENSIONS)}")
+    return UNITS[canonical_unit(unit)][0] in KIND_DIMENSIONS[kind]
+
+
+def units_of_kind(kind: str) -> list[str]:
+    """The units a signal of ``kind`` may carry."""
+    return [u for u in UNITS if unit_fits_kind(u, kind)]
+
+
+def same_dimension(unit: str, other: str) -> bool:
+    """Whether values in ``unit`` convert into ``other``."""
+    return UNITS[canonical_unit(unit)][0] == UNITS[canonical_unit(other)][0]
+
+
+def units_like(unit: str) -> list[str]:
+    """The units of the same dimension as ``unit``, ``unit`` included."""
+    return [u for u in UNITS if same_dimension(u, unit)]
+
+
+def conversion_factor(source: str, target: str) -> float:
+    """Factor turning a value in unit ``source`` into unit ``target`` (same dimension).
+
+    ``conversion_factor("kt", "m/s")`` is 1852/3600; ``conversion_factor("%", "deg")`` raises,
+    since stick travel has no fixed relation to a deflection.
+    """
+    source, target = canonical_unit(source), canonical_unit(target)
+    if source == target:
+        return 1.0
+    if not same_dimension(source, target):
+        raise SignalError(f"cannot convert {source} ({UNITS[source][0]}) to {target} "
+                          f"({UNITS[target][0]}); use one of {', '.join(units_like(target))}")
+    return UNITS[source][1] / UNITS[target][1]
