@@ -7,7 +7,8 @@ import pytest
 import rotorid_envelopes.plugin as envelope_plugin
 from rotorid.errors import VerificationError
 from rotorid.plugin.manager import create, new_plugin_manager, registry
-from rotorid.verification.compare import ValidationEnvelope, wrap180
+from rotorid.plugin.contracts import ValidationEnvelope
+from rotorid.verification.envelopes import wrap180
 
 # reference/validation.md §1.4: ω, mag upper, mag lower, phase upper (no delay, delay),
 # phase lower (no delay, delay).

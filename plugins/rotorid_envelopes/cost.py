@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import attrs
 import numpy as np
-from rotorid.verification.compare import (
+from rotorid.verification.envelopes import (
     EnvelopeBounds,
     EnvelopeCheck,
     error_db_deg,
@@ -60,6 +60,7 @@ class MismatchCost:
                        "(AIAA), eq. 12.20: W_g = 1, W_p = 0.01745, W_γ = [1.58(1 − e^(−γ²))]², "
                        "n = 20; guidelines J ≤ 100, J_ave ≤ 100")
     verified: bool = True
+    kind = "cost"  # scores the pair; not drawn on the error plots
 
     def bounds(self, omega) -> EnvelopeBounds:
         """Uniform-error equivalents of the limit at unit coherence weight (constant)."""

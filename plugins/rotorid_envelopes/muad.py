@@ -10,11 +10,8 @@ from __future__ import annotations
 
 import attrs
 import numpy as np
-from rotorid.verification.compare import (
-    COHERENCE_THRESHOLD,
-    EnvelopeBounds,
-    check_bounds,
-)
+from rotorid.verification.compare import COHERENCE_THRESHOLD
+from rotorid.verification.envelopes import EnvelopeBounds, check_bounds
 
 from .tomlfile import PACKAGE_DIR, load_definition, omega_range, require
 
@@ -78,6 +75,7 @@ class MuadEnvelope:
     verified: bool = False
     threshold: float = COHERENCE_THRESHOLD
     name: str = "MUAD"
+    kind = "bounds"
 
     @classmethod
     def from_definition(cls, definition: dict, *, threshold: float = COHERENCE_THRESHOLD,
@@ -111,5 +109,5 @@ class MuadEnvelope:
             extrapolated=(omega < low * (1 - 1e-9)) | (omega > high * (1 + 1e-9)))
 
     def check(self, error, coherence, omega):
-        """Hold ``ε`` against the bounds (see :func:`rotorid.verification.compare.check_bounds`)."""
+        """Hold ``ε`` against the bounds (see :func:`rotorid.verification.envelopes.check_bounds`)."""
         return check_bounds(self, error, coherence, omega)

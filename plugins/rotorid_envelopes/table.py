@@ -14,11 +14,8 @@ from __future__ import annotations
 import attrs
 import numpy as np
 from rotorid.errors import VerificationError
-from rotorid.verification.compare import (
-    COHERENCE_THRESHOLD,
-    EnvelopeBounds,
-    check_bounds,
-)
+from rotorid.verification.compare import COHERENCE_THRESHOLD
+from rotorid.verification.envelopes import EnvelopeBounds, check_bounds
 
 from .tomlfile import PACKAGE_DIR, load_definition, omega_range, require
 
@@ -64,6 +61,7 @@ class TableEnvelope:
     phase_upper: np.ndarray = attrs.field(converter=_readonly)
     phase_lower: np.ndarray = attrs.field(converter=_readonly)
     threshold: float = COHERENCE_THRESHOLD
+    kind = "bounds"
 
     @classmethod
     def from_definition(cls, definition: dict, where: str = "envelope table", *,
@@ -115,5 +113,5 @@ class TableEnvelope:
                               interpolate(self.phase_upper), outside, self.available)
 
     def check(self, error, coherence, omega):
-        """Hold ``ε`` against the table (see :func:`rotorid.verification.compare.check_bounds`)."""
+        """Hold ``ε`` against the table (see :func:`rotorid.verification.envelopes.check_bounds`)."""
         return check_bounds(self, error, coherence, omega)

@@ -13,7 +13,7 @@ import attrs
 import numpy as np
 from rotorid.errors import DerivativeError, EstimationError
 from rotorid.estimation.estimate import Estimate
-from rotorid.estimation.reduction import Removal
+from rotorid.plugin.contracts import Removal
 from rotorid.model.derivatives import parse_name
 
 

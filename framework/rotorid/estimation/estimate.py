@@ -1,4 +1,4 @@
-"""Estimates and their statistics, and the estimator contract.
+"""Estimates and their statistics.
 
 An :class:`Estimate` is the immutable result of a parameter estimation: values, Cramér-Rao
 bounds, insensitivities, correlations, the noise covariance, the cost and RMSE history and how
@@ -15,7 +15,6 @@ import json
 import math
 import warnings
 from collections.abc import Mapping
-from typing import Protocol, runtime_checkable
 
 import attrs
 import numpy as np
@@ -25,15 +24,6 @@ from rotorid.errors import EstimationError, IdentifiabilityWarning
 #: Condition number of the scaled information matrix above which parameters count as nearly
 #: unidentifiable.
 ILL_CONDITIONED = 1e10
-
-
-@runtime_checkable
-class Estimator(Protocol):
-    """What an estimator plugin builds: ``estimate(model, maneuvers, *, start=None)``."""
-
-    name: str
-
-    def estimate(self, model, maneuvers, *, start=None) -> "Estimate": ...
 
 
 def _frozen_array(value):

@@ -20,7 +20,6 @@ Selection rules:
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Protocol, runtime_checkable
 
 import attrs
 import numpy as np
@@ -28,32 +27,9 @@ import numpy as np
 from rotorid.errors import EstimationError
 from rotorid.estimation.estimate import Estimate
 from rotorid.model.structure import ModelStructure
+from rotorid.plugin.contracts import Removal
 
 RULES = ("lowest-rmse", "first-rise")
-
-
-@attrs.frozen
-class Removal:
-    """A criterion's proposal: remove ``parameter`` because ``metric`` exceeds ``threshold``."""
-
-    parameter: str
-    criterion: str
-    metric: float
-    threshold: float
-    reason: str
-
-
-@runtime_checkable
-class ReductionCriterion(Protocol):
-    """What a reduction-criterion plugin builds."""
-
-    name: str
-
-    def rank(self, estimate: Estimate) -> Removal | None:
-        """The worst removable parameter by this criterion's metric, threshold ignored."""
-
-    def propose(self, estimate: Estimate) -> Removal | None:
-        """The parameter to remove next, or ``None`` when the criterion is satisfied."""
 
 
 @attrs.frozen(eq=False)

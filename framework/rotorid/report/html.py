@@ -37,13 +37,11 @@ from rotorid.study.pipeline import KEY_DERIVATIVES, MODELS
 from rotorid.units import unit_system
 from rotorid.verification.compare import (
     COHERENCE_THRESHOLD,
-    COST_ENVELOPES,
     envelopes_by_name,
-    error_db_deg,
     parse_pair,
 )
+from rotorid.verification.envelopes import error_db_deg
 
-#: Envelope plugins that are costs, not bounds: not drawn in the error plots.
 #: The on-axis pairs the paper requires inside the MUAD bounds with delays.
 ON_AXIS_PAIRS = ("q/long", "p/lat", "r/ped", "az/coll")
 #: The off-axis pairs whose phase error the delays should reduce.
@@ -255,8 +253,8 @@ def case_figures(result, figures_dir: Path) -> dict[str, list[str]]:
         stem = f"time_{_stem(maneuver.name)}"
         save_figure(figure, figures_dir / stem)
         written["time"].append(f"{stem}.png")
-    envelope_names = [n for n in result.case.envelopes if n not in COST_ENVELOPES]
-    envelopes = envelopes_by_name(envelope_names)
+    envelopes = [e for e in envelopes_by_name(result.case.envelopes).values()
+                 if e.kind == "bounds"]
     reference = result.verification.get("with delays")
     for item in () if reference is None else reference.pairs:
         output, control = parse_pair(item.pair)

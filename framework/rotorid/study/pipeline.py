@@ -37,11 +37,12 @@ from rotorid.errors import (
     StudyError,
 )
 from rotorid.estimation.estimate import Estimate
-from rotorid.estimation.reduction import ReductionPath, ReductionStep, Removal, reduce
+from rotorid.estimation.reduction import ReductionPath, ReductionStep, reduce
 from rotorid.executors import check_executor, failure_error, run_tasks
 from rotorid.io import atomic_write, jsonable
 from rotorid.model.modelfile import parse_model
 from rotorid.model.structure import FlightCondition, ModelStructure
+from rotorid.plugin.contracts import Removal
 from rotorid.plugin.manager import create, notify
 from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase

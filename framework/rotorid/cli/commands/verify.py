@@ -143,7 +143,6 @@ def run(args) -> int:
     from rotorid.report.plots.case import save_figure
     from rotorid.report.plots.frequency import plot_bode, plot_error
     from rotorid.verification.compare import (
-        COST_ENVELOPES,
         PAPER_PAIRS,
         envelopes_by_name,
         primary_axis,
@@ -171,7 +170,7 @@ def run(args) -> int:
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    shown = [e for name, e in envelopes.items() if name not in COST_ENVELOPES]
+    shown = [e for e in envelopes.values() if e.kind == "bounds"]
     for item in () if args.no_figures else verification.pairs:
         stem = item.pair.replace("/", "_")
         save_figure(plot_error(item, shown), out / f"error_{stem}", formats=("png",))

@@ -16,12 +16,9 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from rotorid.verification.compare import (
-    COHERENCE_THRESHOLD,
-    PairVerification,
-    ValidationEnvelope,
-    error_db_deg,
-)
+from rotorid.plugin.contracts import ValidationEnvelope
+from rotorid.verification.compare import COHERENCE_THRESHOLD, PairVerification
+from rotorid.verification.envelopes import error_db_deg
 from rotorid.verification.frequency import unwrapped_phase_deg
 
 #: Coherence below which points are hidden.
