@@ -33,6 +33,7 @@ from rotorid_signals.signals import Multistep, Sweep
 
 from .loops import AXES, LoopDesign, design_loops, quasi_steady_model
 from .sensors import SensorNoise, perturbations, with_noise
+from .turbulence import Turbulence, gust_generator, turbulence_setting
 
 KINDS = ("3211", "2311", "sweep")
 #: Flight conditions by name: airspeed in kt.
@@ -90,7 +91,7 @@ class DataSetConfig:
     Attributes:
         condition: name used in maneuver names and metadata (``"hover"``, ``"forward"``).
         airspeed_kt: trim airspeed, level flight.
-        seed: seed of every random draw (sensor noise).
+        seed: seed of every random draw (sensor noise, gusts).
         sample_rate: Hz; substeps: RK4 steps per sample.
         kinds, axes, directions: the maneuver selection (subsets of :data:`KINDS`,
             ``long lat coll ped`` and the multistep directions ``1, -1``).
@@ -98,6 +99,8 @@ class DataSetConfig:
         amplitude, step_width, sweep_amplitude: per-axis overrides (%, s, %).
         noise: sensor noise (or a mapping of σ per channel);
         loops: loop bandwidths (or a mapping of :class:`~.loops.LoopDesign` fields).
+        turbulence: None (still air), a :class:`~.turbulence.Turbulence`, ``"light"``,
+            ``"moderate"`` or a mapping (:func:`~.turbulence.turbulence_setting`).
     """
 
     condition: str = "hover"
@@ -119,6 +122,7 @@ class DataSetConfig:
         v, SensorNoise) else SensorNoise(v))
     loops: LoopDesign = attrs.field(factory=LoopDesign, converter=lambda v: v if isinstance(
         v, LoopDesign) else LoopDesign(**v))
+    turbulence: Turbulence | None = attrs.field(default=None, converter=turbulence_setting)
 
     @classmethod
     def for_condition(cls, name: str, **options) -> "DataSetConfig":
@@ -149,8 +153,11 @@ class DataSetConfig:
         return 1.0 / self.sample_rate
 
     def as_dict(self) -> dict:
-        """Plain JSON-able settings (also the content hashed by :meth:`digest`)."""
-        return attrs.asdict(self, value_serializer=lambda _, __, v: list(v)
+        """Plain JSON-able settings (also the content hashed by :meth:`digest`). Still air
+        leaves ``turbulence`` out, so still-air sets keep the keys they had before
+        turbulence existed."""
+        return attrs.asdict(self, filter=lambda a, v: not (a.name == "turbulence" and v is None),
+                            value_serializer=lambda _, __, v: list(v)
                             if isinstance(v, tuple) else v)
 
     def digest(self, plant_id: str = "") -> str:
@@ -225,6 +232,20 @@ def _pilot_block(specs, dt):
     return counts, pilot
 
 
+def _gusts(rows, n_samples: int, dt: float) -> np.ndarray | None:
+    """(B, N, 6) gusts of the maneuvers (zero in still air), None when every job flies in
+    still air; each maneuver draws from its own seeded generator."""
+    if all(job.config.turbulence is None for job, _ in rows):
+        return None
+    gusts = np.zeros((len(rows), n_samples, 6))
+    for row, (job, spec) in enumerate(rows):
+        turbulence = job.config.turbulence
+        if turbulence is not None:
+            gusts[row] = turbulence.gusts(n_samples, dt, job.config.airspeed_kt * KNOT,
+                                          gust_generator(job.config.seed, spec.name))
+    return gusts
+
+
 def fly_jobs(plant, jobs, progress=None, plant_id: str = "", with_record: bool = False):
     """Fly every maneuver of every job as one batch; one :class:`ManeuverSet` per job.
 
@@ -250,7 +271,8 @@ def fly_jobs(plant, jobs, progress=None, plant_id: str = "", with_record: bool =
             sticks.append(job.trim_stick)
     counts, pilot = _pilot_block([spec for _, spec in rows], dt)
     record = fly(plant, np.array(trims), np.array(sticks), pilot, counts,
-                 np.array([g.matrix for g in gains]), dt, jobs[0].config.substeps, progress)
+                 np.array([g.matrix for g in gains]), dt, jobs[0].config.substeps, progress,
+                 _gusts(rows, pilot.shape[1], dt))
     trim_outputs = {id(job): plant.measurements(job.trim_state[None], job.trim_stick[None])[0]
                     for job in jobs}
     by_job = {id(job): [] for job in jobs}
@@ -261,6 +283,8 @@ def fly_jobs(plant, jobs, progress=None, plant_id: str = "", with_record: bool =
         metadata = _metadata(job, spec, loop, plant_id, plant.state_names)
         metadata["excursion"] = excursion(record.states[row, :n], job.trim_state,
                                           plant.state_names)
+        if job.config.turbulence is not None:
+            metadata["turbulence"] = job.config.as_dict()["turbulence"]
         by_job[id(job)].append(Maneuver(spec.name, record.time[:n],
                                         record.stick[row, :n] - job.trim_stick, outputs,
                                         metadata, initial_state=np.zeros(8)))

@@ -1,7 +1,8 @@
 """Batched flight of a plant through several maneuvers at once.
 
 The plant is any object with ``state_names``, ``n_states``, ``derivatives(x, stick)`` and
-``measurements(x, stick)`` working on batches (rows) of states. All maneuvers start in trim
+``measurements(x, stick)`` working on batches (rows) of states; flights in turbulence also pass
+``gust=`` (B, 6) to both (:mod:`.turbulence`). All maneuvers start in trim
 (each row may have its own) and run side by side as one batch; a maneuver leaves the batch when
 its record ends.
 
@@ -9,7 +10,7 @@ Timing is that of a digital flight-test setup running at the sample rate:
 
 * at each sample instant t_k the pilot signal and the loops (computed from the state at t_k)
   give the stick δ_k, which is recorded and held until t_{k+1} (an exact zero-order hold);
-* the measurements y_k are taken at t_k with δ_k applied;
+* the measurements y_k are taken at t_k with δ_k applied (and the gust g_k, held like δ_k);
 * between samples the plant is integrated with classical fixed-step RK4, ``substeps`` steps per
   sample (0.005 s at 50 Hz with the default 4, resolving the ≈ 93 rad/s advancing flap mode of
   truth-model.md §2.6 with |λ·h| < 0.5).
@@ -18,6 +19,7 @@ Timing is that of a digital flight-test setup running at the sample rate:
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 
 import attrs
 import numpy as np
@@ -57,7 +59,8 @@ def rk4_step(derivatives: Callable, x: np.ndarray, stick: np.ndarray, h: float) 
 
 
 def fly(plant, trim_state, trim_stick, pilot, n_samples, gains, sample_time: float,
-        substeps: int = 4, progress: Callable[[float], None] | None = None) -> FlightRecord:
+        substeps: int = 4, progress: Callable[[float], None] | None = None,
+        gusts: np.ndarray | None = None) -> FlightRecord:
     """Fly B maneuvers together from trim.
 
     Args:
@@ -70,6 +73,7 @@ def fly(plant, trim_state, trim_stick, pilot, n_samples, gains, sample_time: flo
         gains: (B, 4, 9) loop gain matrices (see :class:`~.loops.LoopGains`).
         sample_time: s; substeps: RK4 steps per sample.
         progress: optional callback receiving the completed fraction (0–1).
+        gusts: optional (B, N, 6) gusts at the sample instants (m/s, rad/s); None is still air.
     """
     pilot = np.asarray(pilot, dtype=float)
     n_samples = np.asarray(n_samples, dtype=int)
@@ -80,6 +84,8 @@ def fly(plant, trim_state, trim_stick, pilot, n_samples, gains, sample_time: flo
                         f"maneuvers, got {n_samples}")
     if substeps < 1:
         raise DataError(f"substeps must be ≥ 1, got {substeps}")
+    if gusts is not None and np.shape(gusts) != (batch, length, 6):
+        raise DataError(f"gusts must have shape ({batch}, {length}, 6), got {np.shape(gusts)}")
     trim_state = np.broadcast_to(np.asarray(trim_state, dtype=float), (batch, plant.n_states))
     trim_stick = np.broadcast_to(np.asarray(trim_stick, dtype=float), (batch, 4))
     names = tuple(plant.state_names)
@@ -99,11 +105,17 @@ def fly(plant, trim_state, trim_stick, pilot, n_samples, gains, sample_time: flo
         applied = trim_stick[active] + pilot[active, k] + delta
         states[active, k] = x
         stick[active, k] = applied
-        outputs[active, k] = plant.measurements(x, applied)
+        if gusts is None:
+            derivatives, measurements = plant.derivatives, plant.measurements
+        else:
+            gust = gusts[active, k]
+            derivatives = partial(plant.derivatives, gust=gust)
+            measurements = partial(plant.measurements, gust=gust)
+        outputs[active, k] = measurements(x, applied)
         if k == length - 1:
             break
         for _ in range(substeps):
-            x = rk4_step(plant.derivatives, x, applied, h)
+            x = rk4_step(derivatives, x, applied, h)
         if not np.all(np.isfinite(x)):
             bad = active[np.flatnonzero(~np.all(np.isfinite(x), axis=1))[0]]
             raise SimulationDivergedError(

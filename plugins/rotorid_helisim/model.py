@@ -9,7 +9,10 @@ State vector (SI), in :attr:`Bo105Model.state_names` order:
 * actuators ``theta0 theta1s theta1c theta0T``: blade angles in rad, first-order lags of the
   stick-commanded angles (:class:`~.parameters.StickMixing`).
 
-Controls are stick positions in % of travel, ``[long, lat, coll, ped]``. See docs/truth-model.md.
+Controls are stick positions in % of travel, ``[long, lat, coll, ped]``. An optional gust
+``[u_g v_g w_g p_g q_g r_g]`` (m/s, rad/s, body axes; :mod:`.turbulence`) moves the air: rotor,
+fuselage, tail rotor and surfaces see the body velocity and rates minus the gust, the rigid
+body and the flapping blades' inertia the true ones. See docs/truth-model.md.
 """
 
 from __future__ import annotations
@@ -55,16 +58,20 @@ class Bo105Model:
         self._mixing_centre = np.asarray(c.mixing.centre)
 
     # ------------------------------------------------------------------ public interface
-    def derivatives(self, x: np.ndarray, stick: np.ndarray) -> np.ndarray:
-        """dx/dt, shape (B, n_states), for states x (B, n_states) SI and stick (B, 4) in %."""
+    def derivatives(self, x: np.ndarray, stick: np.ndarray,
+                    gust: np.ndarray | None = None) -> np.ndarray:
+        """dx/dt, shape (B, n_states), for states x (B, n_states) SI, stick (B, 4) in % and
+        an optional gust (B, 6) (module docstring; None is still air)."""
         x, stick = self._check(x, stick)
-        return self._evaluate(x, stick)[0]
+        return self._evaluate(x, stick, gust)[0]
 
-    def measurements(self, x: np.ndarray, stick: np.ndarray) -> np.ndarray:
+    def measurements(self, x: np.ndarray, stick: np.ndarray,
+                     gust: np.ndarray | None = None) -> np.ndarray:
         """(B, 8) ``[ax, az, q, theta, ay, p, phi, r]``: specific force at the CG in body axes
-        (m/s², total, ≈ −g on az in hover), rates (rad/s), attitudes (rad)."""
+        (m/s², total, ≈ −g on az in hover), rates (rad/s), attitudes (rad); ``gust`` as for
+        :meth:`derivatives`."""
         x, stick = self._check(x, stick)
-        specific = self._evaluate(x, stick)[1]["specific_force"]
+        specific = self._evaluate(x, stick, gust)[1]["specific_force"]
         i = self.index
         return np.stack([specific[:, 0], specific[:, 2], x[:, i["q"]], x[:, i["theta"]],
                          specific[:, 1], x[:, i["p"]], x[:, i["phi"]], x[:, i["r"]]], axis=1)
@@ -88,11 +95,14 @@ class Bo105Model:
                             f"[long, lat, coll, ped] in %, got {stick.shape}")
         return x, stick
 
-    def _evaluate(self, x, stick):
+    def _evaluate(self, x, stick, gust=None):
         c = self.config
         hub = self._hub
         omega_r = c.omega
         vel, rates = x[:, 0:3], x[:, 3:6]
+        # air-relative motion for the aerodynamics (the same arrays in still air)
+        air_vel, air_rates = (vel, rates) if gust is None else (vel - gust[:, :3],
+                                                                 rates - gust[:, 3:])
         phi, theta = x[:, 6], x[:, 7]
         flap, flap_dot = x[:, 9:12], x[:, 12:15]
         lam = x[:, self._inflow_slice]
@@ -100,9 +110,10 @@ class Bo105Model:
         blades = x[:, -4:]
 
         # --- main rotor
-        hub_vel = airframe.point_velocity(vel, rates, c.hub_position)
+        hub_vel = airframe.point_velocity(air_vel, air_rates, c.hub_position)
         mu = hub_vel @ hub.T / c.tip_speed
         hub_rates = rates @ hub.T / omega_r
+        air_hub_rates = air_rates @ hub.T / omega_r
         if c.inflow == "baseline":
             lam3 = np.empty_like(flap)
             lam3[:, 0] = lam[:, 0]
@@ -110,7 +121,7 @@ class Bo105Model:
         else:
             lam3 = lam
         loads = rotor.rotor_loads(
-            mu, hub_rates, flap, flap_dot / omega_r, lam3, blades[:, :3],
+            mu, air_hub_rates, flap, flap_dot / omega_r, lam3, blades[:, :3],
             solidity=c.solidity, lift_slope=c.lift_slope, twist=c.twist,
             lock_number=c.lock_number, profile_drag=c.profile_drag)
         spring = 0.5 * c.n_blades * c.flap_spring
@@ -124,10 +135,10 @@ class Bo105Model:
 
         # --- tail rotor, fuselage, empennage
         tr_force, tr_moment, lambda0t_rate, tr_power = airframe.tail_rotor(
-            vel, rates, blades[:, 3], lambda0t, c)
-        fus_force, fus_moment = airframe.fuselage_loads(vel, c)
-        tp_force, tp_moment = airframe.tailplane_loads(vel, rates, c)
-        fin_force, fin_moment = airframe.fin_loads(vel, rates, c)
+            air_vel, air_rates, blades[:, 3], lambda0t, c)
+        fus_force, fus_moment = airframe.fuselage_loads(air_vel, c)
+        tp_force, tp_moment = airframe.tailplane_loads(air_vel, air_rates, c)
+        fin_force, fin_moment = airframe.fin_loads(air_vel, air_rates, c)
         force = mr_force + tr_force + fus_force + tp_force + fin_force
         moment = mr_moment + tr_moment + fus_moment + tp_moment + fin_moment
 

@@ -132,6 +132,9 @@ class HelisimSource:
         """The data sets of ``case`` for any noise seed, for Monte Carlo runs: the noise-free
         set is flown once (stored in ``directory``) and each seed adds its own noise."""
         config = resolve_case(case)
+        if config.turbulence is not None:
+            raise DataError("noise realisations share one flight, but in turbulence every seed "
+                            "flies its own gusts; generate each seed's set instead")
         quiet = attrs.evolve(config, noise=SensorNoise({c: 0.0 for c in config.noise.sigma}))
         clean, _ = self.generate_into(quiet, directory)
         return NoiseRealisations(clean, config.noise)

@@ -15,7 +15,11 @@ def add_arguments(parser) -> None:
                         help="hover, or forward flight at 70 kt")
     parser.add_argument("--out", required=True, metavar="DIR",
                         help="directory for the maneuver files and manifest.json")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the sensor noise (0)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the sensor noise and gusts (0)")
+    parser.add_argument("--turbulence", default="still",
+                        choices=("still", "light", "moderate"),
+                        help="Dryden turbulence, MIL-F-8785C presets at 100 ft "
+                             "(docs/truth-model.md); default still air")
     parser.add_argument("--quick", action="store_true",
                         help="shorter records (duration scale 0.3), for trying things out")
 
@@ -41,7 +45,7 @@ class _Progress:
 def run(args) -> int:
     from rotorid.plugin.manager import create
 
-    settings = {"condition": args.condition, "seed": args.seed}
+    settings = {"condition": args.condition, "seed": args.seed, "turbulence": args.turbulence}
     if args.quick:
         settings["quick"] = True
     source = create("data-sources", "helisim",

@@ -1,0 +1,118 @@
+"""Dryden turbulence in the truth model: spectra, presets, seeds, the air-relative hooks and
+still air unchanged."""
+
+import hashlib
+import math
+
+import numpy as np
+import pytest
+import scipy.signal
+from rotorid.errors import DataError
+from rotorid.units import FOOT, KNOT
+from rotorid_helisim.datasets import DataSetConfig
+from rotorid_helisim.model import Bo105Model
+from rotorid_helisim.source import HelisimSource, resolve_case
+from rotorid_helisim.trim import trim
+from rotorid_helisim.turbulence import Turbulence, gust_generator, turbulence_setting
+
+SMALL = {"condition": "hover", "quick": True, "kinds": ["3211"], "axes": ["lat"], "seed": 3}
+
+
+@pytest.mark.parametrize("speed", [5.0, 36.0])
+def test_gust_spectra_match_the_dryden_psd(speed):
+    """Welch spectra of a long record against the closed-form one-sided PSDs, band by band
+    (ω from 0.3 rad/s, a hundred Welch bins, to a quarter of the Nyquist frequency)."""
+    turbulence = Turbulence((2.0, 1.5, 1.0), (150.0, 100.0, 30.0))
+    dt = 0.05
+    gusts = turbulence.gusts(2**17, dt, speed, np.random.default_rng(7))
+    frequency, density = scipy.signal.welch(gusts, fs=1 / dt, nperseg=4096, axis=0)
+    omega = 2 * np.pi * frequency
+    measured = density / (2 * np.pi)                # per Hz → per rad/s
+    expected = turbulence.psd(omega, speed)
+    edges = np.geomspace(0.3, np.pi / dt / 4, 6)
+    for low, high in zip(edges[:-1], edges[1:]):
+        band = (omega >= low) & (omega < high)
+        ratio = measured[band].mean(axis=0) / expected[band].mean(axis=0)
+        assert np.all(np.abs(ratio - 1) < 0.2), (low, high, ratio)
+
+
+def test_gust_variances_match_the_integrated_psd():
+    turbulence = Turbulence.preset("moderate")
+    speed = turbulence.speed(0.0)
+    omega = np.linspace(0, 2000, 2_000_001)
+    variance = np.trapezoid(turbulence.psd(omega, speed), omega, axis=0)
+    assert variance[:3] == pytest.approx(np.square(turbulence.sigma), rel=1e-3)
+    a, b, c = turbulence.forming_filter(speed)
+    import scipy.linalg
+    stationary = scipy.linalg.solve_continuous_lyapunov(a, -math.pi * b @ b.T)
+    assert np.diag(c @ stationary @ c.T) == pytest.approx(variance, rel=2e-3)
+
+
+def test_presets_follow_mil_f_8785c_low_altitude():
+    light, moderate = Turbulence.preset("light"), Turbulence.preset("moderate")
+    factor = 0.177 + 0.000823 * 100.0
+    assert moderate.sigma[2] == pytest.approx(3.0 * KNOT)          # 0.1 · W20 = 3 kt
+    assert moderate.sigma[0] == pytest.approx(3.0 * KNOT / factor**0.4)
+    assert moderate.scale == pytest.approx((100 * FOOT / factor**1.2,) * 2 + (100 * FOOT,))
+    assert light.sigma == pytest.approx(tuple(s / 2 for s in moderate.sigma))
+    assert turbulence_setting("still") is None
+    assert turbulence_setting({"preset": "light", "min_speed": 8.0}).min_speed == 8.0
+    with pytest.raises(DataError, match="preset"):
+        turbulence_setting("severe")
+
+
+def test_seeds_reproduce_and_streams_differ():
+    turbulence = Turbulence.preset("light")
+    first = turbulence.gusts(500, 0.02, 0.0, gust_generator(4, "hover_3211_lat_pos"))
+    again = turbulence.gusts(500, 0.02, 0.0, gust_generator(4, "hover_3211_lat_pos"))
+    other = turbulence.gusts(500, 0.02, 0.0, gust_generator(5, "hover_3211_lat_pos"))
+    assert first.tobytes() == again.tobytes()
+    assert not np.allclose(first, other)
+    settings = {**SMALL, "turbulence": "light"}
+    source = HelisimSource()
+    one, two = source.generate(settings), source.generate(settings)
+    assert all(a.outputs.tobytes() == b.outputs.tobytes() for a, b in zip(one, two))
+    assert one[0].metadata["turbulence"]["sigma"] == list(turbulence.sigma)
+
+
+def test_aerodynamics_see_the_air_relative_motion():
+    """A body moving at V with rates ω in still air and a body at rest in a gust of −V, −ω
+    (every point meets −(V + ω × r)) carry the same aerodynamic specific force."""
+    plant = Bo105Model()
+    point = trim(plant, 0.0)
+    moving = np.array(point.state, dtype=float)
+    motion = np.array([1.5, -0.8, 0.6, 0.05, -0.04, 0.03])
+    moving[:6] += motion
+    still = np.array(point.state, dtype=float)
+    stick = np.asarray(point.stick, dtype=float)[None]
+    accelerometers = [0, 1, 4]                      # ax az ay: aerodynamic force / mass
+    in_gust = plant.measurements(still[None], stick, gust=-motion[None])[:, accelerometers]
+    in_motion = plant.measurements(moving[None], stick)[:, accelerometers]
+    assert in_gust == pytest.approx(in_motion, rel=1e-12, abs=1e-12)
+
+
+def test_still_air_data_are_unchanged():
+    """The arrays and cache key of a still-air set, recorded before turbulence existed."""
+    flown = HelisimSource().generate(SMALL)
+    digest = hashlib.sha256()
+    for m in flown:
+        digest.update(m.inputs.tobytes())
+        digest.update(m.outputs.tobytes())
+    assert digest.hexdigest() == (
+        "45583f70d67a6396b41fe4ab3d0b669abeea1174e4418339b61abe2a3bad313d")
+    assert resolve_case({**SMALL, "turbulence": "still"}).digest() == (
+        "7489a568a03fa648ac02f8203cb01537fbef25362b534b11f03d30b3989b0f62")
+    assert "turbulence" not in flown[0].metadata
+
+
+def test_zero_intensity_turbulence_flies_as_still_air():
+    calm = DataSetConfig.from_mapping({**SMALL, "turbulence": {"sigma": (0, 0, 0),
+                                                               "scale": (100, 100, 30)}})
+    source = HelisimSource()
+    still, calm_set = source.generate(SMALL), source.generate(calm)
+    assert all(a.outputs.tobytes() == b.outputs.tobytes() for a, b in zip(still, calm_set))
+
+
+def test_turbulent_monte_carlo_realisations_are_refused(tmp_path):
+    with pytest.raises(DataError, match="own gusts"):
+        HelisimSource().noise_realisations({**SMALL, "turbulence": "light"}, tmp_path)
