@@ -1,0 +1,1 @@
+"""The ``frequency-response`` estimator: a model structure fitted to frequency responses."""

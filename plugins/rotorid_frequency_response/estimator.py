@@ -1,0 +1,201 @@
+"""The ``frequency-response`` estimator: a model structure fitted to measured frequency
+responses by minimising Tischler's mismatch cost J summed over the response pairs.
+
+Statistics follow Tischler & Remple (ch. 11, the frequency-response method's accuracy
+metrics): the information matrix is the Gauss-Newton approximation of the Hessian of the cost
+without the factor 20 of J,
+
+    M = (2/n_l) Σ_l Σ_k (∂ε/∂θ)ᵀ W (∂ε/∂θ) = JᵀJ / 10
+
+(ε the dB/deg errors, W = W_γ·diag(W_g, W_p), J the Jacobian of the residual vector of
+:mod:`.cost`), and :func:`rotorid.estimation.estimate.statistics` turns it into Cramér-Rao
+bounds sqrt((M⁻¹)_ii) and insensitivities 1/sqrt(M_ii), so the reduction criteria apply
+unchanged.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import attrs
+import numpy as np
+from rotorid import blas
+from rotorid.data import ManeuverSet
+from rotorid.errors import EstimationError
+from rotorid.estimation.equation_error import equation_error_start
+from rotorid.estimation.estimate import Estimate, statistics
+from rotorid.model.structure import ModelStructure
+from rotorid.plugin.manager import notify
+from rotorid.verification.frequency import FrequencyResponse
+from rotorid_envelopes.cost import COST_THRESHOLD
+
+from .cost import MismatchProblem
+from .levenberg_marquardt import RunResult, Settings, run
+from .pairs import PairData, pair_data, sweep_pair_data
+
+NAME = "frequency-response"
+START_STRATEGIES = ("auto", "initial", "equation-error")
+#: The factor between JᵀJ of the residual vector and Tischler's Hessian approximation.
+HESSIAN_SCALE = 10.0
+
+
+def _check_start(instance, attribute, value):
+    if value not in START_STRATEGIES:
+        raise EstimationError(f"start must be one of {', '.join(START_STRATEGIES)}, got "
+                              f"{value!r}")
+
+
+@attrs.frozen
+class FrequencyResponseEstimator:
+    """State-space fit to frequency responses (CIFER's method).
+
+    Args:
+        pairs: ``output/input`` pairs to fit; default every output over every swept input.
+            Pairs without a coherent frequency (γ² ≥ ``threshold``) are left out with a note.
+        n_points: J points per pair (log-spaced over its coherent range).
+        threshold: coherence bounding each pair's range and its kept points.
+        max_iterations, cost_tolerance, step_tolerance: Levenberg-Marquardt stopping rules
+            (tolerances relative).
+        enforce_signs: use the derivatives' sign priors as bounds.
+        start: ``"auto"`` (equation error on the sweeps when every initial derivative is
+            zero, else the initial values), ``"initial"`` or ``"equation-error"``.
+        callback: called as ``callback(iteration, J)`` after every accepted iteration.
+    """
+
+    name = NAME
+    pairs: tuple[str, ...] | None = attrs.field(
+        default=None, converter=lambda v: None if v is None else tuple(v))
+    n_points: int = 20
+    threshold: float = COST_THRESHOLD
+    max_iterations: int = 100
+    cost_tolerance: float = 1e-9
+    step_tolerance: float = 1e-10
+    enforce_signs: bool = False
+    start: str = attrs.field(default="auto", validator=_check_start)
+    callback: Callable | None = None
+
+    def fit_data(self, data) -> tuple[PairData | str, ...]:
+        """What :meth:`estimate` matches, from a :class:`ManeuverSet` of sweeps (see
+        :mod:`.pairs`) or from measured :class:`FrequencyResponse` objects of the model's
+        own responses (conditioned, or of a model): one :class:`PairData` per pair, or the
+        pair's name when it has no coherent frequency. Compute it once and pass it to
+        repeated fits (a reduction)."""
+        if isinstance(data, ManeuverSet):
+            return sweep_pair_data(data, self.pairs, self.n_points, self.threshold)
+        return tuple(pair_data(r, self.n_points, self.threshold) or r.pair
+                     for r in self._chosen(data))
+
+    def estimate(self, model: ModelStructure, data, *, start=None) -> Estimate:
+        """Fit ``model`` to ``data``: a :class:`ManeuverSet` of sweeps, measured
+        :class:`FrequencyResponse` objects, or the result of :meth:`fit_data`.
+
+        ``start`` overrides the start values (vector in parameter order or name mapping).
+        """
+        if not isinstance(model, ModelStructure):
+            raise EstimationError(f"the {NAME} estimator fits a ModelStructure (its analytic "
+                                  f"response); got {type(model).__name__}")
+        maneuvers = data if isinstance(data, ManeuverSet) else None
+        prepared = list(data) if maneuvers is None else []
+        if prepared and all(isinstance(p, (PairData, str)) for p in prepared):
+            fitted, notes = self._usable(prepared)
+        else:
+            fitted, notes = self._usable(self.fit_data(data))
+        start_values, start_note = self._start_values(model, maneuvers, start)
+        notes = [note for note in (start_note,) if note] + notes
+        problem = MismatchProblem(model, fitted)
+        initial = problem.evaluate(np.clip(start_values, *self._bounds(model)))
+        if not np.isfinite(initial.cost):
+            silent = [p.pair for p, cost in zip(fitted, initial.pair_costs)
+                      if not np.isfinite(cost)]
+            raise EstimationError(f"the start model has no response on {', '.join(silent)}; "
+                                  f"give start values that couple those pairs or leave the "
+                                  f"pairs out (pairs=...)")
+
+        def progress(iteration, cost, lam):
+            notify("rotorid_estimation_iteration", estimator=NAME, iteration=iteration,
+                   cost=cost, rmse=_equivalent_db(cost, len(fitted)), lm_lambda=lam)
+            if self.callback is not None:
+                self.callback(iteration, cost)
+
+        settings = Settings(self.max_iterations, self.cost_tolerance, self.step_tolerance)
+        with blas.single_threaded():
+            result = run(problem, start_values, self._bounds(model), settings, progress)
+        return self._estimate(model, fitted, result, start_values, problem.n_points, notes)
+
+    # ----------------------------------------------------------------- steps
+    def _chosen(self, responses: Sequence[FrequencyResponse]) -> list[FrequencyResponse]:
+        responses = list(responses)
+        if not all(isinstance(r, FrequencyResponse) for r in responses):
+            raise EstimationError(f"the {NAME} estimator fits a ManeuverSet of sweeps or a "
+                                  f"sequence of FrequencyResponse objects")
+        if self.pairs is None:
+            return responses
+        by_pair = {r.pair: r for r in responses}
+        missing = [p for p in self.pairs if p not in by_pair]
+        if missing:
+            raise EstimationError(f"no response given for pair(s) {', '.join(missing)}; "
+                                  f"given: {', '.join(by_pair)}")
+        return [by_pair[p] for p in self.pairs]
+
+    def _usable(self, prepared) -> tuple[list[PairData], list[str]]:
+        fitted = [p for p in prepared if isinstance(p, PairData) and p.omega.size]
+        empty = [p if isinstance(p, str) else p.pair for p in prepared
+                 if not (isinstance(p, PairData) and p.omega.size)]
+        if not fitted:
+            raise EstimationError(f"no pair has a frequency with coherence ≥ "
+                                  f"{self.threshold:g}; check that the sweeps excite the "
+                                  f"chosen pairs")
+        notes = [f"pairs without coherent frequencies (γ² ≥ {self.threshold:g}) left out: "
+                 f"{', '.join(empty)}"] if empty else []
+        return fitted, notes
+
+    def _bounds(self, model: ModelStructure):
+        return model.bounds(enforce_signs=self.enforce_signs)
+
+    def _start_values(self, model: ModelStructure, maneuvers, start):
+        if start is not None:
+            return model.as_vector(start), None
+        initial = model.initial_values()
+        zero = not np.any(initial[~model.is_delay()])
+        if self.start == "equation-error" or (self.start == "auto" and zero):
+            if maneuvers is None:
+                raise EstimationError("equation-error start values need the sweeps; pass the "
+                                      "ManeuverSet, start values or a structure with initial "
+                                      "values")
+            return equation_error_start(model, maneuvers), "start values from equation error"
+        return initial, None
+
+    def _estimate(self, model: ModelStructure, pairs: Sequence[PairData], result: RunResult,
+                  start, n_points: int, notes) -> Estimate:
+        names = model.parameter_names
+        jacobian = result.mismatch.jacobian
+        information = jacobian.T @ jacobian / HESSIAN_SCALE
+        stats = statistics(information, names)
+        lower, upper = self._bounds(model)
+        at_bound = tuple(n for n, v, lo, hi in zip(names, result.values, lower, upper)
+                         if (np.isfinite(lo) and v <= lo) or (np.isfinite(hi) and v >= hi))
+        signs = {d.name: d.sign.value for d in model.free_derivatives}
+        violations = tuple(n for n, v in zip(names, result.values)
+                           if (signs.get(n) == "negative" and v > 0)
+                           or (signs.get(n) == "positive" and v < 0))
+        costs = result.mismatch.pair_costs
+        notes = [*notes, "J per pair: " + ", ".join(
+            f"{p.pair} {c:.1f}" for p, c in zip(pairs, costs))]
+        return Estimate(
+            estimator=NAME, parameter_names=names, values=result.values, start=start,
+            cramer_rao=stats.cramer_rao, insensitivity=stats.insensitivity,
+            correlation=stats.correlation, information=information,
+            noise_covariance=np.diag(costs), output_names=tuple(p.pair for p in pairs),
+            cost=result.mismatch.cost, rmse=_equivalent_db(result.mismatch.cost, len(pairs)),
+            cost_history=result.cost_history,
+            rmse_history=tuple(_equivalent_db(c, len(pairs)) for c in result.cost_history),
+            iterations=result.iterations, converged=result.converged,
+            stop_reason=result.stop_reason, n_samples=n_points, sign_violations=violations,
+            at_bound=at_bound, unidentifiable=stats.unidentifiable,
+            fixed={d.name: d.initial for d in model.derivatives if d.fixed}, signs=signs,
+            units=model.units.name, notes=tuple(notes))
+
+
+def _equivalent_db(cost: float, n_pairs: int) -> float:
+    """sqrt(J_ave/20): the uniform magnitude error in dB that alone gives J_ave."""
+    return float(np.sqrt(cost / (20.0 * n_pairs)))

@@ -1,0 +1,140 @@
+"""The measured responses a fit matches: one pair's magnitude, phase and coherence weight on
+the points of its cost J, and how the model's responses combine into the one compared.
+
+The points follow the mismatch cost of :mod:`rotorid_envelopes.cost` (Tischler & Remple,
+eq. 12.20): ``n_points`` log-spaced frequencies over the pair's coherent range (γ² ≥ 0.6),
+points below the threshold dropped.
+
+From sweeps, each pair's measured response is the single-input composite estimate of its
+output over its sweep axis, and the model's response is its *apparent* response on the same
+records (:func:`rotorid.verification.frequency.apparent_response`): Σ_k κ_k(ω)·H_k(ω) over the
+inputs k, with κ_k the records' cross-spectral ratio G_{u,u_k}/G_{u,u} merged over the windows
+with the measured estimate's weights, times the input hold's response. The feedback that
+moves the other inputs with the swept one (hover stabilisation) thus acts on model and data
+alike, where a conditioned response would be unreliable (input coherence above ~0.5).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import attrs
+import numpy as np
+from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS, ManeuverSet
+from rotorid.errors import EstimationError
+from rotorid.verification.compare import default_omega, parse_pair, primary_axis
+from rotorid.verification.frequency import (
+    FrequencyResponse,
+    apparent_response,
+    response_from_maneuvers,
+)
+from rotorid_envelopes.cost import COST_THRESHOLD, MismatchCost, coherence_weight
+
+
+def _frozen(value, dtype=float) -> np.ndarray:
+    array = np.array(value, dtype=dtype, copy=True)
+    array.setflags(write=False)
+    return array
+
+
+@attrs.frozen(eq=False)
+class PairData:
+    """One pair's measured response on its n J points.
+
+    Attributes:
+        output, control: channel names (``"q"``, ``"long"``).
+        omega: J frequencies in rad/s, shape (n,).
+        magnitude_db: measured 20 log10|Ĥ|, shape (n,); phase_deg: measured unwrapped phase
+            in deg, shape (n,).
+        weight: coherence weight W_γ = [1.58 (1 − e^(−γ²))]², shape (n,).
+        mixing: κ, shape (n, 4) complex: the model's compared response is
+            Σ_k κ[:, k]·H[:, output, k] over the inputs in ``INPUT_CHANNELS`` order.
+    """
+
+    output: str
+    control: str
+    omega: np.ndarray = attrs.field(converter=_frozen)
+    magnitude_db: np.ndarray = attrs.field(converter=_frozen)
+    phase_deg: np.ndarray = attrs.field(converter=_frozen)
+    weight: np.ndarray = attrs.field(converter=_frozen)
+    mixing: np.ndarray = attrs.field(converter=lambda v: _frozen(v, complex))
+
+    @property
+    def pair(self) -> str:
+        return f"{self.output}/{self.control}"
+
+
+def cost_points(response: FrequencyResponse, n_points: int = 20,
+                threshold: float = COST_THRESHOLD) -> np.ndarray:
+    """The J frequencies of one measured response in rad/s (empty when none is coherent)."""
+    finite = np.isfinite(response.response) & np.isfinite(response.coherence)
+    omega, coherence = response.omega[finite], response.coherence[finite]
+    order = np.argsort(omega)
+    return MismatchCost(threshold=threshold, n_points=n_points).points(omega[order],
+                                                                        coherence[order])
+
+
+def pair_data(response: FrequencyResponse, n_points: int = 20,
+              threshold: float = COST_THRESHOLD) -> PairData | None:
+    """The J points of a measured response that the model's own response matches directly
+    (magnitude, unwrapped phase and γ² interpolated linearly in log ω); ``None`` when no
+    frequency is coherent."""
+    points = cost_points(response, n_points, threshold)
+    finite = np.isfinite(response.response) & np.isfinite(response.coherence)
+    if points.size == 0:
+        return None
+    order = np.argsort(response.omega[finite])
+    log_omega, log_points = np.log10(response.omega[finite][order]), np.log10(points)
+
+    def at_points(values):
+        return np.interp(log_points, log_omega, values[finite][order])
+
+    coherence = at_points(response.coherence)
+    kept = coherence >= threshold
+    mixing = np.zeros((points.size, len(INPUT_CHANNELS)), complex)
+    mixing[:, INPUT_CHANNELS.index(response.input)] = 1.0
+    return PairData(response.output, response.input, points[kept],
+                    at_points(response.magnitude_db)[kept], at_points(response.phase_deg)[kept],
+                    coherence_weight(coherence[kept]), mixing[kept])
+
+
+def all_pairs(maneuvers: ManeuverSet) -> tuple[str, ...]:
+    """Every output over every input that a sweep of ``maneuvers`` excites."""
+    axes = {primary_axis(m) for m in maneuvers}
+    return tuple(f"{o}/{c}" for c in INPUT_CHANNELS if c in axes for o in OUTPUT_CHANNELS)
+
+
+def sweep_pair_data(maneuvers: ManeuverSet, pairs: Sequence[str] | None = None,
+                    n_points: int = 20, threshold: float = COST_THRESHOLD,
+                    windows: Sequence[float] | None = None) -> tuple[PairData | str, ...]:
+    """Each pair's J points from the sweeps whose axis is its input (see the module
+    docstring); a pair without coherent frequencies gives its name instead."""
+    pairs = all_pairs(maneuvers) if pairs is None else tuple(pairs)
+    grid = default_omega(maneuvers)
+    axes = [primary_axis(m) for m in maneuvers]
+    found = []
+    for name in pairs:
+        output, control = parse_pair(name)
+        chosen = {m.name for m, axis in zip(maneuvers, axes) if axis == control}
+        if not chosen:
+            raise EstimationError(f"pair {name}: no sweep excites {control!r}; the sweeps "
+                                  f"excite {', '.join(sorted(set(axes)))}")
+        subset = maneuvers.select(lambda m: m.name in chosen)
+        points = cost_points(response_from_maneuvers(subset, control, output, grid,
+                                                     windows=windows), n_points, threshold)
+        if points.size == 0:
+            found.append(name)
+            continue
+        mixing, measured = [], None
+        for unit in np.eye(len(INPUT_CHANNELS)):
+            model, measured = apparent_response(
+                subset, control, output, points,
+                np.broadcast_to(unit, (points.size, unit.size)).astype(complex),
+                windows=windows)
+            mixing.append(model.response)
+        kept = measured.coherence >= threshold
+        found.append(PairData(output, control, points[kept], measured.magnitude_db[kept],
+                              measured.phase_deg[kept], coherence_weight(
+                                  measured.coherence[kept]),
+                              np.column_stack(mixing)[kept]) if kept.any() else name)
+    return tuple(found)

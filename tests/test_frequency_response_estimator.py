@@ -1,0 +1,122 @@
+"""The frequency-response estimator: its cost and Jacobian, exact and noisy recovery."""
+
+import numpy as np
+import pytest
+import rotorid
+from rotorid.data import Maneuver, ManeuverSet
+from rotorid.model.derivatives import Derivative
+from rotorid.simulation.transfer import frequency_response, response_sensitivities
+from rotorid.verification.frequency import FrequencyResponse
+from rotorid_envelopes.cost import MismatchCost
+from rotorid_frequency_response.cost import MismatchProblem
+from rotorid_frequency_response.estimator import FrequencyResponseEstimator
+from rotorid_frequency_response.pairs import pair_data
+from rotorid_signals.signals import Sweep
+
+HOVER = rotorid.FlightCondition.from_airspeed(0.0)
+PAIRS = ("p/lat", "phi/lat", "q/long", "theta/long")
+#: A decoupled pitch/roll model with rotor-like control delays (flight-test units).
+TRUTH = {"L_p": -3.0, "L_lat": 0.9, "M_q": -1.5, "M_long": 0.6, "tau_L_lat": 0.06,
+         "tau_M_long": 0.04}
+
+
+def _structure(names=("L_p", "L_lat", "M_q", "M_long"), delays=("L_lat", "M_long")):
+    return rotorid.ModelStructure(HOVER, [Derivative(n) for n in names]).with_delays(delays)
+
+
+def _analytic_responses(structure, values, omega, pairs=PAIRS):
+    h = frequency_response(structure, values, omega)
+    return [FrequencyResponse(control, output, omega,
+                              h[:, rotorid.OUTPUTS.index(output),
+                                rotorid.CONTROLS.index(control)],
+                              np.ones(omega.size), np.zeros(omega.size))
+            for output, control in (p.split("/") for p in pairs)]
+
+
+def test_response_sensitivities_match_central_differences():
+    structure = rotorid.ModelStructure.six_dof(
+        rotorid.FlightCondition.from_airspeed(60.0, theta0_deg=3.0)).with_delays(
+        ["L_lat", "M_long", "L_p"]).fixing("N_r", -1.0)
+    values = np.random.default_rng(1).normal(size=structure.n_parameters) * 0.3
+    values[structure.is_delay()] = [0.03, 0.05, 0.07]
+    omega = np.geomspace(0.3, 20.0, 15)
+    h, dh = response_sensitivities(structure, values, omega)
+    np.testing.assert_allclose(h, frequency_response(structure, values, omega), rtol=1e-12,
+                               atol=1e-14 * np.abs(h).max())
+    for k in range(structure.n_parameters):
+        step = np.zeros_like(values)
+        step[k] = 1e-6
+        central = (frequency_response(structure, values + step, omega)
+                   - frequency_response(structure, values - step, omega)) / 2e-6
+        assert np.abs(dh[:, k] - central).max() <= 1e-7 * np.abs(central).max()
+
+
+def test_cost_matches_the_mismatch_envelope_and_its_jacobian_central_differences():
+    structure = _structure()
+    omega = np.geomspace(0.5, 12.0, 39)       # the 20 J points fall on every second node
+    measured = _analytic_responses(structure, TRUTH, omega)
+    problem = MismatchProblem(structure, [pair_data(r) for r in measured])
+    values = structure.as_vector({**TRUTH, "L_p": -2.0, "M_long": 0.8, "tau_L_lat": 0.1})
+    mismatch = problem.evaluate(values)
+    model = frequency_response(structure, values, omega)
+    for response, cost in zip(measured, mismatch.pair_costs):
+        ratio = model[:, rotorid.OUTPUTS.index(response.output),
+                      rotorid.CONTROLS.index(response.input)] / response.response
+        reference = MismatchCost().check(ratio, response.coherence, omega).cost
+        assert cost == pytest.approx(reference, rel=1e-9)
+    assert mismatch.cost == pytest.approx(sum(mismatch.pair_costs), rel=1e-12)
+    for k in range(values.size):
+        step = np.zeros_like(values)
+        step[k] = 1e-6 * max(1.0, abs(values[k]))
+        central = (problem.evaluate(values + step, False).residuals
+                   - problem.evaluate(values - step, False).residuals) / (2 * step[k])
+        assert np.abs(mismatch.jacobian[:, k] - central).max() <= 1e-6 * np.abs(central).max()
+
+
+def test_exact_recovery_of_a_delayed_model_from_its_analytic_responses():
+    names = ("L_p", "L_lat", "M_q", "M_long", "L_v", "M_u", "X_u", "Y_v", "X_long", "Y_lat")
+    truth = {**TRUTH, "L_v": -0.05, "M_u": 0.02, "X_u": -0.03, "Y_v": -0.05,
+             "X_long": -0.3, "Y_lat": 0.3}
+    structure = _structure(names)
+    omega = np.geomspace(0.3, 15.0, 39)
+    responses = _analytic_responses(structure, truth, omega, (*PAIRS, "ax/long", "ay/lat"))
+    start = {name: 0.5 * value for name, value in truth.items()}
+    estimate = FrequencyResponseEstimator().estimate(structure, responses, start=start)
+    assert estimate.converged
+    assert estimate.cost < 1e-20
+    np.testing.assert_allclose(estimate.values, structure.as_vector(truth), rtol=1e-9)
+
+
+def _sweeps(structure, values, noise, seed):
+    """Two lateral and two longitudinal 60 s sweeps of the model, with white output noise."""
+    rng = np.random.default_rng(seed)
+    sweep = Sweep(amplitude=1.0, omega_min=0.4, omega_max=15.0, sweep_time=50.0,
+                  sample_time=0.02)
+    time = np.arange(int(round(sweep.duration / 0.02)) + 1) * 0.02
+    maneuvers = []
+    for axis in ("lat", "long"):
+        for sign in (1.0, -1.0):
+            inputs = np.zeros((time.size, 4))
+            inputs[:, rotorid.CONTROLS.index(axis)] = sign * sweep(time)
+            maneuvers.append(Maneuver(f"{axis}{sign:+.0f}", time, inputs,
+                                      np.zeros((time.size, 8)),
+                                      metadata={"axis": axis, "omega_min": 0.4}))
+    clean = ManeuverSet(maneuvers)
+    outputs = rotorid.simulate(structure, values, clean)
+    return ManeuverSet([Maneuver(m.name, m.time, m.inputs,
+                                 y + noise * rng.standard_normal(y.shape), metadata=m.metadata)
+                        for m, y in zip(clean, outputs)])
+
+
+def test_recovery_within_three_cramer_rao_bounds_from_noisy_sweeps():
+    structure = _structure()
+    sweeps = _sweeps(structure, TRUTH, noise=0.1, seed=7)
+    estimator = FrequencyResponseEstimator(pairs=PAIRS)
+    estimate = estimator.estimate(structure, sweeps)
+    truth = structure.as_vector(TRUTH)
+    assert estimate.converged
+    assert np.all(np.isfinite(estimate.cramer_rao))
+    assert np.all(np.abs(estimate.values - truth) <= 3.0 * estimate.cramer_rao)
+    derivatives = ~structure.is_delay()
+    assert np.all(estimate.cramer_rao_pct[derivatives] < 25.0)     # the bounds say something
+    assert np.mean(np.diag(estimate.noise_covariance)) < 20.0       # J per pair on the diagonal
