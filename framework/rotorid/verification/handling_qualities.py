@@ -1,0 +1,164 @@
+"""ADS-33 bandwidth and phase delay of the attitude responses (ADS-33E-PRF, §3.3 / 3.4:
+small-amplitude attitude changes, short-term response).
+
+For an attitude response Φ(ω) = ∠H(jω) in deg (unwrapped) and |H| in dB:
+
+* ω180: the lowest frequency where the phase reaches −180°;
+* ω_BW,phase: where the phase reaches −135° (45° phase margin);
+* ω_BW,gain: where the gain exceeds its value at ω180 by 6 dB (6 dB gain margin);
+* bandwidth ω_BW = min(ω_BW,gain, ω_BW,phase) (rate-response types);
+* phase delay τ_p = −(Φ(2ω180) + 180°) / (57.3·2ω180) in s.
+
+The pairs are pitch attitude over longitudinal cyclic (``theta/long``), roll attitude over
+lateral cyclic (``phi/lat``) and heading over pedal (``psi/ped``). The heading is not a model
+output; its response is taken as that of the yaw rate integrated, ψ = r/(jω) (ψ̇ = r about
+level trim). Crossings are interpolated linearly in log ω between grid points. A response
+whose low-frequency phase is positive (a control whose positive sense reduces the attitude)
+is negated first, so that every attitude starts at −90° as an integrator does. The ADS-33
+boundary charts (Level 1/2/3 regions) are not encoded here: these are the numbers to read
+against them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import attrs
+import numpy as np
+
+from rotorid.errors import VerificationError
+from rotorid.model.structure import CONTROLS, OUTPUTS
+from rotorid.simulation.transfer import frequency_response
+from rotorid.verification.frequency import FrequencyResponse, unwrapped_phase_deg
+
+#: ADS-33's attitude pairs; ``psi`` is the heading (integrated yaw rate).
+HQ_PAIRS = ("theta/long", "phi/lat", "psi/ped")
+#: deg per rad as ADS-33 writes it in the phase-delay formula.
+DEG_PER_RAD = 57.3
+
+
+@attrs.frozen
+class HandlingQualities:
+    """Bandwidth and phase delay of one attitude response.
+
+    Attributes:
+        pair: ``attitude/control``.
+        source: ``"model"`` or ``"measured"``.
+        omega_180, gain_bandwidth, phase_bandwidth, bandwidth: rad/s, ``None`` where the
+            response does not reach the crossing inside the frequencies given.
+        phase_delay: τ_p in s, ``None`` when 2ω180 lies beyond the frequencies given.
+        sign_reversed: the response was negated (its control's positive sense reduces the
+            attitude).
+    """
+
+    pair: str
+    source: str
+    omega_180: float | None
+    gain_bandwidth: float | None
+    phase_bandwidth: float | None
+    bandwidth: float | None
+    phase_delay: float | None
+    sign_reversed: bool = False
+
+    def as_dict(self) -> dict:
+        return attrs.asdict(self)
+
+
+def _crossing(omega: np.ndarray, values: np.ndarray, level: float) -> float | None:
+    """The lowest frequency where ``values`` falls through ``level`` (log-ω interpolation)."""
+    below = np.flatnonzero((values[:-1] > level) & (values[1:] <= level))
+    if below.size == 0:
+        return None
+    k = below[0]
+    share = (values[k] - level) / (values[k] - values[k + 1])
+    return float(10.0 ** (np.log10(omega[k]) + share * np.log10(omega[k + 1] / omega[k])))
+
+
+def _at(omega: np.ndarray, values: np.ndarray, frequency: float) -> float | None:
+    if not omega[0] <= frequency <= omega[-1]:
+        return None
+    return float(np.interp(np.log10(frequency), np.log10(omega), values))
+
+
+def bandwidth_phase_delay(omega, response, pair: str = "", source: str = "model"
+                          ) -> HandlingQualities:
+    """ADS-33 bandwidth and phase delay of an attitude response.
+
+    Args:
+        omega: increasing frequencies in rad/s, shape (M,).
+        response: complex attitude response per control unit, shape (M,).
+        pair, source: labels for the result.
+    """
+    omega = np.asarray(omega, dtype=float)
+    response = np.asarray(response, dtype=complex)
+    if omega.ndim != 1 or omega.shape != response.shape or omega.size < 2 \
+            or np.any(np.diff(omega) <= 0) or np.any(omega <= 0):
+        raise VerificationError("bandwidth needs increasing positive frequencies (rad/s) and "
+                                "a response of the same shape (M,)")
+    if not np.all(np.isfinite(response)) or np.any(response == 0):
+        raise VerificationError(f"{pair or 'the response'}: the response must be finite and "
+                                f"non-zero at every frequency; keep only the coherent ones")
+    reversed_sign = bool(np.angle(response[0]) > 0)
+    if reversed_sign:
+        response = -response
+    phase = unwrapped_phase_deg(response)
+    phase -= 360.0 * np.round((phase[0] + 90.0) / 360.0)     # the branch starting near −90°
+    gain = 20.0 * np.log10(np.abs(response))
+    omega_180 = _crossing(omega, phase, -180.0)
+    phase_bandwidth = _crossing(omega, phase, -135.0)
+    gain_bandwidth = delay = None
+    if omega_180 is not None:
+        gain_bandwidth = _crossing(omega, gain, _at(omega, gain, omega_180) + 6.0)
+        phase_at_double = _at(omega, phase, 2.0 * omega_180)
+        if phase_at_double is not None:
+            delay = -(phase_at_double + 180.0) / (DEG_PER_RAD * 2.0 * omega_180)
+    candidates = [w for w in (gain_bandwidth, phase_bandwidth) if w is not None]
+    return HandlingQualities(pair, source, omega_180, gain_bandwidth, phase_bandwidth,
+                             min(candidates) if candidates else None, delay, reversed_sign)
+
+
+def _attitude(pair: str) -> tuple[str, str]:
+    if pair not in HQ_PAIRS:
+        raise VerificationError(f"unknown handling-qualities pair {pair!r}; pairs: "
+                                f"{', '.join(HQ_PAIRS)}")
+    attitude, control = pair.split("/")
+    return attitude, control
+
+
+def model_handling_qualities(structure, values, omega=None,
+                             pairs: Sequence[str] = HQ_PAIRS) -> tuple[HandlingQualities, ...]:
+    """Bandwidth and phase delay of a model's attitude responses (analytic, exact delays).
+
+    ``omega`` defaults to 400 log-spaced frequencies over 0.1–100 rad/s.
+    """
+    omega = np.geomspace(0.1, 100.0, 400) if omega is None else np.asarray(omega, float)
+    full = frequency_response(structure, values, omega)
+    results = []
+    for pair in pairs:
+        attitude, control = _attitude(pair)
+        column = CONTROLS.index(control)
+        if attitude == "psi":
+            response = full[:, OUTPUTS.index("r"), column] / (1j * omega)
+        else:
+            response = full[:, OUTPUTS.index(attitude), column]
+        results.append(bandwidth_phase_delay(omega, response, pair, "model"))
+    return tuple(results)
+
+
+def measured_handling_qualities(responses: Sequence[FrequencyResponse],
+                                threshold: float = 0.6) -> tuple[HandlingQualities, ...]:
+    """Bandwidth and phase delay from measured attitude responses (``theta/long``,
+    ``phi/lat``; ``r/ped`` gives ``psi/ped``), over the frequencies with coherence ≥
+    ``threshold``; responses of other pairs are ignored."""
+    results = []
+    for measured in responses:
+        pair = "psi/ped" if measured.pair == "r/ped" else measured.pair
+        if pair not in HQ_PAIRS:
+            continue
+        keep = (np.isfinite(measured.response) & (measured.coherence >= threshold)
+                & (np.abs(np.nan_to_num(measured.response)) > 0))
+        omega, response = measured.omega[keep], measured.response[keep]
+        if measured.pair == "r/ped":
+            response = response / (1j * omega)
+        results.append(bandwidth_phase_delay(omega, response, pair, "measured"))
+    return tuple(results)

@@ -1,0 +1,84 @@
+"""ADS-33 bandwidth and phase delay against hand-computed values."""
+
+import math
+
+import numpy as np
+import pytest
+import rotorid
+from rotorid.model.derivatives import Derivative
+from rotorid.simulation.transfer import frequency_response
+from rotorid.verification.frequency import FrequencyResponse
+from rotorid.verification.handling_qualities import (
+    bandwidth_phase_delay,
+    measured_handling_qualities,
+    model_handling_qualities,
+)
+from scipy.optimize import brentq
+
+#: θ/δ = K e^(−τs) / (s (s + a)): pitch rate first order with a control delay.
+K, A, TAU = 0.8, 2.0, 0.1
+
+
+def _phase_deg(omega):
+    """Hand-derived phase of K e^(−τs)/(s(s + a)) in deg."""
+    return -90.0 - math.degrees(math.atan(omega / A)) - math.degrees(TAU * omega)
+
+
+def _reference():
+    omega_180 = brentq(lambda w: _phase_deg(w) + 180.0, 0.1, 50.0)
+    omega_135 = brentq(lambda w: _phase_deg(w) + 135.0, 0.1, 50.0)
+    gain = lambda w: 20 * math.log10(K / (w * math.hypot(w, A)))  # noqa: E731
+    omega_gain = brentq(lambda w: gain(w) - gain(omega_180) - 6.0, 0.01, omega_180)
+    delay = -(_phase_deg(2 * omega_180) + 180.0) / (57.3 * 2 * omega_180)
+    return omega_180, omega_135, omega_gain, delay
+
+
+def test_reference_matches_the_hand_computation():
+    # ω180: atan(ω/2) + 0.1ω = π/2 → ω = 4.328 (atan 2.164 = 1.1383, + 0.4328 = 1.5711).
+    # ω135: atan(ω/2) + 0.1ω = π/4 → ω = 1.481 (0.6375 + 0.1481 = 0.7856).
+    # τ_p: at 2ω180 = 8.657 the lag is atan(4.328) + 0.8657 = 2.2094 rad, 36.6° beyond 90°,
+    # so τ_p = 36.6 / (57.3 · 8.657) = 0.0738 s.
+    omega_180, omega_135, _, delay = _reference()
+    assert omega_180 == pytest.approx(4.328, abs=1e-3)
+    assert omega_135 == pytest.approx(1.481, abs=1e-3)
+    assert delay == pytest.approx(0.0738, abs=1e-4)
+
+
+def test_model_bandwidth_and_phase_delay_match_the_hand_computation():
+    structure = rotorid.ModelStructure(rotorid.FlightCondition.from_airspeed(0.0), [
+        Derivative("M_q"), Derivative("M_long")]).with_delays(["M_long"])
+    values = {"M_q": -A, "M_long": K, "tau_M_long": TAU}
+    (pitch,) = model_handling_qualities(structure, values, np.geomspace(0.1, 100.0, 4000),
+                                        pairs=["theta/long"])
+    omega_180, omega_135, omega_gain, delay = _reference()
+    assert pitch.omega_180 == pytest.approx(omega_180, rel=1e-4)
+    assert pitch.phase_bandwidth == pytest.approx(omega_135, rel=1e-4)
+    assert pitch.gain_bandwidth == pytest.approx(omega_gain, rel=1e-4)
+    assert pitch.bandwidth == pytest.approx(min(omega_135, omega_gain), rel=1e-4)
+    assert pitch.phase_delay == pytest.approx(delay, rel=1e-3)
+    assert not pitch.sign_reversed
+
+
+def test_measured_responses_heading_from_yaw_rate_and_reversed_sign():
+    structure = rotorid.ModelStructure(rotorid.FlightCondition.from_airspeed(0.0), [
+        Derivative("N_r"), Derivative("N_ped")]).with_delays(["N_ped"])
+    values = {"N_r": -A, "N_ped": -K, "tau_N_ped": TAU}          # pedal reduces heading
+    omega = np.geomspace(0.2, 40.0, 800)
+    yaw = frequency_response(structure, values, omega)[:, rotorid.OUTPUTS.index("r"),
+                                                        rotorid.CONTROLS.index("ped")]
+    coherence = np.where(omega < 30.0, 0.9, 0.1)
+    measured = FrequencyResponse("ped", "r", omega, yaw, coherence, np.zeros(omega.size))
+    (heading,) = measured_handling_qualities([measured])
+    omega_180, omega_135, omega_gain, delay = _reference()
+    assert heading.pair == "psi/ped" and heading.source == "measured"
+    assert heading.sign_reversed
+    assert heading.omega_180 == pytest.approx(omega_180, rel=1e-3)
+    assert heading.bandwidth == pytest.approx(min(omega_135, omega_gain), rel=1e-3)
+    assert heading.phase_delay == pytest.approx(delay, rel=1e-2)
+
+
+def test_phase_delay_is_none_beyond_the_grid():
+    omega = np.geomspace(0.5, 6.0, 200)
+    s = 1j * omega
+    result = bandwidth_phase_delay(omega, K * np.exp(-TAU * s) / (s * (s + A)))
+    assert result.omega_180 is not None and result.phase_delay is None
