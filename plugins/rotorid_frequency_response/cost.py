@@ -24,7 +24,7 @@ import numpy as np
 from rotorid.data import OUTPUT_CHANNELS
 from rotorid.model.structure import ModelStructure
 from rotorid.simulation.transfer import frequency_response, response_sensitivities
-from rotorid.verification.compare import wrap180
+from rotorid.verification.envelopes import wrap180
 from rotorid_envelopes.cost import W_GAIN, W_PHASE
 
 from .pairs import PairData

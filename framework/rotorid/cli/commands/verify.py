@@ -118,6 +118,30 @@ def model_from_result(structure, result: Mapping, path: Path):
     return structure, structure.as_mapping(values)
 
 
+def load_sweeps(locations):
+    """The maneuvers of files, directories or patterns; only the ``sweep`` ones when the
+    maneuvers carry ``kind`` metadata."""
+    from rotorid.plugin.manager import create
+
+    source = create("data-sources", "files")
+    sweeps = source.load(locations[0])
+    for location in locations[1:]:
+        sweeps = sweeps.merged(source.load(location))
+    if any("kind" in m.metadata for m in sweeps):
+        sweeps = sweeps.select(kind="sweep")
+    return sweeps
+
+
+def chosen_pairs(option: str | None, sweeps) -> list[str]:
+    """The ``--pairs`` option's pairs, or the paper's pairs whose input the sweeps excite."""
+    from rotorid.verification.compare import PAPER_PAIRS, primary_axis
+
+    if option:
+        return [p.strip() for p in option.split(",") if p.strip()]
+    axes = {primary_axis(m) for m in sweeps}
+    return [p for p in PAPER_PAIRS if p.split("/")[1] in axes]
+
+
 def _check_units(structure, result: Mapping, sweeps, path: Path) -> None:
     from rotorid.errors import DataFileError
     from rotorid.units import unit_system
@@ -139,32 +163,17 @@ def run(args) -> int:
     matplotlib.use("Agg")
 
     from rotorid.io import atomic_write
-    from rotorid.plugin.manager import create
     from rotorid.report.plots.case import save_figure
     from rotorid.report.plots.frequency import plot_bode, plot_error
-    from rotorid.verification.compare import (
-        PAPER_PAIRS,
-        envelopes_by_name,
-        primary_axis,
-        verify_model,
-    )
+    from rotorid.verification.compare import envelopes_by_name, verify_model
 
     model, result_path, locations = _split(args.files)
     result = _read_result(result_path)
     structure, values = model_from_result(_structure(model, result, result_path), result,
                                           result_path)
-    source = create("data-sources", "files")
-    sweeps = source.load(locations[0])
-    for location in locations[1:]:
-        sweeps = sweeps.merged(source.load(location))
-    if any("kind" in m.metadata for m in sweeps):
-        sweeps = sweeps.select(kind="sweep")
+    sweeps = load_sweeps(locations)
     _check_units(structure, result, sweeps, result_path)
-    if args.pairs:
-        pairs = [p.strip() for p in args.pairs.split(",") if p.strip()]
-    else:
-        axes = {primary_axis(m) for m in sweeps}
-        pairs = [p for p in PAPER_PAIRS if p.split("/")[1] in axes]
+    pairs = chosen_pairs(args.pairs, sweeps)
     envelopes = envelopes_by_name([e.strip() for e in args.envelopes.split(",") if e.strip()])
     verification = verify_model(structure, values, sweeps, pairs, envelopes)
 

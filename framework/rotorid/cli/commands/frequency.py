@@ -1,0 +1,122 @@
+"""``rotorid frequency``: frequency responses of sweeps as data.
+
+Usage::
+
+    rotorid frequency SWEEPS... [--pairs q/long,p/lat] [--conditioned] --out responses.json
+
+SWEEPS are maneuver files, directories or glob patterns (only ``kind = sweep`` maneuvers when
+the files say their kind). Each pair's composite response (:mod:`rotorid.verification.frequency`)
+comes from the sweeps whose axis is its input, on the default log grid of the verification
+(:func:`rotorid.verification.compare.default_omega`). The file's suffix picks the format:
+
+* ``.json``: ``{"sweeps", "units", "pairs": [{"pair", "input", "output", "conditioned_on",
+  "windows_s", "omega_rad_s", "magnitude_db", "phase_deg", "real", "imag", "coherence",
+  "random_error"}]}`` (NaN where no window covers a frequency written as null);
+* ``.csv``: one row per pair and frequency with those columns;
+* ``.mat``: one struct per pair named ``<output>_<input>`` with the same fields and ``H``
+  (complex).
+
+Frequencies in rad/s, magnitudes in dB of output unit per input unit, phases in deg
+(unwrapped), coherence γ² (partial with ``--conditioned``), random error normalised.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+NAME = "frequency"
+HELP = ("frequency responses of sweeps as data: ω, H (dB, deg, complex), coherence and "
+        "random error per pair, to JSON, CSV or MAT")
+FORMATS = (".json", ".csv", ".mat")
+COLUMNS = ("omega_rad_s", "magnitude_db", "phase_deg", "real", "imag", "coherence",
+           "random_error")
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("sweeps", nargs="+", metavar="SWEEPS",
+                        help="sweep files, directories or glob patterns")
+    parser.add_argument("--pairs", default=None,
+                        help="comma-separated OUTPUT/INPUT pairs (default: the paper's "
+                             "pairs whose input the sweeps excite)")
+    parser.add_argument("--conditioned", action="store_true",
+                        help="condition each response on the other inputs that moved in its "
+                             "sweeps (partial coherence)")
+    parser.add_argument("--out", required=True, metavar="FILE",
+                        help="responses.json, responses.csv or responses.mat")
+
+
+def response_columns(response) -> dict:
+    """One response's arrays by column name, each shape (M,)."""
+    return {"omega_rad_s": response.omega, "magnitude_db": response.magnitude_db,
+            "phase_deg": response.phase_deg, "real": response.response.real,
+            "imag": response.response.imag, "coherence": response.coherence,
+            "random_error": response.random_error}
+
+
+def _json(responses, sweeps) -> str:
+    import json
+
+    from rotorid.io import jsonable
+
+    pairs = [{"pair": r.pair, "input": r.input, "output": r.output,
+              "conditioned_on": list(r.conditioned_on), "windows_s": list(r.windows),
+              **{k: v.tolist() for k, v in response_columns(r).items()}} for r in responses]
+    return json.dumps(jsonable({"sweeps": list(sweeps.names), "units": sweeps.units,
+                                "pairs": pairs}), indent=1)
+
+
+def _csv(responses) -> str:
+    import numpy as np
+
+    lines = [",".join(("pair", *COLUMNS))]
+    for r in responses:
+        table = np.column_stack(list(response_columns(r).values()))
+        lines.extend(f"{r.pair}," + ",".join(f"{x:.10g}" for x in row) for row in table)
+    return "\n".join(lines) + "\n"
+
+
+def _mat(responses):
+    import scipy.io
+
+    structs = {r.pair.replace("/", "_"): {**response_columns(r), "H": r.response,
+                                          "input": r.input, "output": r.output}
+               for r in responses}
+    return lambda handle: scipy.io.savemat(handle, structs)
+
+
+def run(args) -> int:
+    from rotorid.cli.commands.verify import chosen_pairs, load_sweeps
+    from rotorid.errors import UsageError
+    from rotorid.io import atomic_write
+    from rotorid.verification.compare import default_omega, parse_pair, primary_axis
+    from rotorid.verification.frequency import moving_inputs, response_from_maneuvers
+
+    out = Path(args.out)
+    if out.suffix.lower() not in FORMATS:
+        raise UsageError(f"--out {out}: give a file ending in {', '.join(FORMATS)}")
+    sweeps = load_sweeps(args.sweeps)
+    omega = default_omega(sweeps)
+    axes = [primary_axis(m) for m in sweeps]
+    responses = []
+    for pair in chosen_pairs(args.pairs, sweeps):
+        output, control = parse_pair(pair)
+        names = {m.name for m, axis in zip(sweeps, axes) if axis == control}
+        if not names:
+            raise UsageError(f"pair {pair}: no sweep excites {control!r}; the sweeps excite "
+                             f"{', '.join(sorted(set(axes)))}")
+        subset = sweeps.select(lambda m: m.name in names)
+        others = moving_inputs(subset, control) if args.conditioned else ()
+        responses.append(response_from_maneuvers(subset, control, output, omega,
+                                                 conditioned_on=others))
+    if out.parent != Path(""):
+        out.parent.mkdir(parents=True, exist_ok=True)
+    suffix = out.suffix.lower()
+    atomic_write(out, _json(responses, sweeps) if suffix == ".json"
+                 else _csv(responses) if suffix == ".csv" else _mat(responses))
+    for r in responses:
+        coherent = r.omega[r.coherence >= 0.6]
+        band = (f"γ² ≥ 0.6 over {coherent.min():.2f}–{coherent.max():.2f} rad/s"
+                if coherent.size else "no frequency with γ² ≥ 0.6")
+        print(f"{r.pair:<12} {band}")
+    print(f"wrote {len(responses)} responses to {out}")
+    return 0

@@ -1,0 +1,59 @@
+"""``rotorid frequency``: responses of sweep files written as JSON, CSV and MAT."""
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.io
+from rotorid.cli.main import main
+from rotorid.simulation.transfer import frequency_response
+from rotorid_files.formats import write_maneuver
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_frequency_response_estimator import TRUTH, _structure, _sweeps  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def sweep_dir(tmp_path_factory):
+    directory = tmp_path_factory.mktemp("sweeps")
+    for maneuver in _sweeps(_structure(), TRUTH, noise=0.0, seed=0):
+        write_maneuver(maneuver, directory / f"{maneuver.name}.npz")
+    return directory
+
+
+def test_json_holds_the_response_that_matches_the_model(sweep_dir, tmp_path, capsys):
+    out = tmp_path / "responses.json"
+    assert main(["frequency", str(sweep_dir), "--pairs", "q/long,p/lat", "--out",
+                 str(out)]) == 0
+    assert "wrote 2 responses" in capsys.readouterr().out
+    record = json.loads(out.read_text())
+    assert [p["pair"] for p in record["pairs"]] == ["q/long", "p/lat"]
+    pair = record["pairs"][0]
+    omega = np.array(pair["omega_rad_s"])
+    measured = np.array(pair["real"]) + 1j * np.array(pair["imag"])
+    coherent = (np.array(pair["coherence"]) > 0.99) & (omega < 10.0)
+    model = frequency_response(_structure(), TRUTH, omega)[:, 2, 0]        # q / long
+    hold = (1 - np.exp(-1j * omega * 0.02)) / (1j * omega * 0.02)           # zero-order hold
+    ratio = measured[coherent] / (model * hold)[coherent]
+    assert np.all(np.abs(20 * np.log10(np.abs(ratio))) < 0.5)             # dB
+    assert np.all(np.abs(np.degrees(np.angle(ratio))) < 5.0)
+    np.testing.assert_allclose(pair["magnitude_db"], 20 * np.log10(np.abs(measured)))
+
+
+def test_csv_and_mat_carry_the_same_numbers(sweep_dir, tmp_path):
+    csv, mat = tmp_path / "r.csv", tmp_path / "r.mat"
+    assert main(["frequency", str(sweep_dir), "--pairs", "theta/long", "--conditioned",
+                 "--out", str(csv)]) == 0
+    assert main(["frequency", str(sweep_dir), "--pairs", "theta/long", "--conditioned",
+                 "--out", str(mat)]) == 0
+    table = np.genfromtxt(csv, delimiter=",", names=True, dtype=None, encoding="utf-8")
+    struct = scipy.io.loadmat(mat, simplify_cells=True)["theta_long"]
+    np.testing.assert_allclose(table["omega_rad_s"], struct["omega_rad_s"], rtol=1e-9)
+    np.testing.assert_allclose(table["real"] + 1j * table["imag"], struct["H"], rtol=1e-8)
+
+
+def test_unknown_suffix_is_a_usage_error(sweep_dir, tmp_path, capsys):
+    assert main(["frequency", str(sweep_dir), "--out", str(tmp_path / "r.txt")]) == 2
+    assert "give a file ending in .json, .csv, .mat" in capsys.readouterr().err
