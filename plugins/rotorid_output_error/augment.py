@@ -5,7 +5,7 @@ from __future__ import annotations
 import attrs
 import numpy as np
 from rotorid.data import ManeuverSet
-from rotorid.estimation.models import finite_difference_sensitivities
+from rotorid.estimation.models import finite_difference_sensitivities, measured_outputs
 from rotorid.model.structure import STATES
 from rotorid.simulation.simulator import Simulator
 
@@ -33,6 +33,9 @@ class WithOutputBiases:
         extra = len(self.parameter_names) - self.n_base
         return (np.concatenate([lower, np.full(extra, -np.inf)]),
                 np.concatenate([upper, np.full(extra, np.inf)]))
+
+    def measured(self, maneuvers):
+        return measured_outputs(self.model, maneuvers)
 
     def _biases(self, values):
         return np.asarray(values[self.n_base:]).reshape(len(self.maneuver_names), -1)

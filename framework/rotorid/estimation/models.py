@@ -11,7 +11,10 @@ optional (central finite differences are used otherwise, see
 :func:`finite_difference_sensitivities`), and so is ``gauss_newton(values, maneuvers,
 residuals, weighting) -> (F, G)``, the products of :func:`gauss_newton_products` computed
 without storing the sensitivities. Outputs are compared with the maneuvers' measured outputs
-picked by ``output_names``.
+picked by ``output_names``, or with those of the optional ``measured(maneuvers) -> list of
+(N_i, n_o)`` (a model that reads its own signals from the data, such as
+:class:`rotorid.estimation.integrated.IntegratedModel`). A nonlinear model of one's own
+(:class:`rotorid.model.nonlinear.NonlinearModel`) is wrapped in that adapter by :func:`as_model`.
 """
 
 from __future__ import annotations
@@ -22,6 +25,8 @@ import numpy as np
 
 from rotorid.data import OUTPUT_CHANNELS, ManeuverSet
 from rotorid.errors import StructureError
+from rotorid.estimation.integrated import IntegratedModel
+from rotorid.model.nonlinear import NonlinearModel
 from rotorid.model.structure import ModelStructure
 from rotorid.simulation.simulator import Simulator, weighting_factor
 
@@ -41,7 +46,10 @@ class IdentifiableModel(Protocol):
 
 
 def measured_outputs(model, maneuvers: ManeuverSet) -> list[np.ndarray]:
-    """The measured outputs the model's ``output_names`` select, (N_i, n_o) per maneuver."""
+    """The measured outputs the model's ``output_names`` select (or its ``measured``
+    gives), (N_i, n_o) per maneuver."""
+    if hasattr(model, "measured"):
+        return model.measured(maneuvers)
     unknown = [n for n in model.output_names if n not in OUTPUT_CHANNELS]
     if unknown:
         raise StructureError(f"model outputs {unknown} are not maneuver channels "
@@ -149,9 +157,12 @@ class LinearModel:
 
 
 def as_model(model_or_structure):
-    """Wrap a :class:`ModelStructure` in :class:`LinearModel`; pass other models through."""
+    """Wrap a :class:`ModelStructure` in :class:`LinearModel` and a nonlinear model of one's
+    own in :class:`IntegratedModel` (default options); pass other models through."""
     if isinstance(model_or_structure, ModelStructure):
         return LinearModel(model_or_structure)
+    if isinstance(model_or_structure, NonlinearModel):
+        return IntegratedModel(model_or_structure)
     if not isinstance(model_or_structure, IdentifiableModel):
         raise StructureError(
             f"{type(model_or_structure).__name__} is not an identifiable model: it needs "
