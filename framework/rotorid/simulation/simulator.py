@@ -100,7 +100,7 @@ def _sources(inputs: np.ndarray, states: np.ndarray | None = None) -> np.ndarray
     return sources
 
 
-def _lagged(sources: np.ndarray, taps) -> np.ndarray:
+def lagged_sources(sources: np.ndarray, taps) -> np.ndarray:
     """(N, B, K) array whose column k is source column c at sample n − lag for tap (lag, c).
 
     sources: (N, B, 12) states then controls, time-major. Samples outside the record are trim
@@ -320,7 +320,7 @@ class Simulator:
         families = [({lag: m[None] for lag, m in maps.Pu.items()}, 8)]
         taps = _taps(*families)
         weights = _tap_weights(taps, families, 1, companion.size)
-        lagged = _lagged(_sources(group.inputs), taps)
+        lagged = lagged_sources(_sources(group.inputs), taps)
         start = np.zeros((b, companion.size))
         start[:, :8] = group.x0
         states = np.empty((n, b, companion.size))
@@ -343,7 +343,7 @@ class Simulator:
         taps = _taps(*families)
         y = states @ companion.output.T
         if taps:
-            y += _lagged(_sources(group.inputs), taps) @ _tap_weights(taps, families, 1, 8)
+            y += lagged_sources(_sources(group.inputs), taps) @ _tap_weights(taps, families, 1, 8)
         return y
 
     def _sensitivities(self, maps: DiscreteMaps, companion: _Companion, group: _Group,
@@ -361,7 +361,7 @@ class Simulator:
         forcing_maps = [(maps.dPs, 0), (maps.dPu, 8)]
         direct_maps = [(maps.dCs, 0), (maps.dDu, 8)]
         taps = _taps(*forcing_maps, *direct_maps)
-        lagged = _lagged(_sources(group.inputs, states), taps)
+        lagged = lagged_sources(_sources(group.inputs, states), taps)
         direct = _DirectTerm(_tap_weights(taps, direct_maps, p, 8), sink.output_map, p)
         forcing_weights = _tap_weights(taps, forcing_maps, p, size)
         forcing_weights = forcing_weights.reshape(len(taps), p, size)[:, direct.order]

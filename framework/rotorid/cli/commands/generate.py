@@ -15,7 +15,8 @@ def add_arguments(parser) -> None:
                         help="hover, or forward flight at 70 kt")
     parser.add_argument("--out", required=True, metavar="DIR",
                         help="directory for the maneuver files and manifest.json")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the sensor noise and gusts (0)")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="seed of the sensor noise and gusts (0)")
     parser.add_argument("--turbulence", default="still",
                         choices=("still", "light", "moderate"),
                         help="Dryden turbulence, MIL-F-8785C presets at 100 ft "

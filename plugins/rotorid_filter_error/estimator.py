@@ -1,0 +1,291 @@
+"""The ``filter-error`` estimator: maximum likelihood with process and measurement noise.
+
+The model is the structure's exact discrete recursion (delays included, :mod:`.system`) with
+white process noise on the physical states and white measurement noise on the outputs::
+
+    x_n+1 = Φ x_n + Σ_j Pu[j] u_n−j + F w_n      y_n = H x_n + Σ_j Du[j] u_n−j
+    z_n = y_n + v_n      w_n ~ N(0, I), v_n ~ N(0, R)
+
+F is diagonal over :data:`PROCESS_NOISE_STATES` (``F_<state>``: standard deviation of the noise
+added to that state over one sample, structure units) and R diagonal (``R_<output>``, the
+measurement-noise variance, units²). Both are estimated with the derivatives and delays. The
+steady-state Kalman filter (:mod:`.riccati`, :mod:`.kalman`) turns the data into innovations ν_n
+with covariance B = H P Hᵀ + R; the negative log-likelihood is
+
+    L = ½ Σ_n ν_nᵀ B⁻¹ ν_n + ½ N ln det B.
+
+Levenberg-Marquardt (the output-error plugin's, on the cost exp(2L/N), which is e^{n_o}·det B
+at the optimum) steps with the Fisher information
+
+    M_ij = Σ_n ∂ν_nᵀ/∂θ_i B⁻¹ ∂ν_n/∂θ_j + ½ N tr(B⁻¹ ∂B/∂θ_i B⁻¹ ∂B/∂θ_j)
+
+and the exact gradient of L. The sensitivities ∂ν/∂θ and ∂B/∂θ are exact: one batched filter
+pass over complex parameter directions (the complex step through the discretisation, the
+doubling algorithm of the Riccati equation and the filter). M is also the information matrix
+of the Cramér-Rao bounds. Because the filter is stable whatever the model's stability, an
+unstable model is identified directly, on the full records.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+import attrs
+import numpy as np
+from rotorid import blas
+from rotorid.data import ManeuverSet
+from rotorid.errors import EstimationError, SimulationDivergedError
+from rotorid.estimation.estimate import Estimate, statistics
+from rotorid.estimation.models import LinearModel
+from rotorid.model.structure import OUTPUTS, STATES, ModelStructure
+from rotorid.plugin.manager import notify
+from rotorid.simulation.discretisation import COMPLEX_STEP
+from rotorid_output_error.levenberg_marquardt import Settings, run
+
+from .kalman import Records, innovation_blocks
+from .riccati import steady_state_filter
+from .system import companion_system
+
+NAME = "filter-error"
+#: States the process noise enters by default: the six force and moment equations.
+PROCESS_NOISE_STATES = ("u", "w", "q", "v", "p", "r")
+#: Measured output whose first differences size the start of each state's process noise.
+_START_OUTPUT = {"u": "ax", "w": "az", "v": "ay", "q": "q", "p": "p", "r": "r",
+                 "theta": "theta", "phi": "phi"}
+#: Lower bound of a measurement-noise variance relative to its start value.
+_VARIANCE_FLOOR = 1e-8
+
+
+def _states(value) -> tuple[str, ...]:
+    states = tuple(value)
+    unknown = [s for s in states if s not in STATES]
+    if unknown or len(set(states)) != len(states):
+        raise EstimationError(f"process_noise must name distinct states of {', '.join(STATES)}, "
+                              f"got {list(states)}")
+    return tuple(s for s in STATES if s in states)
+
+
+def _start_choice(instance, attribute, value):
+    if value not in ("auto", "initial", "equation-error"):
+        raise EstimationError(f"start must be 'auto', 'initial' or 'equation-error', "
+                              f"got {value!r}")
+
+
+class FilterErrorProblem:
+    """Cost, innovations and Fisher information of one structure on one maneuver set, in the
+    form :func:`rotorid_output_error.levenberg_marquardt.run` drives."""
+
+    def __init__(self, structure: ModelStructure, maneuvers: ManeuverSet,
+                 process_noise: tuple[str, ...], settings: Settings):
+        self.structure = structure
+        self.hold = maneuvers.hold
+        self.records = Records.from_maneuvers(maneuvers)
+        self.settings = settings
+        self.n_samples = self.records.n_samples
+        self.noise_rows = [STATES.index(s) for s in process_noise]
+        self.n_structure = structure.n_parameters
+        self.parameter_names = (tuple(structure.parameter_names)
+                                + tuple(f"F_{s}" for s in process_noise)
+                                + tuple(f"R_{o}" for o in OUTPUTS))
+
+    def split(self, values) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(structure parameters, F (n_F,), R diagonal (8,)) of a parameter vector."""
+        values = np.asarray(values)
+        k, n_f = self.n_structure, len(self.noise_rows)
+        return values[:k], values[k:k + n_f], values[k + n_f:]
+
+    def filter(self, values, directions: bool = False):
+        """The companion system and its steady-state filter at ``values``; with
+        ``directions`` one complex-step direction per parameter (leading axis)."""
+        theta, f, r = self.split(np.asarray(values, dtype=float))
+        n_f = f.size
+        system = companion_system(self.structure, theta, self.records.dt, self.hold,
+                                  n_f + r.size if directions else None)
+        n_dir = system.transition.shape[0]
+        f_dir = np.repeat(f[None].astype(system.transition.dtype), n_dir, axis=0)
+        r_dir = np.repeat(r[None].astype(system.transition.dtype), n_dir, axis=0)
+        if directions:
+            k = self.n_structure
+            f_dir[k + np.arange(n_f), np.arange(n_f)] += 1j * COMPLEX_STEP
+            r_dir[k + n_f + np.arange(r.size), np.arange(r.size)] += 1j * COMPLEX_STEP
+        process = np.zeros((n_dir, system.size, system.size), dtype=system.transition.dtype)
+        process[:, self.noise_rows, self.noise_rows] = f_dir**2
+        return system, steady_state_filter(system.transition, system.output, process, r_dir)
+
+    def innovations(self, values) -> tuple[np.ndarray, np.ndarray]:
+        """Time-major innovations (N, M, 8) and their covariance B (8, 8) at ``values``."""
+        system, steady = self.filter(values)
+        blocks = [block[:, 0] for _, block in innovation_blocks(system, steady, self.records)]
+        return np.concatenate(blocks), steady.innovation[0]
+
+    def evaluate(self, values):
+        """(cost exp(2L/N), B, innovations per maneuver, innovation RMSE); cost = inf when the
+        filter does not exist or the innovations overflow."""
+        try:
+            innovations, b = self.innovations(values)
+        except (EstimationError, np.linalg.LinAlgError):
+            return np.inf, None, None, np.inf
+        sign, log_det = np.linalg.slogdet(b)
+        with np.errstate(over="ignore", invalid="ignore"):
+            scatter = np.einsum("nmi,nmj->ij", innovations, innovations)
+            quadratic = np.trace(np.linalg.solve(b, scatter)) / self.n_samples
+            cost = float(np.exp(quadratic + log_det))
+        if sign <= 0 or not np.isfinite(cost):
+            return np.inf, None, None, np.inf
+        rmse = float(np.sqrt(np.sum(innovations**2) / (8 * self.n_samples)))
+        return cost, b, self.records.split(innovations), rmse
+
+    def gauss_newton(self, values, b: np.ndarray, residuals):
+        """Fisher information M (P, P) and gradient G (P,) of L at ``values`` (module
+        docstring); ``b`` and ``residuals`` are B and the innovations there."""
+        system, steady = self.filter(values, directions=True)
+        p = len(self.parameter_names)
+        b_inv = np.linalg.inv(b)
+        whiten = np.linalg.cholesky(b_inv)                           # B⁻¹ = W Wᵀ
+        information, gradient = np.zeros((p, p)), np.zeros(p)
+        for _, block in innovation_blocks(system, steady, self.records):
+            sens = (block.imag / COMPLEX_STEP) @ whiten                # (L, P, M, 8)
+            flat = np.moveaxis(sens, 1, 0).reshape(p, -1)
+            information += flat @ flat.T
+            gradient += flat @ (block[:, 0].real @ whiten).reshape(-1)
+        db = b_inv @ (steady.innovation.imag / COMPLEX_STEP)          # B⁻¹ ∂B/∂θ_i
+        scatter = sum(e.T @ e for e in residuals)
+        n = self.n_samples
+        information += 0.5 * n * np.einsum("iab,jba->ij", db, db)
+        gradient += 0.5 * np.einsum("iab,ba->i", db, b_inv @ (n * b - scatter))
+        return information, gradient
+
+
+@attrs.frozen
+class FilterErrorEstimator:
+    """Maximum-likelihood filter-error estimator for linear model structures.
+
+    Args:
+        max_iterations, cost_tolerance, step_tolerance: stopping rules (as output error's).
+        process_noise: states the process noise enters (one ``F_<state>`` each).
+        process_noise_start: optional ``F_<state>`` → start value (structure units per sample);
+            by default F starts at the measurement-noise size of the state's output (over one
+            sample for the velocities, from the accelerometers).
+        enforce_signs: use the sign priors as bounds.
+        start: ``"auto"`` (equation error when every initial value is zero, else the initial
+            values), ``"initial"`` or ``"equation-error"`` for the derivatives and delays.
+        callback: called with ``(stage, progress record)`` after every accepted iteration.
+    """
+
+    name = NAME
+    max_iterations: int = 50
+    cost_tolerance: float = 1e-7
+    step_tolerance: float = 1e-9
+    process_noise: tuple[str, ...] = attrs.field(default=PROCESS_NOISE_STATES, converter=_states)
+    process_noise_start: Mapping[str, float] | None = None
+    enforce_signs: bool = False
+    start: str = attrs.field(default="auto", validator=_start_choice)
+    callback: Callable | None = None
+
+    def estimate(self, structure: ModelStructure, maneuvers: ManeuverSet, *,
+                 start=None) -> Estimate:
+        """Fit ``structure``'s derivatives and delays, F and R to ``maneuvers``.
+
+        ``start`` overrides start values: a vector over the estimate's parameter names or a
+        mapping of some of them.
+        """
+        if not isinstance(structure, ModelStructure):
+            raise EstimationError("the filter-error estimator identifies linear model "
+                                  "structures (ModelStructure); use output error for a model "
+                                  "of one's own")
+        with blas.single_threaded():
+            settings = Settings(self.max_iterations, self.cost_tolerance, self.step_tolerance)
+            problem = FilterErrorProblem(structure, maneuvers, self.process_noise, settings)
+            values, note = self._start_values(problem, maneuvers, start)
+            bounds = self._bounds(problem, values)
+
+            def progress(record):
+                notify("rotorid_estimation_iteration", estimator=NAME,
+                       iteration=record.iteration, cost=record.cost, rmse=record.rmse,
+                       lm_lambda=record.lm_lambda)
+                if self.callback is not None:
+                    self.callback("full", record)
+
+            try:
+                result = run(problem, values, bounds, progress)
+            except SimulationDivergedError:
+                raise EstimationError("the Kalman filter does not exist at the start values; "
+                                      "give other start values (derivatives, F or R)") from None
+        return self._estimate(problem, structure, result, values, bounds, note)
+
+    def _start_values(self, problem, maneuvers, start):
+        structure = problem.structure
+        names = problem.parameter_names
+        initial = structure.initial_values()
+        note = None
+        wants_ee = self.start == "equation-error" or (self.start == "auto"
+                                                      and not np.any(initial))
+        if wants_ee and structure.n_parameters:
+            initial = LinearModel(structure).start_values(maneuvers)
+            note = "start values from equation error"
+        variance = self._noise_start(problem.records)
+        steps = {s: np.sqrt(variance[OUTPUTS.index(_START_OUTPUT[s])])
+                 * (problem.records.dt if s in ("u", "w", "v") else 1.0)
+                 for s in self.process_noise}
+        steps.update({k[2:]: float(v) for k, v in dict(self.process_noise_start or {}).items()
+                      if k.startswith("F_") and k[2:] in steps})
+        unknown = set(self.process_noise_start or {}) - {f"F_{s}" for s in self.process_noise}
+        if unknown:
+            raise EstimationError(f"process_noise_start for unknown parameters {sorted(unknown)}")
+        values = np.concatenate([initial, [steps[s] for s in self.process_noise], variance])
+        if start is None:
+            return values, note
+        if isinstance(start, Mapping):
+            unknown = set(start) - set(names)
+            if unknown:
+                raise EstimationError(f"start values for unknown parameters {sorted(unknown)}")
+            for name, value in start.items():
+                values[names.index(name)] = float(value)
+            return values, None
+        vector = np.asarray(start, dtype=float)
+        if vector.shape != values.shape:
+            raise EstimationError(f"start has shape {vector.shape}; the filter-error estimate "
+                                  f"has {values.size} parameters ({', '.join(names)})")
+        return vector.copy(), None
+
+    @staticmethod
+    def _noise_start(records) -> np.ndarray:
+        """Half the mean square first difference of each output: the white measurement
+        noise's variance plus the (small) signal change over one sample."""
+        both = records.mask[1:] & records.mask[:-1]
+        change = np.diff(records.outputs, axis=0) * both[..., None]
+        pairs = max(int(np.sum(both)), 1)
+        return np.maximum(0.5 * np.sum(change**2, axis=(0, 1)) / pairs, 1e-12)
+
+    def _bounds(self, problem, values):
+        lower, upper = problem.structure.bounds(enforce_signs=self.enforce_signs)
+        _, f, r = problem.split(values)
+        return (np.concatenate([lower, np.zeros(f.size), _VARIANCE_FLOOR * r]),
+                np.concatenate([upper, np.full(f.size + r.size, np.inf)]))
+
+    def _estimate(self, problem, structure, result, start, bounds, note) -> Estimate:
+        names = problem.parameter_names
+        stats = statistics(result.information, names)
+        lower, upper = bounds
+        at_bound = tuple(n for n, v, lo, hi in zip(names, result.values, lower, upper)
+                         if (np.isfinite(lo) and v <= lo) or (np.isfinite(hi) and v >= hi))
+        model = LinearModel(structure, enforce_signs=self.enforce_signs)
+        signs = model.signs
+        violations = tuple(n for n, v in zip(names, result.values)
+                           if (signs.get(n) == "negative" and v > 0)
+                           or (signs.get(n) == "positive" and v < 0))
+        _, _, r = problem.split(result.values)
+        notes = ([note] if note else []) + [
+            "cost exp(2L/N) = det B·exp(mean νᵀB⁻¹ν); RMSE of the innovations; "
+            "noise_covariance is the measurement noise R"]
+        return Estimate(
+            estimator=NAME, parameter_names=names, values=result.values, start=start,
+            cramer_rao=stats.cramer_rao, insensitivity=stats.insensitivity,
+            correlation=stats.correlation, information=result.information,
+            noise_covariance=np.diag(r), output_names=OUTPUTS, cost=result.cost,
+            rmse=result.rmse, cost_history=result.cost_history,
+            rmse_history=result.rmse_history, iterations=result.iterations,
+            converged=result.converged, stop_reason=result.stop_reason,
+            n_samples=problem.n_samples, sign_violations=violations, at_bound=at_bound,
+            unidentifiable=stats.unidentifiable, fixed=model.fixed, signs=signs,
+            units=structure.units.name, notes=tuple(notes))

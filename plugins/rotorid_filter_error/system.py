@@ -1,0 +1,110 @@
+"""The delayed linear model as one first-order discrete system per parameter direction.
+
+:func:`rotorid.simulation.discretisation.discrete_maps` gives the exact lagged recursion of the
+delayed model between samples (delays as lags plus fractional-interval integrals)::
+
+    x_n+1 = Σ_j Ps[j] x_n−j + Σ_j Pu[j] u_n−j       y_n = Σ_j Cs[j] x_n−j + Σ_j Du[j] u_n−j
+
+Stacking x_n with the delayed state samples the maps read gives the delay-free companion system
+z_n+1 = Φ z_n + Σ_j Pu[j] u_n−j, y_n = H z_n + Σ_j Du[j] u_n−j, on which the Kalman filter runs
+unchanged: the delays are states of the filter. Process noise enters the physical states only.
+
+For sensitivities the system is built for complex parameter vectors θ + i·h·e_k, one per
+direction k, from the maps' derivatives (the complex step of the discretisation itself).
+"""
+
+from __future__ import annotations
+
+import attrs
+import numpy as np
+from rotorid.model.structure import ModelStructure
+from rotorid.simulation.discretisation import COMPLEX_STEP, discrete_maps
+from rotorid.simulation.simulator import lagged_sources
+
+
+@attrs.frozen(eq=False)
+class CompanionSystem:
+    """Per direction (leading axis D), S companion states, T input taps.
+
+    Attributes:
+        transition: Φ (D, S, S).
+        output: H (D, 8, S).
+        taps: ((lag, control), …) the inputs u_n−lag the forcing reads.
+        state_forcing: (D, T, S) weights: the state forcing at n is lagged(u)[n] @ weights.
+        output_forcing: (D, T, 8) the same for the outputs' direct terms.
+    """
+
+    transition: np.ndarray
+    output: np.ndarray
+    taps: tuple
+    state_forcing: np.ndarray
+    output_forcing: np.ndarray
+
+    @property
+    def size(self) -> int:
+        return self.transition.shape[-1]
+
+
+def _directions(nominal: dict, derivative: dict, extra: int, varied: bool) -> dict:
+    """lag → (D, 8, C): the nominal map, or its complex-step directions followed by ``extra``
+    copies of the nominal map (directions of parameters the maps do not depend on)."""
+    if not varied:
+        return {lag: m[None] for lag, m in nominal.items()}
+    return {lag: np.concatenate([m[None] + 1j * COMPLEX_STEP * derivative[lag],
+                                 np.broadcast_to(m, (extra,) + m.shape)])
+            for lag, m in nominal.items()}
+
+
+def _columns(stack: np.ndarray) -> np.ndarray:
+    return np.flatnonzero(np.any(stack.reshape(-1, stack.shape[-1]) != 0, axis=0))
+
+
+def companion_system(structure: ModelStructure, values, dt: float, hold: str,
+                     extra_directions: int | None = None) -> CompanionSystem:
+    """The companion system at ``values`` (structure parameters); with ``extra_directions``
+    (an int ≥ 0) one complex direction per structure parameter, then that many nominal ones."""
+    varied = extra_directions is not None
+    maps = discrete_maps(structure, values, dt, hold, with_derivatives=varied)
+    extra = extra_directions or 0
+    ps = _directions(maps.Ps, maps.dPs, extra, varied)
+    cs = _directions(maps.Cs, maps.dCs, extra, varied)
+    pu = _directions(maps.Pu, maps.dPu, extra, varied)
+    du = _directions(maps.Du, maps.dDu, extra, varied)
+    depth: dict[int, int] = {}
+    for family in (ps, cs):
+        for lag, stack in family.items():
+            for c in (_columns(stack) if lag >= 1 else ()):
+                depth[int(c)] = max(depth.get(int(c), 0), lag)
+    slots = {(c, lag): 8 + k for k, (c, lag) in enumerate(
+        (c, lag) for c in sorted(depth) for lag in range(1, depth[c] + 1))}
+    n_dir, size = ps[0].shape[0], 8 + len(slots)
+    dtype = ps[0].dtype
+    transition = np.zeros((n_dir, size, size), dtype)
+    output = np.zeros((n_dir, 8, size), dtype)
+    transition[:, :8, :8] = ps[0]
+    if 0 in cs:
+        output[:, :, :8] = cs[0]
+    for (c, lag), slot in slots.items():
+        transition[:, slot, c if lag == 1 else slots[(c, lag - 1)]] = 1.0
+        if lag in ps:
+            transition[:, :8, slot] = ps[lag][:, :, c]
+        if lag in cs:
+            output[:, :, slot] = cs[lag][:, :, c]
+    taps = sorted({(lag, int(c)) for family in (pu, du) for lag, stack in family.items()
+                   for c in _columns(stack)})
+    state_forcing = np.zeros((n_dir, len(taps), size), dtype)
+    output_forcing = np.zeros((n_dir, len(taps), 8), dtype)
+    for t, (lag, c) in enumerate(taps):
+        if lag in pu:
+            state_forcing[:, t, :8] = pu[lag][:, :, c]
+        if lag in du:
+            output_forcing[:, t, :] = du[lag][:, :, c]
+    return CompanionSystem(transition, output, tuple(taps), state_forcing, output_forcing)
+
+
+def lagged_inputs(inputs: np.ndarray, taps) -> np.ndarray:
+    """(N, M, T): column t is control c at sample n − lag for tap (lag, c); inputs (N, M, 4)
+    time-major; samples outside the record are trim (zero)."""
+    sources = np.zeros(inputs.shape[:2] + (12,))
+    sources[:, :, 8:] = inputs
+    return lagged_sources(sources, [(lag, 8 + c) for lag, c in taps])

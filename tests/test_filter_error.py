@@ -1,0 +1,150 @@
+"""The filter-error estimator: steady-state gain, sensitivities, recovery with process and
+measurement noise, and reduction to output error in still air."""
+
+import warnings
+
+import numpy as np
+import pytest
+import rotorid
+import scipy.linalg
+from rotorid import Derivative, ModelStructure
+from rotorid.errors import DataError, EstimationError, IdentifiabilityWarning
+from rotorid.model.structure import STATES
+from rotorid_filter_error.estimator import FilterErrorProblem
+from rotorid_filter_error.kalman import innovation_blocks
+from rotorid_filter_error.riccati import steady_state_filter
+from rotorid_output_error.levenberg_marquardt import Settings
+from rotorid.simulation.discretisation import COMPLEX_STEP
+from test_output_error import HOVER, SMALL_TRUTH, doublet_maneuvers
+
+#: Process noise per sample (structure units) and measurement-noise variances of the data.
+PROCESS = {"w": 0.03, "q": 0.05, "v": 0.02, "p": 0.1, "r": 0.05}
+VARIANCE = np.array([0.2, 0.2, 0.1, 0.1, 0.2, 0.1, 0.1, 0.1]) ** 2
+
+
+def estimator(**options):
+    return rotorid.create("estimators", "filter-error", **options)
+
+
+def structure(delays=()):
+    return ModelStructure(HOVER, [Derivative(n) for n in SMALL_TRUTH]).with_delays(delays)
+
+
+def noisy_data(process, seed=1, dt=0.02):
+    """Doublet maneuvers of the small hover model, simulated independently of the estimator
+    (zero-order-hold discretisation by one matrix exponential), with white process noise
+    added to the states each sample and white measurement noise."""
+    model = structure()
+    a, b, c, d = model.matrices(model.as_vector(SMALL_TRUTH))
+    block = np.zeros((12, 12))
+    block[:8, :8], block[:8, 8:] = a, b
+    exp = scipy.linalg.expm(block * dt)
+    phi, gamma = exp[:8, :8], exp[:8, 8:]
+    rows = [STATES.index(s) for s in process]
+    sigma = np.array(list(process.values()))
+    rng = np.random.default_rng(seed)
+    maneuvers = []
+    for m in doublet_maneuvers(dt=dt):
+        x, outputs = np.zeros(8), np.empty((m.n_samples, 8))
+        for k, u in enumerate(m.inputs):
+            outputs[k] = c @ x + d @ u
+            x = phi @ x + gamma @ u
+            x[rows] += sigma * rng.standard_normal(len(rows))
+        outputs += rng.standard_normal(outputs.shape) * np.sqrt(VARIANCE)
+        maneuvers.append(m.with_outputs(outputs))
+    return rotorid.ManeuverSet(maneuvers)
+
+
+@pytest.mark.parametrize("unstable", [False, True])
+def test_steady_state_gain_matches_scipy_dare(unstable):
+    rng = np.random.default_rng(4)
+    size, n_out = 6, 3
+    phi = rng.normal(size=(size, size)) * 0.3 + np.eye(size) * (0.9 if not unstable else 1.05)
+    h = rng.normal(size=(n_out, size))
+    root = rng.normal(size=(size, size))
+    q = root @ root.T * 0.01
+    r = rng.uniform(0.05, 0.2, n_out)
+    steady = steady_state_filter(phi[None], h[None], q[None], r[None])
+    p = scipy.linalg.solve_discrete_are(phi.T, h.T, q, np.diag(r))
+    gain = p @ h.T @ np.linalg.inv(h @ p @ h.T + np.diag(r))
+    assert steady.covariance[0] == pytest.approx(p, rel=1e-9, abs=1e-12)
+    assert steady.gain[0] == pytest.approx(gain, rel=1e-9, abs=1e-12)
+    closed = phi @ (np.eye(size) - steady.gain[0] @ h)
+    assert np.max(np.abs(np.linalg.eigvals(closed))) < 1.0
+
+
+def test_filtered_output_sensitivities_match_finite_differences():
+    """Complex-step innovations and innovation covariance against central differences, for
+    a derivative, a delay, a process-noise and a measurement-noise parameter."""
+    model = structure(delays=("L_lat",))
+    data = noisy_data(PROCESS)
+    problem = FilterErrorProblem(model, data, tuple(PROCESS), Settings())
+    values = np.concatenate([model.as_vector({**SMALL_TRUTH, "tau_L_lat": 0.05}),
+                             list(PROCESS.values()), VARIANCE])
+    system, steady = problem.filter(values, directions=True)
+    sens = np.concatenate([b.imag for _, b in innovation_blocks(system, steady,
+                                                                 problem.records)])
+    sens /= COMPLEX_STEP
+    d_innovation = steady.innovation.imag / COMPLEX_STEP
+    names = problem.parameter_names
+    for name in ("M_q", "tau_L_lat", "F_p", "R_q"):
+        k = names.index(name)
+        step = 1e-6 * max(abs(values[k]), 1e-2)
+        up, down = values.copy(), values.copy()
+        up[k] += step
+        down[k] -= step
+        (nu_up, b_up), (nu_down, b_down) = problem.innovations(up), problem.innovations(down)
+        expected = (nu_up - nu_down) / (2 * step)
+        assert sens[:, k] == pytest.approx(expected, rel=1e-5, abs=1e-6 * np.abs(
+            expected).max()), name
+        assert d_innovation[k] == pytest.approx((b_up - b_down) / (2 * step), rel=1e-5,
+                                                abs=1e-9), name
+
+
+def test_recovers_derivatives_process_and_measurement_noise_within_3_cr():
+    data = noisy_data(PROCESS)
+    result = estimator(process_noise=tuple(PROCESS)).estimate(structure(), data)
+    assert result.converged, result.stop_reason
+    truth = np.concatenate([structure().as_vector(SMALL_TRUTH), list(PROCESS.values()),
+                            VARIANCE])
+    error = np.abs(result.values - truth) / result.cramer_rao
+    assert np.all(error < 3.0), dict(zip(result.parameter_names, error.round(2)))
+    assert result.noise_covariance == pytest.approx(np.diag(VARIANCE), rel=0.1, abs=1e-12)
+
+
+def test_output_error_is_biased_on_the_same_data():
+    """The reason for the filter: output error misses some derivatives by many CR bounds."""
+    data = noisy_data(PROCESS)
+    model = structure()
+    result = rotorid.create("estimators", "output-error").estimate(model, data)
+    error = np.abs(result.values - model.as_vector(SMALL_TRUTH)) / result.cramer_rao
+    assert error.max() > 5.0
+
+
+def test_in_still_air_filter_error_reduces_to_output_error():
+    data = noisy_data({})
+    model = structure()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IdentifiabilityWarning)      # F → 0: flat in F
+        filtered = estimator().estimate(model, data)
+    output_error = rotorid.create("estimators", "output-error", noise="diagonal").estimate(
+        model, data)
+    k = model.n_parameters
+    difference = np.abs(filtered.values[:k] - output_error.values) / output_error.cramer_rao
+    assert np.all(difference < 1.0), dict(zip(model.parameter_names, difference.round(2)))
+    f = filtered.values[k:k + 6]
+    assert np.all(f < 0.2 * np.array([0.03, 0.03, 0.05, 0.02, 0.1, 0.05]))
+
+
+def test_start_values_and_options_are_checked():
+    data = noisy_data(PROCESS)
+    with pytest.raises(EstimationError, match="process_noise"):
+        estimator(process_noise=("u", "x"))
+    with pytest.raises(EstimationError, match="unknown parameters"):
+        estimator().estimate(structure(), data, start={"F_theta": 1.0})
+    with pytest.raises(EstimationError, match="linear model structures"):
+        estimator().estimate(object(), data)
+    coarse = noisy_data(PROCESS, dt=0.04)[0]
+    mixed = rotorid.ManeuverSet([data[1], coarse])
+    with pytest.raises(DataError, match="one sample time"):
+        estimator().estimate(structure(), mixed)
