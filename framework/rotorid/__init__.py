@@ -24,8 +24,10 @@ from rotorid.errors import (
     SimulationDivergedError,
     StructureError,
 )
+from rotorid.estimation.result_file import IdentifiedModel, load_result, to_statespace
 from rotorid.model.derivatives import Delay, Derivative, Sign
 from rotorid.model.signals import ChannelLink, ChannelMap, Signal, SignalSet
+from rotorid.model.statespace import NamedStateSpace, state_space
 from rotorid.model.structure import (
     CONTROLS,
     OUTPUTS,
@@ -48,9 +50,10 @@ __all__ = [
     "CONTROLS", "OUTPUTS", "STATES", "FLIGHT_TEST", "SI",
     "ChannelLink", "ChannelMap", "Signal", "SignalError", "SignalSet",
     "ConvergenceWarning", "DataError", "DataFileError", "Delay", "Derivative", "DerivativeError",
-    "EstimationError", "FlightCondition", "IdentifiabilityWarning", "Maneuver", "ManeuverSet",
-    "MissingFileError", "ModelStructure", "PluginDescriptor", "PluginError", "RotoridError",
-    "RotoridWarning", "Sign", "SimulationDivergedError", "Simulator", "StructureError",
-    "UnitSystem", "create", "frequency_response", "get_plugin_manager", "hookimpl", "registry",
-    "sensitivities", "simulate", "unit_system",
+    "EstimationError", "FlightCondition", "IdentifiabilityWarning", "IdentifiedModel",
+    "Maneuver", "ManeuverSet", "MissingFileError", "ModelStructure", "NamedStateSpace",
+    "PluginDescriptor", "PluginError", "RotoridError", "RotoridWarning", "Sign",
+    "SimulationDivergedError", "Simulator", "StructureError", "UnitSystem", "create",
+    "frequency_response", "get_plugin_manager", "hookimpl", "load_result", "registry",
+    "sensitivities", "simulate", "state_space", "to_statespace", "unit_system",
 ]

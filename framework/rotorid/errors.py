@@ -55,6 +55,10 @@ class MissingFileError(RotoridError, FileNotFoundError):
     """A file the user named does not exist."""
 
 
+class OverwriteError(RotoridError, FileExistsError):
+    """A file to be written exists already and overwriting it was not asked for."""
+
+
 class PluginError(RotoridError, LookupError):
     """A plugin is unknown, broken or registered twice."""
 

@@ -1,4 +1,4 @@
-"""Atomic file writing, shared by every writer in rotorid, and JSON-ready values.
+"""Atomic file writing, shared by every writer in rotorid, JSON-ready values and JSON reading.
 
 A reader never sees a half-written file: the content goes to a temporary file in the target's
 directory, is flushed to disk, and only then replaces the target with :func:`os.replace`.
@@ -6,6 +6,7 @@ directory, is flushed to disk, and only then replaces the target with :func:`os.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import stat
@@ -14,7 +15,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import BinaryIO
 
-from rotorid.errors import MissingFileError
+from rotorid.errors import DataFileError, MissingFileError
 
 
 def atomic_write(path: str | os.PathLike, content: bytes | str | Callable[[BinaryIO], object]
@@ -62,3 +63,19 @@ def jsonable(value):
     if isinstance(value, (list, tuple)):
         return [jsonable(v) for v in value]
     return value
+
+
+def read_json_object(path: str | os.PathLike, what: str, content: str = "") -> dict:
+    """The JSON object stored in ``path``; errors name ``what`` (e.g. ``"result file"``), the
+    path and, when given, the expected ``content`` (e.g. ``"name → value"``)."""
+    path = Path(path)
+    if not path.is_file():
+        raise MissingFileError(f"{what} {path} does not exist")
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        raise DataFileError(f"{what} {path} is not valid JSON: {error}") from None
+    if not isinstance(record, Mapping):
+        raise DataFileError(f"{what} {path} must hold a JSON object"
+                            + (f" ({content})" if content else ""))
+    return dict(record)

@@ -21,7 +21,6 @@ that diverges stops the command with a one-line error.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -48,21 +47,15 @@ def add_arguments(parser) -> None:
 
 def read_values(path: Path, structure):
     """The structure and the parameter vector that ``path`` (a values JSON file) describes."""
-    from rotorid.cli.commands.verify import model_from_result
-    from rotorid.errors import DataFileError, MissingFileError
+    from rotorid.errors import DataFileError
+    from rotorid.estimation.result_file import load_result
+    from rotorid.io import read_json_object
 
-    if not path.is_file():
-        raise MissingFileError(f"values file {path} does not exist")
-    try:
-        content = json.loads(path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        raise DataFileError(f"values file {path} is not valid JSON: {error}") from None
-    if not isinstance(content, Mapping):
-        raise DataFileError(f"values file {path} must hold a JSON object (name → value, or an "
-                            f"estimate with a 'parameters' table)")
+    content = read_json_object(path, "values file", "name → value, or an estimate with a "
+                                                    "'parameters' table")
     if isinstance(content.get("parameters"), Mapping):
-        structure, values = model_from_result(structure, content, path)
-        return structure, structure.as_vector(values)
+        identified = load_result(path, structure=structure)
+        return identified.structure, identified.structure.as_vector(identified.values)
     bad = [name for name, value in content.items()
            if not isinstance(value, (int, float)) or isinstance(value, bool)]
     if bad:

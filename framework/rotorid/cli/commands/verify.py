@@ -4,23 +4,27 @@ Usage::
 
     rotorid verify [MODEL.toml] RESULT.json SWEEPS... [--pairs q/long,p/long] [--out DIR]
 
-``RESULT.json`` is an estimate written by ``rotorid identify``: ``parameters`` and ``delays``
-(``{"L_lat": {"value": 0.05}}``), ``fixed`` values and ``structure`` (the model file's path,
-relative to the result file, or an embedded model-file mapping). ``MODEL.toml`` overrides the
-structure (the estimate JSON of ``Estimate.as_dict`` names none, so give it). Free derivatives
-of the structure that the result does not list were removed by the reduction and are dropped;
-output biases of the identification records are ignored. SWEEPS are maneuver files,
-directories or glob patterns; when the maneuvers carry ``kind`` metadata only the ``sweep``
-ones are used.
+``RESULT.json`` is an estimate written by ``rotorid identify`` or a study's ``result.json``
+(its model with delays), read by :func:`rotorid.estimation.result_file.load_result`:
+``parameters`` and ``delays`` (``{"L_lat": {"value": 0.05}}``), ``fixed`` values and
+``structure`` (the model file's path, relative to the result file, or an embedded model-file
+mapping). ``MODEL.toml`` overrides the structure (the estimate JSON of ``Estimate.as_dict``
+names none, so give it). Free derivatives of the structure that the result does not list were
+removed by the reduction and are dropped; output biases and initial states of the
+identification records are ignored. SWEEPS are maneuver files, directories or glob patterns;
+when the maneuvers carry ``kind`` metadata only the ``sweep`` ones are used.
 
-Writes ``verification.json`` (every check, J_ave, time-domain metrics) and, per pair,
-``error_<output>_<input>.png`` and ``bode_<output>_<input>.png`` into ``--out``.
+A pair the model or the sweeps cannot produce (no sweep excites its input, the model's output
+does not respond to that input, the measured output never moves) is skipped with the reason
+(:mod:`rotorid.verification.producible`). Writes ``verification.json`` (every check, J_ave,
+time-domain metrics, the skipped pairs, and per pair the frequency responses it was judged
+on) and, per pair, ``error_<output>_<input>.png`` and ``bode_<output>_<input>.png`` into
+``--out``.
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
 from pathlib import Path
 
 NAME = "verify"
@@ -58,66 +62,6 @@ def _split(files: list[str]):
     return model, Path(rest[0]), rest[1:]
 
 
-def _read_result(path: Path) -> dict:
-    from rotorid.errors import DataFileError, MissingFileError
-
-    if not path.is_file():
-        raise MissingFileError(f"estimate file {path} does not exist")
-    try:
-        result = json.loads(path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        raise DataFileError(f"estimate file {path} is not valid JSON: {error}") from None
-    if not isinstance(result, Mapping) or not isinstance(result.get("parameters"), Mapping):
-        raise DataFileError(f"estimate file {path} has no 'parameters' table")
-    return dict(result)
-
-
-def _structure(model: str | None, result: dict, result_path: Path):
-    from rotorid.errors import DataFileError
-    from rotorid.model.modelfile import load_model, parse_model
-
-    if model is not None:
-        return load_model(model)
-    described = result.get("structure")
-    if isinstance(described, str):
-        path = Path(described)
-        return load_model(path if path.is_absolute() else result_path.parent / path)
-    if isinstance(described, Mapping):
-        return parse_model(described, f"{result_path} (embedded structure)")
-    raise DataFileError(f"{result_path}: the result names no model structure; run "
-                        f"`rotorid verify MODEL.toml {result_path} SWEEPS...`")
-
-
-def _value(entry, name: str, path: Path) -> float:
-    from rotorid.errors import DataFileError
-
-    value = entry.get("value") if isinstance(entry, Mapping) else entry
-    if not isinstance(value, (int, float)) or isinstance(value, bool):
-        raise DataFileError(f"{path}: {name} has no numeric value ({entry!r})")
-    return float(value)
-
-
-def model_from_result(structure, result: Mapping, path: Path):
-    """The identified structure and its parameter values from an estimate mapping.
-
-    Output biases (``bias_<maneuver>_<output>``) belong to the identification records, not
-    to the model, and are ignored.
-    """
-    parameters = {n: _value(e, n, path) for n, e in result["parameters"].items()
-                  if not n.startswith("bias_")}
-    for name, value in dict(result.get("fixed") or {}).items():
-        if name in structure.names:
-            structure = structure.fixing(name, _value(value, name, path))
-    delays = {n: _value(e, n, path) for n, e in dict(result.get("delays") or {}).items()}
-    removed = [d.name for d in structure.free_derivatives if d.name not in parameters]
-    structure = structure.without(*removed)
-    structure = structure.with_delays([n for n in delays if structure.derivative(n).delay
-                                       is None], missing="error")
-    values = dict(parameters)
-    values.update({f"tau_{n}": v for n, v in delays.items()})
-    return structure, structure.as_mapping(values)
-
-
 def load_sweeps(locations):
     """The maneuvers of files, directories or patterns; only the ``sweep`` ones when the
     maneuvers carry ``kind`` metadata."""
@@ -142,19 +86,37 @@ def chosen_pairs(option: str | None, sweeps) -> list[str]:
     return [p for p in PAPER_PAIRS if p.split("/")[1] in axes]
 
 
-def _check_units(structure, result: Mapping, sweeps, path: Path) -> None:
+def _check_units(structure, sweeps) -> None:
     from rotorid.errors import DataFileError
     from rotorid.units import unit_system
 
     expected = structure.units.name
-    declared = result.get("units")
-    if declared is not None and unit_system(declared).name != expected:
-        raise DataFileError(f"{path}: the estimate is in {declared!r} units but the model "
-                            f"structure in {expected!r}; use the model file it was estimated "
-                            f"with")
     if unit_system(sweeps.units).name != expected:
         raise DataFileError(f"the sweeps are in {sweeps.units!r} units but the model in "
                             f"{expected!r}; convert the sweep files first")
+
+
+def _db_deg(response) -> dict:
+    from rotorid.verification.envelopes import error_db_deg
+
+    magnitude, phase = error_db_deg(response)
+    return {"magnitude_db": magnitude.tolist(), "phase_deg": phase.tolist()}
+
+
+def response_arrays(item) -> dict:
+    """The frequency responses a pair was judged on: ω (rad/s), the truth's coherence, the
+    measured and the model's response and ε = model/measured, each as magnitude (dB) and phase
+    (deg, wrapped to (−180, 180]); with the analytic model, the conditioned measured response
+    and its partial coherence too. NaN marks points no window covered."""
+    arrays = {"omega_rad_s": item.omega.tolist(), "coherence": item.coherence.tolist(),
+              "measured": _db_deg(item.truth.response), "model": _db_deg(item.model.response),
+              "error": _db_deg(item.error)}
+    if item.analytic_error is not None:
+        arrays["analytic"] = {"coherence": item.analytic_coherence.tolist(),
+                              "measured": _db_deg(item.conditioned.response),
+                              "model": _db_deg(item.analytic),
+                              "error": _db_deg(item.analytic_error)}
+    return arrays
 
 
 def run(args) -> int:
@@ -162,20 +124,26 @@ def run(args) -> int:
 
     matplotlib.use("Agg")
 
-    from rotorid.io import atomic_write
+    from rotorid.errors import ExitStatus, VerificationError
+    from rotorid.estimation.result_file import load_result
+    from rotorid.io import atomic_write, jsonable
+    from rotorid.model.modelfile import load_model
     from rotorid.report.plots.case import save_figure
     from rotorid.report.plots.frequency import plot_bode, plot_error
     from rotorid.verification.compare import envelopes_by_name, verify_model
+    from rotorid.verification.producible import producible_pairs
 
     model, result_path, locations = _split(args.files)
-    result = _read_result(result_path)
-    structure, values = model_from_result(_structure(model, result, result_path), result,
-                                          result_path)
+    identified = load_result(result_path, structure=None if model is None else load_model(model))
+    structure, values = identified.structure, identified.values
     sweeps = load_sweeps(locations)
-    _check_units(structure, result, sweeps, result_path)
-    pairs = chosen_pairs(args.pairs, sweeps)
+    _check_units(structure, sweeps)
+    selection = producible_pairs(structure, values, sweeps, chosen_pairs(args.pairs, sweeps))
+    if not selection.pairs:
+        raise VerificationError("no pair can be verified: " + "; ".join(
+            f"{pair}: {reason}" for pair, reason in selection.skipped.items()))
     envelopes = envelopes_by_name([e.strip() for e in args.envelopes.split(",") if e.strip()])
-    verification = verify_model(structure, values, sweeps, pairs, envelopes)
+    verification = verify_model(structure, values, sweeps, selection.pairs, envelopes)
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -186,12 +154,19 @@ def run(args) -> int:
         save_figure(plot_bode(item, structure.units.label(item.truth.output)),
                     out / f"bode_{stem}", formats=("png",))
     summary = verification.summary()
+    for entry, item in zip(summary["pairs"], verification.pairs):
+        entry["frequency_response"] = response_arrays(item)
+    summary["skipped_pairs"] = [{"pair": pair, "reason": reason}
+                                for pair, reason in selection.skipped.items()]
     summary["result"] = str(result_path)
     summary["sweeps"] = list(sweeps.names)
-    atomic_write(out / "verification.json", json.dumps(summary, indent=2, allow_nan=False))
+    atomic_write(out / "verification.json",
+                 json.dumps(jsonable(summary), indent=1, allow_nan=False))
+    for pair, reason in selection.skipped.items():
+        print(f"skipped {pair}: {reason}")
     print(verification.report())
     print(f"{'verification.json' if args.no_figures else 'figures and verification.json'} "
           f"written to {out}")
     failed = [c for p in verification.pairs for c in p.checks.values()
               if c.verified and c.passed is False]
-    return 1 if args.strict and failed else 0
+    return ExitStatus.CHECK_FAILED if args.strict and failed else ExitStatus.OK

@@ -1,0 +1,178 @@
+"""Identified models read back from result files: :func:`load_result`.
+
+Two kinds of file hold identified models:
+
+- the estimate JSON of ``rotorid identify`` (:meth:`~rotorid.estimation.estimate.Estimate.as_dict`
+  plus ``structure``: the model file's path relative to the JSON file, or an embedded model-file
+  mapping);
+- a study's ``result.json``, which holds two models, ``"no delays"`` and ``"with delays"``,
+  with the case's structure declaration and the trim condition.
+
+Either gives an :class:`IdentifiedModel`: the identified structure (the derivatives the
+reduction removed are gone, the estimated delays are on), its parameter values and the
+estimate, and from them the state-space system (:mod:`rotorid.model.statespace`).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from pathlib import Path
+
+import attrs
+
+from rotorid.errors import DataFileError, UsageError
+from rotorid.estimation.estimate import Estimate
+from rotorid.io import read_json_object
+from rotorid.model.modelfile import load_model, parse_model
+from rotorid.model.statespace import NamedStateSpace, state_space
+from rotorid.model.structure import FlightCondition, ModelStructure
+from rotorid.units import unit_system
+
+#: The models of a study's ``result.json``, the one with delays first (the default).
+STUDY_MODELS = ("with delays", "no delays")
+#: Parameters that belong to the identification records, not to the model: output biases and
+#: initial states per maneuver.
+RECORD_PARAMETER_PREFIXES = ("bias_", "x0_")
+
+
+@attrs.frozen(eq=False)
+class IdentifiedModel:
+    """An identified model read from a result file (immutable).
+
+    Attributes:
+        structure: the identified structure (removed derivatives dropped, delays added).
+        values: name → value of every parameter of ``structure`` (delays ``tau_<name>`` in s),
+            in the structure's units.
+        estimate: the full estimate, or None for a file that lists only values.
+        source: the file read; model: the study model chosen, None for an identify result.
+    """
+
+    structure: ModelStructure
+    values: Mapping[str, float] = attrs.field(converter=dict)
+    estimate: Estimate | None
+    source: str
+    model: str | None = None
+
+    def __repr__(self) -> str:
+        label = f", model {self.model!r}" if self.model else ""
+        delays = len(self.structure.free_delays)
+        return (f"IdentifiedModel({self.source}{label}: {len(self.values) - delays} "
+                f"derivatives, {delays} delays, {self.structure.units.name} units)")
+
+    def state_space(self, pade_order: int = 0) -> NamedStateSpace:
+        """The model as a named state-space system (see :func:`rotorid.model.statespace.state_space`)."""
+        return state_space(self.structure, self.values, pade_order=pade_order)
+
+    def to_statespace(self, pade_order: int = 0):
+        """The model as a :class:`scipy.signal.StateSpace`; signal names in
+        ``state_space(pade_order)``."""
+        return self.state_space(pade_order).to_scipy()
+
+
+def to_statespace(estimate: Estimate, structure: ModelStructure, pade_order: int = 0):
+    """``estimate`` of ``structure`` as a :class:`scipy.signal.StateSpace` (parameters of the
+    records, such as output biases, are left out; their names: ``state_space``)."""
+    return state_space(structure, model_values(structure, estimate.as_mapping()),
+                       pade_order=pade_order).to_scipy()
+
+
+def model_values(structure: ModelStructure, values: Mapping[str, float]) -> dict[str, float]:
+    """``values`` without the parameters of the identification records
+    (:data:`RECORD_PARAMETER_PREFIXES`), as a mapping over ``structure``'s parameters."""
+    kept = {n: v for n, v in values.items() if not n.startswith(RECORD_PARAMETER_PREFIXES)}
+    return structure.as_mapping(kept)
+
+
+def load_result(path: str | os.PathLike, model: str | None = None,
+                structure: ModelStructure | None = None) -> IdentifiedModel:
+    """The identified model in a ``rotorid identify`` result or a study's ``result.json``.
+
+    Args:
+        path: the JSON file.
+        model: for a study result, ``"with delays"`` (default) or ``"no delays"``; an
+            identify result holds one model and takes none.
+        structure: the structure the estimate belongs to, overriding the one the file names
+            (needed when it names none).
+    """
+    path = Path(path)
+    record = read_json_object(path, "result file")
+    if isinstance(record.get("estimates"), Mapping):
+        chosen = model or STUDY_MODELS[0]
+        if chosen not in record["estimates"]:
+            raise UsageError(f"{path}: no model {chosen!r}; the study result holds "
+                             f"{', '.join(map(repr, record['estimates']))}")
+        entry = record["estimates"][chosen]
+        declared = structure or _study_structure(record, entry, path)
+    else:
+        if model is not None:
+            raise UsageError(f"{path} is a `rotorid identify` result holding one model; "
+                             f"choosing a model ({model!r}) applies to study results only")
+        chosen, entry = None, record
+        declared = structure or _described_structure(record, path)
+    if not isinstance(entry.get("parameters"), Mapping):
+        raise DataFileError(f"{path}: no 'parameters' table; give a result written by "
+                            f"`rotorid identify` or `rotorid study`")
+    identified, values = _identified(declared, entry, path)
+    estimate = Estimate.from_dict(entry) if "parameter_names" in entry else None
+    return IdentifiedModel(identified, values, estimate, str(path), chosen)
+
+
+def _described_structure(record: Mapping, path: Path) -> ModelStructure:
+    described = record.get("structure")
+    if isinstance(described, str):
+        model_path = Path(described)
+        return load_model(model_path if model_path.is_absolute() else path.parent / model_path)
+    if isinstance(described, Mapping):
+        return parse_model(described, f"{path} (embedded structure)")
+    raise DataFileError(f"{path}: the result names no model structure; give the model file "
+                        f"it was estimated with")
+
+
+def _study_structure(record: Mapping, entry: Mapping, path: Path) -> ModelStructure:
+    """The case's starting structure at the study's trim condition."""
+    case, condition = record.get("case"), record.get("condition")
+    if not isinstance(case, Mapping) or not isinstance(condition, Mapping):
+        raise DataFileError(f"{path}: a study result needs its 'case' and 'condition'")
+    mapping = {"units": entry.get("units", "flight-test"), "condition": {"airspeed_kt": 0.0},
+               "structure": dict(case.get("structure") or {}),
+               "derivatives": dict(case.get("derivatives") or {})}
+    declared = parse_model(mapping, f"{path} (the case's structure)")
+    try:
+        return attrs.evolve(declared, condition=FlightCondition(**condition))
+    except TypeError as error:
+        raise DataFileError(f"{path}: malformed 'condition' {dict(condition)!r}: "
+                            f"{error}") from None
+
+
+def _number(entry, name: str, path: Path) -> float:
+    value = entry.get("value") if isinstance(entry, Mapping) else entry
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        raise DataFileError(f"{path}: {name} has no numeric value ({entry!r})")
+    return float(value)
+
+
+def _identified(structure: ModelStructure, entry: Mapping, path: Path):
+    """The identified structure and its values from an estimate record: fixed values set,
+    free derivatives the record does not list removed, its delays added."""
+    declared = entry.get("units")
+    if declared is not None and unit_system(declared).name != structure.units.name:
+        raise DataFileError(f"{path}: the estimate is in {declared!r} units but the model "
+                            f"structure in {structure.units.name!r}; use the model file it "
+                            f"was estimated with")
+    parameters = {n: _number(e, n, path) for n, e in entry["parameters"].items()
+                  if not n.startswith(RECORD_PARAMETER_PREFIXES)}
+    for name, value in dict(entry.get("fixed") or {}).items():
+        if name in structure.names:
+            structure = structure.fixing(name, _number(value, name, path))
+    delays = {n: _number(e, n, path) for n, e in dict(entry.get("delays") or {}).items()}
+    removed = [d.name for d in structure.free_derivatives if d.name not in parameters]
+    structure = structure.without(*removed)
+    structure = structure.with_delays([n for n in delays if structure.derivative(n).delay
+                                       is None], missing="error")
+    values = dict(parameters)
+    values.update({f"tau_{n}": v for n, v in delays.items()})
+    return structure, structure.as_mapping(values)
+
+
+__all__ = ["IdentifiedModel", "STUDY_MODELS", "load_result", "model_values", "to_statespace"]

@@ -1,0 +1,234 @@
+"""An identified model as a named state-space system: A, B, C, D with signal names and units.
+
+:func:`state_space` assembles ``ẋ = A x + B u``, ``y = C x + D u`` from a structure and its
+parameter values and keeps only what the model can produce: the controls that drive a state or
+an output, the states those controls reach and the outputs that depend on them. A decoupled
+longitudinal model thus has the states ``u w q theta``, not eight states of which four are
+spurious integrators at s = 0.
+
+Delays are kept as data (:class:`DelayedTerm`: which derivative, which equation, which signal,
+how long). With ``pade_order = n`` each distinct delayed signal also gets an n-th order Padé
+approximation of ``e^(−sτ)`` as extra states, so that the system alone reproduces the delayed
+model's response up to about ``ω ≈ n/τ``; without it, A, B, C, D are the model with every
+delay set to zero.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+
+import attrs
+import numpy as np
+
+from rotorid.errors import StructureError
+from rotorid.model.structure import CONTROLS, OUTPUTS, STATES, ModelStructure
+
+
+def _readonly(value) -> np.ndarray:
+    array = np.array(value, dtype=float, copy=True) + 0.0     # + 0.0: no negative zeros
+    array.setflags(write=False)
+    return array
+
+
+@attrs.frozen
+class DelayedTerm:
+    """One delayed derivative term: ``equation``'s derivative ``derivative`` acts on
+    ``source`` (a state or control) ``seconds`` late."""
+
+    derivative: str
+    equation: str
+    source: str
+    seconds: float
+
+
+@attrs.frozen(eq=False)
+class NamedStateSpace:
+    """``ẋ = A x + B u``, ``y = C x + D u`` with named signals (immutable).
+
+    Shapes: ``a`` (n, n), ``b`` (n, m), ``c`` (p, n), ``d`` (p, m) for n ``states``, m
+    ``inputs`` and p ``outputs``. ``units`` maps every signal name to its unit label (the
+    structure's unit system, e.g. ``deg/s``; controls in ``%``). ``delays`` lists every delayed
+    term; ``pade_order`` is the order of their realisation among the states, 0 when the
+    matrices ignore them.
+    """
+
+    a: np.ndarray = attrs.field(converter=_readonly)
+    b: np.ndarray = attrs.field(converter=_readonly)
+    c: np.ndarray = attrs.field(converter=_readonly)
+    d: np.ndarray = attrs.field(converter=_readonly)
+    states: tuple[str, ...] = attrs.field(converter=tuple)
+    inputs: tuple[str, ...] = attrs.field(converter=tuple)
+    outputs: tuple[str, ...] = attrs.field(converter=tuple)
+    units: Mapping[str, str] = attrs.field(converter=dict)
+    unit_system: str
+    delays: tuple[DelayedTerm, ...] = attrs.field(default=(), converter=tuple)
+    pade_order: int = 0
+
+    def __repr__(self) -> str:
+        delays = (f", {len(self.delays)} delays" + (f" (Padé order {self.pade_order})"
+                                                   if self.pade_order else " (not realised)")
+                  if self.delays else "")
+        return (f"NamedStateSpace({len(self.states)} states {' '.join(self.states)}; inputs "
+                f"{' '.join(self.inputs)}; outputs {' '.join(self.outputs)}; "
+                f"{self.unit_system} units{delays})")
+
+    def to_scipy(self):
+        """The system as a :class:`scipy.signal.StateSpace` (which keeps no names)."""
+        from scipy import signal
+
+        return signal.StateSpace(self.a, self.b, self.c, self.d)
+
+    def as_dict(self) -> dict:
+        """JSON-ready record: matrices as nested lists, signals with their units, delays."""
+        def signals(names):
+            return [{"name": n, "unit": self.units[n]} for n in names]
+
+        return {"unit_system": self.unit_system,
+                "states": signals(self.states), "inputs": signals(self.inputs),
+                "outputs": signals(self.outputs),
+                "A": self.a.tolist(), "B": self.b.tolist(), "C": self.c.tolist(),
+                "D": self.d.tolist(),
+                "delays": [attrs.asdict(term) for term in self.delays],
+                "pade_order": self.pade_order}
+
+
+def pade_realisation(seconds: float, order: int):
+    """State-space realisation (A, B, C, D) of the [order/order] Padé approximation of
+    ``e^(−s·seconds)``, shapes (n, n), (n, 1), (1, n), (1, 1).
+
+    The realisation is built for ``σ = s·seconds`` and rescaled in time, so that its states
+    carry the unit of the delayed signal and its coefficients stay of order one for any delay.
+    """
+    from scipy import signal
+
+    if order < 1 or not seconds > 0:
+        raise StructureError(f"a Padé realisation needs order ≥ 1 and a delay > 0 s, got "
+                             f"order {order} and {seconds!r} s")
+    coefficients = [math.factorial(2 * order - k) * math.factorial(order)
+                    / (math.factorial(2 * order) * math.factorial(k)
+                       * math.factorial(order - k)) for k in range(order + 1)]
+    numerator = [c * (-1) ** k for k, c in enumerate(coefficients)][::-1]
+    denominator = coefficients[::-1]
+    a, b, c, d = signal.tf2ss(numerator, denominator)
+    return a / seconds, b / seconds, c, d
+
+
+def state_space(structure: ModelStructure, values=None, *, pade_order: int = 0,
+                inputs: Iterable[str] | None = None) -> NamedStateSpace:
+    """The model at ``values`` as a :class:`NamedStateSpace` of the signals it can produce.
+
+    Args:
+        structure: the identified structure; values: parameter vector, name → value mapping
+            (delays as ``tau_<derivative>``) or None for the initial values.
+        pade_order: 0 keeps the delays as data only; n ≥ 1 adds an n-th order Padé
+            realisation per delayed signal (states ``tau_<derivative>_1 … _n``).
+        inputs: controls to keep (default: every control that drives something).
+    Raises:
+        StructureError: no kept control drives a state or an output.
+    """
+    if pade_order < 0:
+        raise StructureError(f"pade_order must be 0 (delays as data) or a positive order, got "
+                             f"{pade_order}")
+    table = structure.terms(values)
+    delays = tuple(DelayedTerm(d.name, d.equation, d.variable, float(tau))
+                   for d, tau in zip(structure.derivatives, table.delay) if tau > 0)
+    a, b, c, d, names = _assemble(structure, table, pade_order)
+    wanted = CONTROLS if inputs is None else tuple(inputs)
+    unknown = [name for name in wanted if name not in CONTROLS]
+    if unknown:
+        raise StructureError(f"unknown control(s) {', '.join(unknown)}; controls: "
+                             f"{', '.join(CONTROLS)}")
+    columns = [CONTROLS.index(n) for n in wanted
+               if np.any(b[:, CONTROLS.index(n)]) or np.any(d[:, CONTROLS.index(n)])]
+    if not columns:
+        raise StructureError(f"no control among {', '.join(wanted)} drives a state or an "
+                             f"output of this model; check its control derivatives")
+    rows, kept = _produced(a, b, c, d, columns)
+    units = {name: structure.units.label(name) for name in STATES + CONTROLS + OUTPUTS}
+    units.update({name: units[source] for name, source in names[len(STATES):]})
+    return NamedStateSpace(
+        a[np.ix_(rows, rows)], b[np.ix_(rows, columns)], c[np.ix_(kept, rows)],
+        d[np.ix_(kept, columns)], [names[i][0] for i in rows], [CONTROLS[j] for j in columns],
+        [OUTPUTS[i] for i in kept], units, structure.units.name, delays, pade_order)
+
+
+def responding_outputs(structure: ModelStructure, values=None) -> dict[str, tuple[str, ...]]:
+    """Control → the outputs that respond to it at all; an output missing from a control's
+    list is identically zero in the response to that control (a decoupled model)."""
+    a, b, c, d, _ = _assemble(structure, structure.terms(values), 0)
+    return {control: tuple(OUTPUTS[i] for i in _produced(a, b, c, d, [j])[1])
+            for j, control in enumerate(CONTROLS)}
+
+
+def _produced(a, b, c, d, columns) -> tuple[list[int], list[int]]:
+    """The states the input ``columns`` reach and the outputs that depend on them."""
+    rows = _reachable(a, b[:, columns])
+    return rows, [i for i in range(len(OUTPUTS)) if np.any(c[i, rows]) or np.any(d[i, columns])]
+
+
+def _assemble(structure: ModelStructure, table, pade_order: int):
+    """Full A, B, C, D (8 states plus the Padé states) and (name, source) of every state."""
+    a = structure.known_state_matrix()
+    b = np.zeros((len(STATES), len(CONTROLS)))
+    c = structure.known_output_matrix()
+    d = np.zeros((len(OUTPUTS), len(CONTROLS)))
+    groups: dict[tuple[int, float], list] = {}
+    for derivative, eq, src, gain, tau, out in zip(
+            structure.derivatives, table.equation, table.source, table.gain, table.delay,
+            table.output):
+        if pade_order and tau > 0:
+            groups.setdefault((int(src), float(tau)), []).append((derivative.name, eq, gain, out))
+            continue
+        _add(a, b, c, d, eq, src, out, gain, state_gain=None)
+    names = [(s, s) for s in STATES]
+    sources = STATES + CONTROLS
+    for (src, tau), terms in groups.items():
+        fa, fb, fc, fd = pade_realisation(tau, pade_order)
+        first = a.shape[0]
+        label = "+".join(name for name, *_ in terms)
+        names += [(f"tau_{label}_{k}", sources[src]) for k in range(1, pade_order + 1)]
+        a = np.pad(a, ((0, pade_order), (0, pade_order)))
+        b = np.pad(b, ((0, pade_order), (0, 0)))
+        c = np.pad(c, ((0, 0), (0, pade_order)))
+        block = slice(first, first + pade_order)
+        a[block, block] = fa
+        if src < len(STATES):
+            a[block, src] = fb[:, 0]
+        else:
+            b[block, src - len(STATES)] = fb[:, 0]
+        for _, eq, gain, out in terms:
+            _add(a, b, c, d, eq, src, out, gain * fd[0, 0], state_gain=(block, gain * fc[0]))
+    return a, b, c, d, names
+
+
+def _add(a, b, c, d, eq, src, out, gain, state_gain) -> None:
+    """Add a term ``gain·source`` to equation ``eq`` (and to output ``out`` when ≥ 0), plus
+    ``state_gain = (columns, row)`` on the Padé states of a delayed source."""
+    n_states = len(STATES)
+    targets = [(a, b, eq)] + ([(c, d, out)] if out >= 0 else [])
+    for states, controls, row in targets:
+        if src < n_states:
+            states[row, src] += gain
+        else:
+            controls[row, src - n_states] += gain
+        if state_gain is not None:
+            states[row, state_gain[0]] += state_gain[1]
+
+
+def _reachable(a: np.ndarray, b: np.ndarray) -> list[int]:
+    """Indices of the states reachable from the inputs through the nonzero pattern of A and B
+    (structural controllability), in order."""
+    reached = set(np.flatnonzero(np.any(b != 0, axis=1)).tolist())
+    frontier = list(reached)
+    while frontier:
+        j = frontier.pop()
+        for i in np.flatnonzero(a[:, j]).tolist():
+            if i not in reached:
+                reached.add(i)
+                frontier.append(i)
+    return sorted(reached)
+
+
+__all__ = ["DelayedTerm", "NamedStateSpace", "pade_realisation", "responding_outputs",
+           "state_space"]

@@ -1,0 +1,54 @@
+"""The response pairs a model and its sweeps can produce, and why the others are skipped.
+
+A pair ``output/input`` cannot be verified when no sweep excites the input, when the model's
+output does not respond to the input at all (a decoupled model: its response is identically
+zero and ε would be infinite), or when the measured output never moves on the input's sweeps
+(a padded column: the measured response is zero). :func:`producible_pairs` sorts the pairs
+into those to verify and those skipped, with the reason.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import attrs
+import numpy as np
+
+from rotorid.data import OUTPUT_CHANNELS
+from rotorid.model.statespace import responding_outputs
+from rotorid.verification.compare import parse_pair, primary_axis
+
+
+@attrs.frozen
+class PairSelection:
+    """``pairs`` to verify, in the order given, and ``skipped``: pair → reason."""
+
+    pairs: tuple[str, ...] = attrs.field(converter=tuple)
+    skipped: Mapping[str, str] = attrs.field(converter=dict)
+
+
+def producible_pairs(structure, values, sweeps, pairs: Sequence[str]) -> PairSelection:
+    """Split ``pairs`` into those the model at ``values`` and the ``sweeps`` can produce and
+    those they cannot (see the module docstring)."""
+    responding = responding_outputs(structure, values)
+    axes = [primary_axis(m) for m in sweeps]
+    kept, skipped = [], {}
+    for pair in pairs:
+        output, control = parse_pair(pair)
+        chosen = [m for m, axis in zip(sweeps, axes) if axis == control]
+        column = OUTPUT_CHANNELS.index(output)
+        if not chosen:
+            skipped[pair] = (f"no sweep excites {control!r} (the sweeps excite "
+                             f"{', '.join(sorted(set(axes)))})")
+        elif output not in responding[control]:
+            skipped[pair] = (f"the model's {output} does not respond to {control} (no "
+                             f"derivative couples them): its response is identically zero")
+        elif all(np.ptp(m.outputs[:, column]) == 0 for m in chosen):
+            skipped[pair] = (f"the measured {output} never moves on the {control} sweeps "
+                             f"({', '.join(m.name for m in chosen)}); is the column padded?")
+        else:
+            kept.append(pair)
+    return PairSelection(kept, skipped)
+
+
+__all__ = ["PairSelection", "producible_pairs"]
