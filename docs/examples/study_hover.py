@@ -23,7 +23,8 @@ Run it from the repository root::
 
 ``--quick`` (or the environment variable ``ROTORID_QUICK=1``) runs the case's reduced but
 honest variant (records shortened to 60 %, reduction stopped by the criteria instead of being
-continued to zero parameters): about 20 s on 2 cores, plus about 8 s for the figures.
+continued to zero parameters): about 40 s on 2 cores with the figures and the report, as
+``rotorid study hover --quick``.
 Without it the full paper setup runs (full-length records, reduction to zero parameters):
 about 1.5 minutes plus the figures. ``--seed`` changes the sensor noise, ``--resume``
 reuses the reduction steps a previous run of the same configuration left in the output

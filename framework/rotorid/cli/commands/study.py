@@ -17,7 +17,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--out", required=True, help="results directory")
     parser.add_argument("--quick", action="store_true",
                         help="reduced but honest run: shorter records, reduction stopped by "
-                             "the criteria (a few minutes on 2 cores)")
+                             "the criteria (hover: about 40 s on 2 cores)")
     parser.add_argument("--seed", type=int, help="noise seed of generated data")
     parser.add_argument("--speeds", help="airspeeds of speed-sweep in kt: '0,40,80' or "
                                          "START:STOP:STEP (default 0:120:10)")
