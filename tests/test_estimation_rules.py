@@ -10,7 +10,8 @@ import rotorid
 from rotorid import Derivative, FlightCondition, Maneuver, ManeuverSet, ModelStructure
 from rotorid.estimation.estimate import Estimate, statistics
 from rotorid.estimation.reduction import ReductionPath, ReductionStep, reduce
-from rotorid_output_error.levenberg_marquardt import Settings, _bounded_step, run
+from rotorid.estimation.steps import bounded_step
+from rotorid_output_error.levenberg_marquardt import Settings, run
 
 HOVER = FlightCondition.from_airspeed(0.0)
 
@@ -170,10 +171,10 @@ def test_levenberg_marquardt_accepted_costs_fall_strictly():
 def test_a_step_is_shortened_along_its_direction_to_stay_within_the_bounds():
     # F = I, G = (−2, −2): the free step is (2, 2); the first parameter may move by 0.5 only,
     # so the whole step is scaled by 1/4 (its direction kept).
-    step = _bounded_step(np.eye(2), np.array([-2.0, -2.0]), 0.0, np.array([0.5, 0.0]),
+    step = bounded_step(np.eye(2), np.array([-2.0, -2.0]), 0.0, np.array([0.5, 0.0]),
                          np.array([-np.inf, -np.inf]), np.array([1.0, np.inf]))
     np.testing.assert_allclose(step, [0.5, 0.5], rtol=1e-9)
     # At its bound and pushed outward, a parameter is frozen; the other takes its full step.
-    step = _bounded_step(np.eye(2), np.array([-2.0, -2.0]), 0.0, np.array([1.0, 0.0]),
+    step = bounded_step(np.eye(2), np.array([-2.0, -2.0]), 0.0, np.array([1.0, 0.0]),
                          np.array([-np.inf, -np.inf]), np.array([1.0, np.inf]))
     np.testing.assert_allclose(step, [0.0, 2.0], rtol=1e-9)

@@ -253,12 +253,8 @@ def test_predicted_cost_change_matches_the_observed_one_near_the_minimum():
     """The convergence test's Gauss-Newton prediction −(2GᵀΔ + ΔᵀFΔ)/N of the relative
     change of det R agrees with the change a simulated step actually gives."""
     from rotorid.estimation.models import LinearModel
-    from rotorid_output_error.levenberg_marquardt import (
-        Problem,
-        Settings,
-        _bounded_step,
-        predicted_change,
-    )
+    from rotorid.estimation.steps import bounded_step
+    from rotorid_output_error.levenberg_marquardt import Problem, Settings, predicted_change
 
     structure = small_structure()
     truth = structure.as_vector({**SMALL_TRUTH, "tau_L_lat": 0.07, "tau_M_long": 0.05})
@@ -270,7 +266,7 @@ def test_predicted_cost_change_matches_the_observed_one_near_the_minimum():
     cost, r, residuals, _ = problem.evaluate(values)
     f, g = problem.gauss_newton(values, r, residuals)
     predicted = predicted_change(f, g, values, bounds, problem.n_samples)
-    stepped = problem.evaluate(values + _bounded_step(f, g, 0.0, values, *bounds))[0]
+    stepped = problem.evaluate(values + bounded_step(f, g, 0.0, values, *bounds))[0]
     observed = (cost - stepped) / cost
     assert 1e-4 < predicted < 1e-1, predicted
     assert abs(predicted / observed - 1) < 0.01

@@ -54,6 +54,9 @@ class FrequencyResponseEstimator:
             Pairs without a coherent frequency (γ² ≥ ``threshold``) are left out with a note.
         n_points: J points per pair (log-spaced over its coherent range).
         threshold: coherence bounding each pair's range and its kept points.
+        band: (lowest, highest) frequency in rad/s a pair's range may reach; default the
+            whole coherent range. A 6-DoF model has no rotor modes: limit its band below
+            them (about 10 rad/s for a hingeless rotor).
         max_iterations, cost_tolerance, step_tolerance: Levenberg-Marquardt stopping rules
             (tolerances relative).
         enforce_signs: use the derivatives' sign priors as bounds.
@@ -67,6 +70,7 @@ class FrequencyResponseEstimator:
         default=None, converter=lambda v: None if v is None else tuple(v))
     n_points: int = 20
     threshold: float = COST_THRESHOLD
+    band: tuple[float, float] = attrs.field(default=(0.0, np.inf), converter=tuple)
     max_iterations: int = 100
     cost_tolerance: float = 1e-9
     step_tolerance: float = 1e-10
@@ -81,8 +85,8 @@ class FrequencyResponseEstimator:
         pair's name when it has no coherent frequency. Compute it once and pass it to
         repeated fits (a reduction)."""
         if isinstance(data, ManeuverSet):
-            return sweep_pair_data(data, self.pairs, self.n_points, self.threshold)
-        return tuple(pair_data(r, self.n_points, self.threshold) or r.pair
+            return sweep_pair_data(data, self.pairs, self.n_points, self.threshold, self.band)
+        return tuple(pair_data(r, self.n_points, self.threshold, self.band) or r.pair
                      for r in self._chosen(data))
 
     def estimate(self, model: ModelStructure, data, *, start=None) -> Estimate:

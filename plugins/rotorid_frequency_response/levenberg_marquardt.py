@@ -1,8 +1,9 @@
 """Levenberg-Marquardt on the residual vector of the mismatch cost J = eᵀe.
 
 Each iteration solves (F + λ·diag F) Δ = −G with the Gauss-Newton F = JᵀJ and G = Jᵀe of the
-exact Jacobian J = ∂e/∂θ (Marquardt's scaling, so that parameters of very different
-magnitudes converge together) and clips the trial to the bounds. A trial that does not lower
+exact Jacobian J = ∂e/∂θ, within the bounds (:func:`rotorid.estimation.steps.bounded_step`:
+parameters at a bound whose step points outward are frozen, the step is shortened at a
+bound). A trial that does not lower
 J is never taken: λ grows by ``factor`` and the step is recomputed; after an accepted step λ
 shrinks by ``factor``.
 """
@@ -13,6 +14,7 @@ from collections.abc import Callable
 
 import attrs
 import numpy as np
+from rotorid.estimation.steps import bounded_step
 
 from .cost import Mismatch, MismatchProblem
 
@@ -43,15 +45,6 @@ class RunResult:
     stop_reason: str
 
 
-def _step(jacobian: np.ndarray, residuals: np.ndarray, lam: float) -> np.ndarray:
-    """Solve (F + λ·diag F) Δ = −G with F = JᵀJ, G = Jᵀe; shape (P,)."""
-    f = jacobian.T @ jacobian
-    scale = np.sqrt(np.maximum(np.diag(f), 1e-12 * max(np.max(np.diag(f)), 1e-300)))
-    scaled = f / np.outer(scale, scale)
-    scaled[np.diag_indices_from(scaled)] += lam + 1e-12
-    return np.linalg.solve(scaled, -(jacobian.T @ residuals) / scale) / scale
-
-
 def run(problem: MismatchProblem, start: np.ndarray, bounds, settings: Settings,
         on_progress: Callable[[int, float, float], None] | None = None) -> RunResult:
     """Levenberg-Marquardt from ``start`` within ``bounds`` ((P,), (P,)); ``on_progress``
@@ -67,8 +60,10 @@ def run(problem: MismatchProblem, start: np.ndarray, bounds, settings: Settings,
             reason, converged = "the model reproduces the responses exactly", True
             break
         for _ in range(settings.max_tries):
-            trial_values = np.clip(values + _step(current.jacobian, current.residuals, lam),
-                                   lower, upper)
+            jacobian = current.jacobian
+            step = bounded_step(jacobian.T @ jacobian, jacobian.T @ current.residuals, lam,
+                                values, lower, upper)
+            trial_values = np.clip(values + step, lower, upper)
             trial = problem.evaluate(trial_values)
             if trial.cost < current.cost:
                 break

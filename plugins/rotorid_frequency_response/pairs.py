@@ -65,9 +65,11 @@ class PairData:
 
 
 def cost_points(response: FrequencyResponse, n_points: int = 20,
-                threshold: float = COST_THRESHOLD) -> np.ndarray:
-    """The J frequencies of one measured response in rad/s (empty when none is coherent)."""
+                threshold: float = COST_THRESHOLD, band=(0.0, np.inf)) -> np.ndarray:
+    """The J frequencies of one measured response in rad/s (empty when none is coherent),
+    within ``band`` (lowest, highest frequency in rad/s)."""
     finite = np.isfinite(response.response) & np.isfinite(response.coherence)
+    finite &= (response.omega >= band[0]) & (response.omega <= band[1])
     omega, coherence = response.omega[finite], response.coherence[finite]
     order = np.argsort(omega)
     return MismatchCost(threshold=threshold, n_points=n_points).points(omega[order],
@@ -75,11 +77,11 @@ def cost_points(response: FrequencyResponse, n_points: int = 20,
 
 
 def pair_data(response: FrequencyResponse, n_points: int = 20,
-              threshold: float = COST_THRESHOLD) -> PairData | None:
+              threshold: float = COST_THRESHOLD, band=(0.0, np.inf)) -> PairData | None:
     """The J points of a measured response that the model's own response matches directly
     (magnitude, unwrapped phase and γ² interpolated linearly in log ω); ``None`` when no
     frequency is coherent."""
-    points = cost_points(response, n_points, threshold)
+    points = cost_points(response, n_points, threshold, band)
     finite = np.isfinite(response.response) & np.isfinite(response.coherence)
     if points.size == 0:
         return None
@@ -106,7 +108,8 @@ def all_pairs(maneuvers: ManeuverSet) -> tuple[str, ...]:
 
 def sweep_pair_data(maneuvers: ManeuverSet, pairs: Sequence[str] | None = None,
                     n_points: int = 20, threshold: float = COST_THRESHOLD,
-                    windows: Sequence[float] | None = None) -> tuple[PairData | str, ...]:
+                    band=(0.0, np.inf), windows: Sequence[float] | None = None
+                    ) -> tuple[PairData | str, ...]:
     """Each pair's J points from the sweeps whose axis is its input (see the module
     docstring); a pair without coherent frequencies gives its name instead."""
     pairs = all_pairs(maneuvers) if pairs is None else tuple(pairs)
@@ -121,7 +124,8 @@ def sweep_pair_data(maneuvers: ManeuverSet, pairs: Sequence[str] | None = None,
                                   f"excite {', '.join(sorted(set(axes)))}")
         subset = maneuvers.select(lambda m: m.name in chosen)
         points = cost_points(response_from_maneuvers(subset, control, output, grid,
-                                                     windows=windows), n_points, threshold)
+                                                     windows=windows),
+                             n_points, threshold, band)
         if points.size == 0:
             found.append(name)
             continue

@@ -28,6 +28,7 @@ import attrs
 import numpy as np
 from rotorid.errors import SimulationDivergedError
 from rotorid.estimation.models import gauss_newton_products
+from rotorid.estimation.steps import bounded_step
 
 _MAX_LAMBDA = 1e12
 #: Simulated outputs beyond this multiple of the largest measured value count as divergence.
@@ -132,34 +133,9 @@ class Problem:
         return gauss_newton_products(self.model, values, self.maneuvers, residuals, weighting)
 
 
-def _bounded_step(f, g, lam, values, lower, upper):
-    """Solve (F + λ·diag F) Δ = −G with bound handling; returns Δ (P,)."""
-    p = values.size
-    scale = np.sqrt(np.maximum(np.diag(f), 1e-12 * max(np.max(np.diag(f)), 1e-300)))
-    free = np.ones(p, dtype=bool)
-    for _ in range(p + 1):
-        step = np.zeros(p)
-        idx = np.flatnonzero(free)
-        if idx.size == 0:
-            return step
-        fs = f[np.ix_(idx, idx)] / np.outer(scale[idx], scale[idx])
-        fs[np.diag_indices_from(fs)] *= 1.0 + lam
-        fs[np.diag_indices_from(fs)] += 1e-12
-        step[idx] = np.linalg.solve(fs, -g[idx] / scale[idx]) / scale[idx]
-        blocked = free & (((values <= lower) & (step < 0)) | ((values >= upper) & (step > 0)))
-        if not np.any(blocked):
-            break
-        free &= ~blocked
-    with np.errstate(divide="ignore", invalid="ignore"):
-        room = np.where(step > 0, (upper - values) / step,
-                        np.where(step < 0, (lower - values) / step, np.inf))
-    alpha = min(1.0, float(np.min(room))) if room.size else 1.0
-    return step * max(alpha, 0.0)
-
-
 def predicted_change(f, g, values, bounds, n_samples: int) -> float:
     """Relative decrease of det R predicted by the Gauss-Newton model for the bounded full step."""
-    step = _bounded_step(f, g, 0.0, values, *bounds)
+    step = bounded_step(f, g, 0.0, values, *bounds)
     return float(-(2.0 * g @ step + step @ f @ step) / n_samples)
 
 
@@ -187,7 +163,7 @@ def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | Non
     while iteration < settings.max_iterations:
         accepted = False
         for _ in range(settings.max_tries):
-            step = _bounded_step(f, g, lam, values, lower, upper)
+            step = bounded_step(f, g, lam, values, lower, upper)
             trial = np.clip(values + step, lower, upper)
             trial_cost, trial_r, trial_residuals, trial_rmse = problem.evaluate(trial)
             if trial_cost < cost:
