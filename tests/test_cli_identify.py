@@ -68,6 +68,23 @@ def case(tmp_path_factory):
     return model, data, structure
 
 
+def _cramer_rao_at_truth(structure):
+    """Cramér-Rao bounds from the true noise (diagonal NOISE²) and central-difference
+    sensitivities at the truth: sqrt(diag F⁻¹), F = Σ Jᵀ diag(NOISE⁻²) J."""
+    truth, blank = structure.as_vector(TRUTH), _doublets()
+    columns = []
+    for k in range(truth.size):
+        step = np.zeros(truth.size)
+        step[k] = 1e-6 * max(abs(truth[k]), 1e-2)
+        up = np.concatenate(rotorid.simulate(structure, truth + step, blank))
+        down = np.concatenate(rotorid.simulate(structure, truth - step, blank))
+        columns.append(((up - down) / (2 * step[k])).ravel())
+    jacobian = np.array(columns).T                                  # (N·8, P)
+    weights = np.tile(NOISE**-2, jacobian.shape[0] // NOISE.size)
+    information = jacobian.T @ (weights[:, None] * jacobian)
+    return np.sqrt(np.diag(np.linalg.inv(information)))
+
+
 def test_identify_recovers_the_truth_and_writes_the_json(case, tmp_path, capsys):
     model, data, structure = case
     out = tmp_path / "result.json"
@@ -79,10 +96,12 @@ def test_identify_recovers_the_truth_and_writes_the_json(case, tmp_path, capsys)
     assert record["converged"] is True
     assert set(record["parameters"]) == set(structure.parameter_names) - {"tau_L_lat"}
     assert set(record["delays"]) == {"L_lat"}
+    expected_bounds = dict(zip(structure.parameter_names, _cramer_rao_at_truth(structure)))
     for name, truth in TRUTH.items():
         entry = (record["delays"]["L_lat"] if name == "tau_L_lat"
                  else record["parameters"][name])
         assert abs(entry["value"] - truth) <= 4 * entry["cramer_rao"], (name, entry, truth)
+        assert entry["cramer_rao"] == pytest.approx(expected_bounds[name], rel=0.2), name
         assert entry["cramer_rao_pct"] == pytest.approx(
             100 * entry["cramer_rao"] / abs(entry["value"]))
     assert record["parameters"]["M_q"]["sign"] == "negative"

@@ -157,7 +157,6 @@ def _check_sweep_coherence(sweep, bands=FULL_BANDS):
 
 @pytest.fixture(scope="module")
 def truth_source():
-    pytest.importorskip("rotorid_helisim.model")
     return HelisimSource()
 
 

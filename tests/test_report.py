@@ -75,7 +75,16 @@ def test_the_quick_hover_study_writes_a_complete_linked_report(tmp_path, capsys)
     printed = capsys.readouterr().out
     assert f"report: {out}/report.html" in printed
     claims = [line for line in printed.splitlines() if "paper's claims:" in line]
-    assert len(claims) == 1 and " hold" in claims[0]
+    assert len(claims) == 1
+    held, decided = map(int, re.search(r"paper's claims: (\d+)/(\d+) hold", claims[0]).groups())
+    # Two RMSE claims, two off-axis phase claims and four on-axis MUAD claims are decided on
+    # every run, then one claim per delay and per key derivative with a reference sign. The
+    # method's eight hold; a delay just past the paper's range or a weakly identified sign
+    # may not (each failure is listed with its measured value).
+    failures = claims[0].partition("; not: ")[2]
+    assert decided >= 8 + 3 and held >= decided - 3 and (held == decided) == (not failures)
+    for claim in ("RMSE", "phase error", "MUAD"):
+        assert claim not in failures, failures
     case = out / "hover"
     record = json.loads((case / "result.json").read_text())
 

@@ -31,26 +31,40 @@ THETA0, PHI0 = math.radians(5.0), math.radians(-3.0)
 CONDITION = FlightCondition(U0_FT * FOOT, V0_FT * FOOT, W0_FT * FOOT, THETA0, PHI0)
 
 
-def expected_known_terms(u0, v0, w0, g, k):
-    """A of the linearised equations with every derivative zero, written out term by term.
+# The known terms of the small-perturbation equations at this trim, worked out by hand.
+# Trig: sin 5° = 0.0871557, cos 5° = 0.9961947, tan 5° = 0.0874887, sin(−3°) = −0.0523360,
+# cos(−3°) = 0.9986295. Flight-test units: g = 9.80665/0.3048 = 32.17405 ft/s², angles and
+# rates in deg, so every force term carries k = π/180 = 0.01745329 rad/deg; SI: U0 = 30.48,
+# V0 = 0.6096, W0 = 2.4384 m/s, g = 9.80665 m/s², k = 1.
+#
+#   u' = −W0 q + V0 r − g cosΘ0 θ          −8·k = −0.1396263; 2·k = 0.0349066;
+#                                           −32.17405·0.9961947·k = −0.559406
+#   v' = −U0 r + W0 p + g cosΘ0 cosΦ0 φ     −100·k = −1.745329; 8·k = 0.1396263;
+#        − g sinΘ0 sinΦ0 θ                  32.17405·0.9961947·0.9986295·k = 0.558640;
+#                                           −32.17405·0.0871557·(−0.0523360)·k = +0.00256141
+#   w' = −V0 p + U0 q − g cosΦ0 sinΘ0 θ     −2·k = −0.0349066; 100·k = 1.745329;
+#        − g sinΦ0 cosΘ0 φ                  −32.17405·0.9986295·0.0871557·k = −0.0488746;
+#                                           −32.17405·(−0.0523360)·0.9961947·k = +0.0292771
+#   θ' = q cosΦ0 − r sinΦ0                  0.9986295; +0.0523360
+#   φ' = p + q sinΦ0 tanΘ0 + r cosΦ0 tanΘ0  1; −0.0523360·0.0874887 = −0.00457880;
+#                                           0.9986295·0.0874887 = 0.0873688
+KINEMATIC = {("theta", "q"): 0.9986295, ("theta", "r"): 0.0523360, ("phi", "p"): 1.0,
+             ("phi", "q"): -0.00457880, ("phi", "r"): 0.0873688}
+KNOWN_FLIGHT_TEST = {
+    ("u", "q"): -0.1396263, ("u", "r"): 0.0349066, ("u", "theta"): -0.559406,
+    ("v", "r"): -1.745329, ("v", "p"): 0.1396263, ("v", "phi"): 0.558640,
+    ("v", "theta"): 0.00256141,
+    ("w", "p"): -0.0349066, ("w", "q"): 1.745329, ("w", "theta"): -0.0488746,
+    ("w", "phi"): 0.0292771, **KINEMATIC}
+KNOWN_SI = {
+    ("u", "q"): -2.4384, ("u", "r"): 0.6096, ("u", "theta"): -9.76933,
+    ("v", "r"): -30.48, ("v", "p"): 2.4384, ("v", "phi"): 9.75594, ("v", "theta"): 0.0447318,
+    ("w", "p"): -0.6096, ("w", "q"): 30.48, ("w", "theta"): -0.853535,
+    ("w", "phi"): 0.511287, **KINEMATIC}
 
-    ``u0 v0 w0`` in the length unit per s, ``g`` in the length unit per s², ``k`` radians
-    per angle unit (π/180 for degrees, 1 for radians).
-    """
-    st, ct, sp, cp = math.sin(THETA0), math.cos(THETA0), math.sin(PHI0), math.cos(PHI0)
-    terms = {
-        # u' = -W0 q + V0 r - g cosΘ0 θ
-        ("u", "q"): -w0 * k, ("u", "r"): v0 * k, ("u", "theta"): -g * ct * k,
-        # v' = -U0 r + W0 p + g cosΘ0 cosΦ0 φ - g sinΘ0 sinΦ0 θ
-        ("v", "r"): -u0 * k, ("v", "p"): w0 * k, ("v", "phi"): g * ct * cp * k,
-        ("v", "theta"): -g * st * sp * k,
-        # w' = -V0 p + U0 q - g cosΦ0 sinΘ0 θ - g sinΦ0 cosΘ0 φ
-        ("w", "p"): -v0 * k, ("w", "q"): u0 * k, ("w", "theta"): -g * cp * st * k,
-        ("w", "phi"): -g * sp * ct * k,
-        # θ' = q cosΦ0 - r sinΦ0 ;  φ' = p + q sinΦ0 tanΘ0 + r cosΦ0 tanΘ0
-        ("theta", "q"): cp, ("theta", "r"): -sp,
-        ("phi", "p"): 1.0, ("phi", "q"): sp * st / ct, ("phi", "r"): cp * st / ct,
-    }
+
+def known_matrix(terms):
+    """The (8, 8) matrix holding ``terms`` (row state, column state) → value, zero elsewhere."""
     a = np.zeros((8, 8))
     for (row, column), value in terms.items():
         a[STATES.index(row), STATES.index(column)] = value
@@ -62,18 +76,11 @@ def test_flight_test_gravity_is_the_standard_value_in_feet():
     assert SI.g == 9.80665
 
 
-def test_known_terms_in_flight_test_units():
-    structure = ModelStructure.six_dof(CONDITION)
-    expected = expected_known_terms(U0_FT, V0_FT, W0_FT, 9.80665 / 0.3048, math.pi / 180.0)
-    np.testing.assert_allclose(structure.known_state_matrix(), expected, rtol=1e-6, atol=1e-12)
-    # one entry worked out on paper: -32.174 ft/s² · cos 5° · π/180 per deg of pitch
-    assert structure.known_state_matrix()[0, 3] == pytest.approx(-0.55940, abs=1e-5)
-
-
-def test_known_terms_in_si_units():
-    structure = ModelStructure.six_dof(CONDITION, units="si")
-    expected = expected_known_terms(U0_FT * 0.3048, V0_FT * 0.3048, W0_FT * 0.3048, 9.80665, 1.0)
-    np.testing.assert_allclose(structure.known_state_matrix(), expected, rtol=1e-12, atol=1e-12)
+@pytest.mark.parametrize("units, terms", [("flight-test", KNOWN_FLIGHT_TEST), ("si", KNOWN_SI)])
+def test_known_terms_match_the_hand_derived_values(units, terms):
+    structure = ModelStructure.six_dof(CONDITION, units=units)
+    np.testing.assert_allclose(structure.known_state_matrix(), known_matrix(terms), rtol=2e-6,
+                               atol=0.0)
 
 
 def test_known_output_terms_measure_rates_and_attitudes():
