@@ -35,11 +35,32 @@ from rotorid.model.structure import (
     FlightCondition,
     ModelStructure,
 )
+from rotorid.estimation.estimate import Estimate, ParameterEstimate, statistics
+from rotorid.plugin.contracts import (
+    CaseData,
+    Command,
+    DataSource,
+    Estimator,
+    InputSignal,
+    LinearSystem,
+    ReductionCriterion,
+    Removal,
+    TruthModel,
+    ValidationEnvelope,
+)
 from rotorid.plugin.hookspecs import PluginDescriptor, hookimpl
-from rotorid.plugin.manager import create, get_plugin_manager, registry
+from rotorid.plugin.manager import (
+    create,
+    get_plugin_manager,
+    new_plugin_manager,
+    notify,
+    register_plugin,
+    registry,
+)
 from rotorid.simulation.simulator import Simulator, sensitivities, simulate
 from rotorid.simulation.transfer import frequency_response
 from rotorid.units import FLIGHT_TEST, SI, UnitSystem, unit_system
+from rotorid.verification.envelopes import EnvelopeBounds, EnvelopeCheck, check_bounds
 
 try:
     __version__ = version("rotorid")
@@ -48,12 +69,15 @@ except PackageNotFoundError:  # running from a source tree without installation
 
 __all__ = [
     "CONTROLS", "OUTPUTS", "STATES", "FLIGHT_TEST", "SI",
-    "ChannelLink", "ChannelMap", "Signal", "SignalError", "SignalSet",
-    "ConvergenceWarning", "DataError", "DataFileError", "Delay", "Derivative", "DerivativeError",
-    "EstimationError", "FlightCondition", "IdentifiabilityWarning", "IdentifiedModel",
-    "Maneuver", "ManeuverSet", "MissingFileError", "ModelStructure", "NamedStateSpace",
-    "PluginDescriptor", "PluginError", "RotoridError", "RotoridWarning", "Sign",
-    "SimulationDivergedError", "Simulator", "StructureError", "UnitSystem", "create",
-    "frequency_response", "get_plugin_manager", "hookimpl", "load_result", "registry",
-    "sensitivities", "simulate", "state_space", "to_statespace", "unit_system",
+    "CaseData", "ChannelLink", "ChannelMap", "Command", "ConvergenceWarning", "DataError",
+    "DataFileError", "DataSource", "Delay", "Derivative", "DerivativeError", "EnvelopeBounds",
+    "EnvelopeCheck", "Estimate", "EstimationError", "Estimator", "FlightCondition",
+    "IdentifiabilityWarning", "IdentifiedModel", "InputSignal", "LinearSystem", "Maneuver",
+    "ManeuverSet", "MissingFileError", "ModelStructure", "NamedStateSpace", "ParameterEstimate",
+    "PluginDescriptor", "PluginError", "ReductionCriterion", "Removal", "RotoridError",
+    "RotoridWarning", "Sign", "Signal", "SignalError", "SignalSet", "SimulationDivergedError",
+    "Simulator", "StructureError", "TruthModel", "UnitSystem", "ValidationEnvelope",
+    "check_bounds", "create", "frequency_response", "get_plugin_manager", "hookimpl",
+    "load_result", "new_plugin_manager", "notify", "register_plugin", "registry",
+    "sensitivities", "simulate", "state_space", "statistics", "to_statespace", "unit_system",
 ]

@@ -11,14 +11,14 @@ unstable hover dynamics bounded, so the iteration neither stalls nor diverges. `
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 
 import attrs
 import numpy as np
 from rotorid import blas
 from rotorid.data import ManeuverSet
 from rotorid.errors import EstimationError, SimulationDivergedError
-from rotorid.estimation.estimate import Estimate, statistics
+from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.models import (
     LinearModel,
     as_model,
@@ -62,7 +62,9 @@ class OutputErrorEstimator:
         start: ``"auto"`` (equation error when every initial value is zero, else the
             initial values), ``"initial"`` or ``"equation-error"``.
         horizons: durations (s) of the initial portions fitted before the full records.
-        callback: called with a progress record after every accepted iteration.
+
+    Every accepted iteration is reported through the ``rotorid_estimation_iteration`` hook
+    (stage ``"3 s"``, ``"6 s"``, … or ``"full"``).
     """
 
     name = NAME
@@ -78,7 +80,6 @@ class OutputErrorEstimator:
     initial_states: bool = False
     start: str = attrs.field(default="auto", validator=_check_choice(START_STRATEGIES))
     horizons: tuple[float, ...] = attrs.field(default=(3.0, 6.0), converter=tuple)
-    callback: Callable | None = None
 
     # ----------------------------------------------------------------- public
     def estimate(self, model, maneuvers: ManeuverSet, *, start=None) -> Estimate:
@@ -229,35 +230,27 @@ class OutputErrorEstimator:
         problem = Problem(selected, maneuvers, measured, weights, settings)
 
         def progress(record):
-            notify("rotorid_estimation_iteration", estimator=NAME, iteration=record.iteration,
-                   cost=record.cost, rmse=record.rmse, lm_lambda=record.lm_lambda)
-            if self.callback is not None:
-                self.callback(stage, record)
+            notify("rotorid_estimation_iteration", estimator=NAME, stage=stage,
+                   iteration=record.iteration, cost=record.cost, rmse=record.rmse,
+                   lm_lambda=record.lm_lambda)
 
         return run(problem, start, model.bounds(), progress, final_information)
 
     def _estimate(self, fitted, base, result, start, notes, n_samples, columns):
+        """The estimate of ``result``: the run's own cost (weighted, floored R) and RMSE."""
         names = tuple(fitted.parameter_names)
-        stats = statistics(result.information, names)
         lower, upper = fitted.bounds()
         at_bound = tuple(n for n, v, lo, hi in zip(names, result.values, lower, upper)
                          if (np.isfinite(lo) and v <= lo) or (np.isfinite(hi) and v >= hi))
-        signs = getattr(base, "signs", {})
-        violations = tuple(n for n, v in zip(names, result.values)
-                           if (signs.get(n) == "negative" and v > 0)
-                           or (signs.get(n) == "positive" and v < 0))
         structure = getattr(base, "structure", None)
-        return Estimate(
-            estimator=NAME, parameter_names=names, values=result.values, start=start,
-            cramer_rao=stats.cramer_rao, insensitivity=stats.insensitivity,
-            correlation=stats.correlation, information=result.information,
-            noise_covariance=result.noise_covariance,
-            output_names=tuple(fitted.output_names[c] for c in columns),
-            cost=result.cost, rmse=result.rmse, cost_history=result.cost_history,
-            rmse_history=result.rmse_history, iterations=result.iterations,
-            converged=result.converged, stop_reason=result.stop_reason, n_samples=n_samples,
-            sign_violations=violations, at_bound=at_bound, unidentifiable=stats.unidentifiable,
-            fixed=getattr(base, "fixed", {}), signs=signs,
+        return Estimate.from_fit(
+            fitted, result.values, result.information, estimator=NAME, start=start,
+            noise_covariance=result.noise_covariance, cost=result.cost, rmse=result.rmse,
+            n_samples=n_samples, output_names=tuple(fitted.output_names[c] for c in columns),
+            cost_history=result.cost_history, rmse_history=result.rmse_history,
+            iterations=result.iterations, converged=result.converged,
+            stop_reason=result.stop_reason, at_bound=at_bound,
+            fixed=getattr(base, "fixed", {}), signs=getattr(base, "signs", {}),
             units=structure.units.name if structure is not None else "model",
             notes=tuple(notes))
 

@@ -20,6 +20,7 @@ import attrs
 import numpy as np
 
 from rotorid.errors import EstimationError, IdentifiabilityWarning
+from rotorid.model.structure import ModelStructure
 
 #: Condition number of the scaled information matrix above which parameters count as nearly
 #: unidentifiable.
@@ -103,25 +104,62 @@ def rmse(residuals: np.ndarray) -> float:
     return float(np.sqrt(np.mean(residuals**2)))
 
 
+# attrs metadata that drive the JSON record (Estimate.as_dict / from_dict):
+#: (P,) array stored per parameter, under this key of the parameter's entry;
+_COLUMN = "column"
+#: its normalised form (a property of the same name) stored next to it;
+_NORMALISED = "normalised"
+#: a name → text mapping stored per derivative (not per delay) under this key;
+_PER_DERIVATIVE = "per_derivative"
+#: a field stored under another key of the record;
+_KEY = "key"
+#: a (P, P) array (reshaped on reading, so that P = 0 round-trips).
+_SQUARE = "square"
+#: Prefix of the delay parameters' names (``tau_L_p``); delays are in s.
+DELAY_PREFIX = "tau_"
+
+
+@attrs.frozen
+class ParameterEstimate:
+    """One parameter of an :class:`Estimate` (``estimate["L_p"]``).
+
+    ``cramer_rao_pct`` and ``insensitivity_pct`` are normalised by the value (inf at 0);
+    ``sign`` is the prior (``"negative"``, ``"positive"`` or ``"none"``).
+    """
+
+    name: str
+    value: float
+    start: float
+    cramer_rao: float
+    cramer_rao_pct: float
+    insensitivity: float
+    insensitivity_pct: float
+    sign: str
+
+
 @attrs.frozen(eq=False)
 class Estimate:
     """The result of one estimation (immutable).
 
-    Array attributes are read-only; shapes: ``values``, ``cramer_rao``, ``insensitivity``
-    (P,), ``correlation`` and ``information`` (P, P), ``noise_covariance`` (n_o, n_o).
-    Units follow the model (flight-test by default); delays are in s.
+    Array attributes are read-only; shapes: ``values``, ``start``, ``cramer_rao``,
+    ``insensitivity`` (P,), ``correlation`` and ``information`` (P, P), ``noise_covariance``
+    (n_o, n_o). Units follow the model (flight-test by default); delays are in s.
+    An estimator builds one with :meth:`from_fit`; ``estimate["L_p"]`` gives one parameter.
     """
 
     estimator: str
     parameter_names: tuple[str, ...] = attrs.field(converter=tuple)
-    values: np.ndarray = attrs.field(converter=_frozen_array)
+    values: np.ndarray = attrs.field(converter=_frozen_array, metadata={_COLUMN: "value"})
     start: np.ndarray = attrs.field(converter=_frozen_array)
-    cramer_rao: np.ndarray = attrs.field(converter=_frozen_array)
-    insensitivity: np.ndarray = attrs.field(converter=_frozen_array)
-    correlation: np.ndarray = attrs.field(converter=_frozen_array)
-    information: np.ndarray = attrs.field(converter=_frozen_array)
+    cramer_rao: np.ndarray = attrs.field(
+        converter=_frozen_array, metadata={_COLUMN: "cramer_rao", _NORMALISED: "cramer_rao_pct"})
+    insensitivity: np.ndarray = attrs.field(
+        converter=_frozen_array,
+        metadata={_COLUMN: "insensitivity", _NORMALISED: "insensitivity_pct"})
+    correlation: np.ndarray = attrs.field(converter=_frozen_array, metadata={_SQUARE: True})
+    information: np.ndarray = attrs.field(converter=_frozen_array, metadata={_SQUARE: True})
     noise_covariance: np.ndarray = attrs.field(converter=_frozen_array)
-    output_names: tuple[str, ...] = attrs.field(converter=tuple)
+    output_names: tuple[str, ...] = attrs.field(converter=tuple, metadata={_KEY: "outputs"})
     cost: float
     rmse: float
     cost_history: tuple[float, ...] = attrs.field(converter=tuple)
@@ -130,13 +168,65 @@ class Estimate:
     converged: bool
     stop_reason: str
     n_samples: int
-    sign_violations: tuple[str, ...] = ()
-    at_bound: tuple[str, ...] = ()
-    unidentifiable: tuple[tuple[str, ...], ...] = ()
+    sign_violations: tuple[str, ...] = attrs.field(default=(), converter=tuple)
+    at_bound: tuple[str, ...] = attrs.field(default=(), converter=tuple)
+    unidentifiable: tuple[tuple[str, ...], ...] = attrs.field(
+        default=(), converter=lambda combos: tuple(tuple(c) for c in combos))
     fixed: Mapping[str, float] = attrs.field(factory=dict, converter=dict)
-    signs: Mapping[str, str] = attrs.field(factory=dict, converter=dict)
+    signs: Mapping[str, str] = attrs.field(factory=dict, converter=dict,
+                                           metadata={_PER_DERIVATIVE: "sign"})
     units: str = "flight-test"
-    notes: tuple[str, ...] = ()
+    notes: tuple[str, ...] = attrs.field(default=(), converter=tuple)
+
+    # ----------------------------------------------------------------- building
+    @classmethod
+    def from_fit(cls, model, values, information, residuals=None, *, estimator: str,
+                 **fields) -> "Estimate":
+        """Build an estimate from a fit, deriving what follows from it.
+
+        Args:
+            model: the fitted :class:`~rotorid.model.structure.ModelStructure` (or a model
+                with ``parameter_names`` and ``output_names``, and optionally a ``structure``).
+            values: the estimated parameters, shape (P,) in ``model.parameter_names`` order.
+            information: the information matrix F at ``values``, shape (P, P).
+            residuals: measured minus model outputs per maneuver, shapes (N_i, n_o); give
+                them unless ``fields`` sets ``noise_covariance``, ``cost``, ``rmse`` and
+                ``n_samples``.
+            estimator: the estimator's registered name.
+            fields: any other :class:`Estimate` field, overriding the derived one (an
+                estimator with its own cost definition passes ``cost`` and so on). Not given:
+                ``iterations`` 0, ``converged`` True, ``stop_reason`` ``"converged"``, one-point
+                cost and RMSE histories, ``start`` the model's initial values.
+
+        Derived: Cramér-Rao bounds, insensitivities, correlations and unidentifiable
+        combinations from F (:func:`statistics`); R = Σ eᵀe / N, cost det R and the RMSE
+        (eq. 18) from the residuals; sign priors, fixed derivatives, units and sign violations
+        from the structure.
+        """
+        names = tuple(model.parameter_names)
+        values = np.asarray(values, dtype=float)
+        stats = statistics(information, names)
+        derived = {**_structure_facts(model), **_residual_facts(residuals)}
+        derived.update(fields)
+        signs = derived.get("signs", {})
+        derived.setdefault("sign_violations", tuple(
+            n for n, v in zip(names, values)
+            if (signs.get(n) == "negative" and v > 0) or (signs.get(n) == "positive" and v < 0)))
+        derived.setdefault("cost_history", (derived.get("cost"),))
+        derived.setdefault("rmse_history", (derived.get("rmse"),))
+        missing = [k for k in ("noise_covariance", "cost", "rmse", "n_samples")
+                   if k not in derived]
+        if missing:
+            raise EstimationError(f"Estimate.from_fit needs the residuals, or "
+                                  f"{', '.join(missing)} given explicitly")
+        if "start" not in derived:
+            derived["start"] = model.initial_values()
+        return cls(estimator=estimator, parameter_names=names, values=values,
+                   cramer_rao=stats.cramer_rao, insensitivity=stats.insensitivity,
+                   correlation=stats.correlation, information=information,
+                   unidentifiable=stats.unidentifiable,
+                   **{"iterations": 0, "converged": True, "stop_reason": "converged",
+                      **derived})
 
     # ----------------------------------------------------------------- access
     def index(self, name: str) -> int:
@@ -145,6 +235,21 @@ class Estimate:
         except ValueError:
             raise EstimationError(f"no estimated parameter {name!r}; estimated: "
                                   f"{', '.join(self.parameter_names)}") from None
+
+    def __getitem__(self, name: str) -> ParameterEstimate:
+        """One estimated parameter by name (``estimate["L_p"].cramer_rao``)."""
+        i = self.index(name)
+        return ParameterEstimate(
+            name, float(self.values[i]), float(self.start[i]), float(self.cramer_rao[i]),
+            float(self.cramer_rao_pct[i]), float(self.insensitivity[i]),
+            float(self.insensitivity_pct[i]), self.signs.get(name, "none"))
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.parameter_names
+
+    def __iter__(self):
+        """The estimated parameters, in order (:class:`ParameterEstimate`)."""
+        return (self[name] for name in self.parameter_names)
 
     def value(self, name: str) -> float:
         """Estimated value of one parameter (fixed derivatives give their fixed value)."""
@@ -168,38 +273,37 @@ class Estimate:
 
     @property
     def is_delay(self) -> np.ndarray:
-        return np.array([n.startswith("tau_") for n in self.parameter_names], dtype=bool)
+        return np.array([n.startswith(DELAY_PREFIX) for n in self.parameter_names], dtype=bool)
 
     # ----------------------------------------------------------------- export
     def as_dict(self) -> dict:
-        """JSON-ready record (the ``rotorid identify`` format)."""
-        def number(x):
-            return float(x) if math.isfinite(x) else None
+        """JSON-ready record (the ``rotorid identify`` format), driven by the fields' metadata.
 
+        Each parameter gets an entry under ``"parameters"`` (delays: under ``"delays"``,
+        keyed without ``tau_``) holding the per-parameter columns, their normalised forms
+        (null where not finite) and, for derivatives, the sign prior. Every other field is
+        stored under its name or its metadata ``key``.
+        """
+        fields = attrs.fields(type(self))
         parameters, delays = {}, {}
         for i, name in enumerate(self.parameter_names):
-            entry = {"value": float(self.values[i]), "cramer_rao": number(self.cramer_rao[i]),
-                     "cramer_rao_pct": number(self.cramer_rao_pct[i]),
-                     "insensitivity": number(self.insensitivity[i]),
-                     "insensitivity_pct": number(self.insensitivity_pct[i])}
-            if name.startswith("tau_"):
-                delays[name[4:]] = entry
-            else:
-                entry["sign"] = self.signs.get(name, "none")
-                parameters[name] = entry
-        return {"estimator": self.estimator, "converged": self.converged,
-                "stop_reason": self.stop_reason, "iterations": self.iterations,
-                "cost": self.cost, "rmse": self.rmse,
-                "cost_history": list(self.cost_history), "rmse_history": list(self.rmse_history),
-                "n_samples": self.n_samples, "outputs": list(self.output_names),
-                "noise_covariance": self.noise_covariance.tolist(),
-                "parameters": parameters, "delays": delays, "fixed": dict(self.fixed),
-                "correlation": self.correlation.tolist(),
-                "sign_violations": list(self.sign_violations), "at_bound": list(self.at_bound),
-                "unidentifiable": [list(c) for c in self.unidentifiable],
-                "notes": list(self.notes), "units": self.units,
-                "parameter_names": list(self.parameter_names), "start": self.start.tolist(),
-                "information": self.information.tolist()}
+            entry = {}
+            for field in (f for f in fields if _COLUMN in f.metadata):
+                entry[field.metadata[_COLUMN]] = _number(getattr(self, field.name)[i])
+                if _NORMALISED in field.metadata:
+                    normalised = field.metadata[_NORMALISED]
+                    entry[normalised] = _number(getattr(self, normalised)[i])
+            if name.startswith(DELAY_PREFIX):
+                delays[name[len(DELAY_PREFIX):]] = entry
+                continue
+            for field in (f for f in fields if _PER_DERIVATIVE in f.metadata):
+                entry[field.metadata[_PER_DERIVATIVE]] = getattr(self, field.name).get(name,
+                                                                                      "none")
+            parameters[name] = entry
+        record = {field.metadata.get(_KEY, field.name): _plain(getattr(self, field.name))
+                  for field in fields
+                  if _COLUMN not in field.metadata and _PER_DERIVATIVE not in field.metadata}
+        return {**record, "parameters": parameters, "delays": delays}
 
     @classmethod
     def from_dict(cls, record: Mapping) -> "Estimate":
@@ -207,30 +311,24 @@ class Estimate:
         try:
             names = tuple(record["parameter_names"])
             entries = {**record["parameters"],
-                       **{f"tau_{k}": v for k, v in record["delays"].items()}}
-
-            def column(key):
-                return [np.inf if entries[n][key] is None else entries[n][key] for n in names]
-
-            return cls(
-                estimator=record["estimator"], parameter_names=names,
-                values=column("value"), start=record["start"],
-                cramer_rao=column("cramer_rao"), insensitivity=column("insensitivity"),
-                correlation=np.array(record["correlation"], dtype=float).reshape(
-                    len(names), len(names)),
-                information=np.array(record["information"], dtype=float).reshape(
-                    len(names), len(names)),
-                noise_covariance=record["noise_covariance"], output_names=record["outputs"],
-                cost=record["cost"], rmse=record["rmse"], cost_history=record["cost_history"],
-                rmse_history=record["rmse_history"], iterations=record["iterations"],
-                converged=record["converged"], stop_reason=record["stop_reason"],
-                n_samples=record["n_samples"],
-                sign_violations=tuple(record["sign_violations"]),
-                at_bound=tuple(record["at_bound"]),
-                unidentifiable=tuple(tuple(c) for c in record["unidentifiable"]),
-                fixed=record["fixed"],
-                signs={n: e["sign"] for n, e in record["parameters"].items() if "sign" in e},
-                units=record["units"], notes=tuple(record["notes"]))
+                       **{f"{DELAY_PREFIX}{k}": v for k, v in record["delays"].items()}}
+            fields = {}
+            for field in attrs.fields(cls):
+                metadata = field.metadata
+                if _COLUMN in metadata:
+                    key = metadata[_COLUMN]
+                    fields[field.name] = [np.inf if entries[n][key] is None else entries[n][key]
+                                          for n in names]
+                elif _PER_DERIVATIVE in metadata:
+                    key = metadata[_PER_DERIVATIVE]
+                    fields[field.name] = {n: e[key] for n, e in record["parameters"].items()
+                                          if key in e}
+                elif metadata.get(_SQUARE):
+                    fields[field.name] = np.array(record[field.name], dtype=float).reshape(
+                        len(names), len(names))
+                else:
+                    fields[field.name] = record[metadata.get(_KEY, field.name)]
+            return cls(**fields)
         except (KeyError, TypeError, ValueError) as error:
             raise EstimationError(f"not a complete rotorid estimate record: {error!r}") from None
 
@@ -275,6 +373,46 @@ class Estimate:
             lines.append("[[Notes]]")
             lines.extend(f"    {note}" for note in self.notes)
         return "\n".join(lines)
+
+
+def _number(value: float) -> float | None:
+    """A finite float, or None (JSON has no infinity)."""
+    return float(value) if math.isfinite(value) else None
+
+
+def _plain(value):
+    """A field value as JSON-ready lists, dicts and scalars."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, tuple):
+        return [_plain(v) for v in value]
+    if isinstance(value, Mapping):
+        return dict(value)
+    return value
+
+
+def _structure_facts(model) -> dict:
+    """Output names, sign priors, fixed derivatives and units of a fitted model."""
+    if isinstance(model, ModelStructure):
+        structure, outputs = model, model.outputs
+    else:
+        structure, outputs = getattr(model, "structure", None), model.output_names
+    facts = {"output_names": tuple(outputs)}
+    if isinstance(structure, ModelStructure):
+        facts.update(signs={d.name: d.sign.value for d in structure.free_derivatives},
+                     fixed={d.name: d.initial for d in structure.derivatives if d.fixed},
+                     units=structure.units.name)
+    return facts
+
+
+def _residual_facts(residuals) -> dict:
+    """R = Σ eᵀe / N, its determinant (the cost), the RMSE and N from per-maneuver residuals."""
+    if residuals is None:
+        return {}
+    stacked = np.concatenate([np.asarray(e, dtype=float) for e in residuals])
+    noise = stacked.T @ stacked / len(stacked)
+    return {"noise_covariance": noise, "cost": float(np.linalg.det(noise)),
+            "rmse": rmse(stacked), "n_samples": len(stacked)}
 
 
 def _pct(value: float) -> str:

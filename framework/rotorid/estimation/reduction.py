@@ -118,7 +118,7 @@ def reduce(structure: ModelStructure, maneuvers, estimator, criteria: Sequence, 
            continue_to_zero: bool = False, warm_start: bool = False, rule: str = "lowest-rmse",
            rmse_tolerance: float = 0.01, finished: Sequence[ReductionStep] = (),
            on_step: Callable[[ReductionStep], None] | None = None,
-           case: str = "") -> ReductionPath:
+           case: str = "", manager=None) -> ReductionPath:
     """Run the reduction loop.
 
     Args:
@@ -132,8 +132,10 @@ def reduce(structure: ModelStructure, maneuvers, estimator, criteria: Sequence, 
         finished: steps already computed (resume); they must be a prefix of this run.
         on_step: called after every step (progress, persistence); the
             ``rotorid_reduction_step`` hook fires too, with ``case``.
+        manager: the plugin manager notified (and current while the estimator runs);
+            default the current one (:func:`rotorid.plugin.manager.current_manager`).
     """
-    from rotorid.plugin.manager import notify
+    from rotorid.plugin.manager import notify, using
 
     def record(step: ReductionStep) -> None:
         steps.append(step)
@@ -148,23 +150,24 @@ def reduce(structure: ModelStructure, maneuvers, estimator, criteria: Sequence, 
     if structure.free_delays:
         raise EstimationError("reduce the structure without delays; the delays are added "
                               "after selection (the paper's two-step approach)")
-    steps = list(finished)
-    if not steps:
-        record(ReductionStep(0, None, estimator.estimate(structure, maneuvers), structure))
-    while steps[-1].structure.free_derivatives:
-        last = steps[-1]
-        removal = _propose(criteria, last.estimate, continue_to_zero)
-        if removal is None:
-            break
-        reduced = last.structure.without(removal.parameter)
-        start = None
-        if warm_start:
-            previous = last.estimate.as_mapping()
-            start = {n: previous[n] for n in reduced.parameter_names}
-        estimate = (estimator.estimate(reduced, maneuvers, start=start)
-                    if reduced.parameter_names else _empty_estimate(reduced, maneuvers))
-        record(ReductionStep(len(steps), removal, estimate, reduced))
-    return ReductionPath(steps, rule, rmse_tolerance)
+    with using(manager):
+        steps = list(finished)
+        if not steps:
+            record(ReductionStep(0, None, estimator.estimate(structure, maneuvers), structure))
+        while steps[-1].structure.free_derivatives:
+            last = steps[-1]
+            removal = _propose(criteria, last.estimate, continue_to_zero)
+            if removal is None:
+                break
+            reduced = last.structure.without(removal.parameter)
+            start = None
+            if warm_start:
+                previous = last.estimate.as_mapping()
+                start = {n: previous[n] for n in reduced.parameter_names}
+            estimate = (estimator.estimate(reduced, maneuvers, start=start)
+                        if reduced.parameter_names else _empty_estimate(reduced, maneuvers))
+            record(ReductionStep(len(steps), removal, estimate, reduced))
+        return ReductionPath(steps, rule, rmse_tolerance)
 
 
 def _empty_estimate(structure: ModelStructure, maneuvers) -> Estimate:
@@ -172,12 +175,7 @@ def _empty_estimate(structure: ModelStructure, maneuvers) -> Estimate:
     from rotorid.simulation.simulator import simulate
 
     outputs = simulate(structure, None, maneuvers)
-    residuals = np.concatenate([m.outputs - y for m, y in zip(maneuvers, outputs)])
-    r = residuals.T @ residuals / len(residuals)
-    return Estimate(estimator="none", parameter_names=(), values=[], start=[], cramer_rao=[],
-                    insensitivity=[], correlation=np.zeros((0, 0)), information=np.zeros((0, 0)),
-                    noise_covariance=r, output_names=structure.outputs,
-                    cost=float(np.linalg.det(r)), rmse=float(np.sqrt(np.mean(residuals**2))),
-                    cost_history=(), rmse_history=(), iterations=0, converged=True,
-                    stop_reason="no parameter left", n_samples=len(residuals),
-                    units=structure.units.name)
+    residuals = [m.outputs - y for m, y in zip(maneuvers, outputs)]
+    return Estimate.from_fit(structure, [], np.zeros((0, 0)), residuals, estimator="none",
+                             stop_reason="no parameter left", cost_history=(),
+                             rmse_history=())

@@ -132,7 +132,7 @@ class Command(Protocol):
 
 # ----------------------------------------------------------------- data sources
 @runtime_checkable
-class LinearModel(Protocol):
+class LinearSystem(Protocol):
     """A truth model's linearisation: ``dx/dt = A x + B u``."""
 
     A: np.ndarray
@@ -146,7 +146,7 @@ class TruthModel(Protocol):
     """The model a simulating data source flew: linearised for truth derivatives and delays."""
 
     def linearize(self, airspeed_kt: float, *, full: bool = False,
-                  units: str = "flight-test") -> LinearModel:
+                  units: str = "flight-test") -> LinearSystem:
         """Linear model about the trim at ``airspeed_kt`` (kt).
 
         ``full`` keeps the rotor (flap, inflow) states instead of residualising them;

@@ -118,12 +118,14 @@ def rotorid_commands():
 
 # ----------------------------------------------------------------- lifecycle hooks
 @hookspec
-def rotorid_estimation_iteration(estimator, iteration, cost, rmse, lm_lambda):
+def rotorid_estimation_iteration(estimator, stage, iteration, cost, rmse, lm_lambda):
     """Called after every accepted iteration of an iterative estimator.
 
     Args:
         estimator: name of the estimator (``str``).
-        iteration: 1-based iteration count (``int``).
+        stage: which run of the estimation (``str``, e.g. output error's ``"3 s"`` horizon or
+            ``"full"``); ``""`` for an estimator with one run.
+        iteration: 1-based iteration count within the stage (``int``).
         cost: current cost, for output error ``det R`` (``float``).
         rmse: current RMSE, the paper's eq. 18 (``float``).
         lm_lambda: current Levenberg-Marquardt parameter, or ``None``.

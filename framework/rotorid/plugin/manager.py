@@ -2,13 +2,22 @@
 
 Built-in plugins are registered exactly like third-party ones, through the ``rotorid``
 entry-point group in ``pyproject.toml``. :func:`get_plugin_manager` builds the manager once
-per process; :func:`registry` gives one family's components by name; :func:`create` builds one.
+per process; :func:`new_plugin_manager` builds a separate one and :func:`register_plugin` adds
+an in-process plugin to either, checked. :func:`registry` gives one family's components by
+name; :func:`create` builds one; :func:`notify` calls a lifecycle hook.
+
+Which manager: every function here takes ``manager=None``, meaning the manager of the
+innermost :func:`using` block (``Study(manager=...)`` and the ``rotorid`` commands run inside
+one), else the process-wide one. So a component that calls :func:`notify` itself (an
+estimator reporting iterations) reaches the observers of the run that created it.
 """
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import functools
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 
 import attrs
 import pluggy
@@ -52,22 +61,73 @@ def new_plugin_manager(extra_plugins: Iterable[object] = (), load_entry_points: 
     try:
         if load_entry_points:
             manager.load_setuptools_entrypoints(hookspecs.PROJECT)
-        for plugin in extra_plugins:
-            manager.register(plugin)
-        manager.check_pending()
     except ImportError as error:
         raise PluginError(f"a plugin of the {hookspecs.PROJECT!r} entry-point group cannot be "
                           f"imported: {error}; fix or uninstall it") from error
+    _checked(manager.check_pending)
+    for plugin in extra_plugins:
+        register_plugin(plugin, manager)
+    return manager
+
+
+def register_plugin(plugin: object, manager: pluggy.PluginManager | None = None,
+                    name: str | None = None) -> str:
+    """Register an in-process ``plugin`` (a module or an object with hook methods), checked.
+
+    Its hooks are validated against the specifications as for an installed plugin (unknown
+    hook names, wrong arguments); a bad plugin leaves the manager unchanged and a
+    :class:`PluginError` names it. ``manager`` defaults as in :func:`current_manager`.
+    Returns the name it was registered under (``manager.unregister(name=...)`` removes it).
+    """
+    manager = current_manager(manager)
+    try:
+        registered = _checked(lambda: manager.register(plugin, name=name))
+    except ValueError as error:
+        raise PluginError(f"plugin {name or plugin!r} cannot be registered: {error}; register "
+                          f"each plugin once, under a name of its own") from error
+    if registered is None:
+        raise PluginError(f"plugin {name or plugin!r} is blocked in this plugin manager")
+    try:
+        _checked(manager.check_pending)
+    except PluginError:
+        manager.unregister(name=registered)
+        raise
+    return registered
+
+
+def _checked(check):
+    """Run ``check`` (hook validation); a pluggy validation error becomes a PluginError."""
+    try:
+        return check()
     except pluggy.PluginValidationError as error:
         raise PluginError(f"plugin {error.plugin!r} is invalid: {error}; fix or uninstall it"
                           ) from error
-    return manager
 
 
 @functools.lru_cache(maxsize=1)
 def get_plugin_manager() -> pluggy.PluginManager:
     """The process-wide plugin manager (entry-point plugins loaded, hooks checked)."""
     return new_plugin_manager()
+
+
+_ACTIVE: contextvars.ContextVar[pluggy.PluginManager | None] = contextvars.ContextVar(
+    "rotorid_plugin_manager", default=None)
+
+
+@contextlib.contextmanager
+def using(manager: pluggy.PluginManager | None) -> Iterator[pluggy.PluginManager]:
+    """Make ``manager`` the one ``manager=None`` means inside the block (None: unchanged)."""
+    manager = current_manager(manager)
+    token = _ACTIVE.set(manager)
+    try:
+        yield manager
+    finally:
+        _ACTIVE.reset(token)
+
+
+def current_manager(manager: pluggy.PluginManager | None = None) -> pluggy.PluginManager:
+    """``manager`` if given, else the innermost :func:`using` block's, else the process-wide."""
+    return manager or _ACTIVE.get() or get_plugin_manager()
 
 
 def _descriptors(impl, hook_name: str) -> list:
@@ -90,7 +150,7 @@ def registry(family: str, manager: pluggy.PluginManager | None = None) -> dict[s
     """
     if family not in FAMILIES:
         raise PluginError(f"unknown plugin family {family!r}; families: {', '.join(FAMILIES)}")
-    manager = manager or get_plugin_manager()
+    manager = current_manager(manager)
     hook_name = FAMILIES[family]
     hook = getattr(manager.hook, hook_name)
     found: dict[str, Registered] = {}
@@ -119,6 +179,5 @@ def create(family: str, name: str, manager: pluggy.PluginManager | None = None, 
 
 
 def notify(hook_name: str, manager: pluggy.PluginManager | None = None, **kwargs) -> None:
-    """Call a lifecycle hook on every observer plugin."""
-    manager = manager or get_plugin_manager()
-    getattr(manager.hook, hook_name)(**kwargs)
+    """Call a lifecycle hook on every observer plugin of the manager (see :func:`current_manager`)."""
+    getattr(current_manager(manager).hook, hook_name)(**kwargs)

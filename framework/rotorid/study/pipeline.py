@@ -43,7 +43,7 @@ from rotorid.io import atomic_write, jsonable
 from rotorid.model.modelfile import parse_model
 from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.plugin.contracts import Removal
-from rotorid.plugin.manager import create, notify
+from rotorid.plugin.manager import create, notify, using
 from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase
 from rotorid.verification.compare import VerificationResult, verify_model
@@ -262,9 +262,15 @@ class ReportWriter(Protocol):
 
 def run_case(case: FlightCase, out_dir: str | Path, resume: bool = True,
              progress: Callable[[str, str], None] | None = print_progress,
-             report_writer: ReportWriter | None = None) -> CaseResult:
+             report_writer: ReportWriter | None = None, manager=None) -> CaseResult:
     """Run one flight case end to end and write its results under ``out_dir/<case>``; with a
-    ``report_writer``, also its figures and report."""
+    ``report_writer``, also its figures and report. Plugins come from ``manager`` (a
+    :func:`~rotorid.plugin.manager.new_plugin_manager`; default: the current one)."""
+    with using(manager):
+        return _run_case(case, out_dir, resume, progress, report_writer)
+
+
+def _run_case(case, out_dir, resume, progress, report_writer) -> CaseResult:
     report = progress or (lambda case_name, message: None)
     directory = Path(out_dir) / case.name
     (directory / "steps").mkdir(parents=True, exist_ok=True)
@@ -460,12 +466,17 @@ class Study:
             :class:`concurrent.futures.Executor` (e.g. ``client.get_executor()`` of a
             ``dask.distributed.Client``) runs them there. The numbers are the same whichever
             runs them (see :mod:`rotorid.executors`).
-        resume: reuse finished steps found in ``out_dir``.
+        resume: reuse finished steps found in ``out_dir`` (off by default, as in
+            ``rotorid study``).
         progress: ``progress(case, message)`` receives progress lines (it runs in the worker:
             with a process pool or Dask it must be a picklable module-level function).
         report_writer: writes each case's figures and report and the study report (e.g.
             :class:`rotorid.report.html.StudyReport`; with a process pool or Dask it must be
             picklable); ``None`` writes the results only.
+        manager: the plugin manager the cases take their plugins from and notify (one built
+            with :func:`~rotorid.plugin.manager.new_plugin_manager`); default the current
+            one. It cannot travel to other processes: with a manager, run serially or on a
+            thread pool.
 
     :meth:`run` raises :class:`~rotorid.errors.StudyError` when cases fail: its message names
     each failed case with its last progress message, and its ``results`` holds the cases that
@@ -473,25 +484,31 @@ class Study:
     """
 
     def __init__(self, cases: Sequence[FlightCase | str], out_dir: str | Path,
-                 executor: Executor | str | None = None, resume: bool = True,
+                 executor: Executor | str | None = None, resume: bool = False,
                  progress: Callable[[str, str], None] | None = print_progress,
-                 report_writer: ReportWriter | None = None):
+                 report_writer: ReportWriter | None = None, manager=None):
         self.cases = [c if isinstance(c, FlightCase) else FlightCase.load(c) for c in cases]
         names = [c.name for c in self.cases]
         if len(set(names)) != len(names):
             raise EstimationError(f"case names must be distinct, got {names}")
         check_executor(executor)
+        if manager is not None and executor == "process":
+            raise StudyError("a plugin manager cannot be sent to other processes: run a study "
+                             "with manager=... serially (executor=None) or on a thread pool")
         self.out_dir = Path(out_dir)
         self.executor = executor
         self.resume = resume
         self.progress = progress
         self.report_writer = report_writer
+        self.manager = manager
 
     def run(self) -> dict[str, CaseResult]:
         """Run every case; returns results by case name and writes the study report."""
         self.out_dir.mkdir(parents=True, exist_ok=True)
         options = dict(out_dir=self.out_dir, resume=self.resume, progress=self.progress,
                        report_writer=self.report_writer)
+        if self.manager is not None:
+            options["manager"] = self.manager
         results, failures = run_tasks(run_case_task,
                                       {c.name: ((c,), options) for c in self.cases},
                                       self.executor, label=lambda name: f"case {name}")

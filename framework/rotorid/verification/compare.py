@@ -57,11 +57,13 @@ def parse_pair(pair: str) -> tuple[str, str]:
     return parts[0], parts[1]
 
 
-def envelopes_by_name(names: Sequence[str], **options) -> dict[str, ValidationEnvelope]:
-    """Build registered envelopes by name (``rotorid plugins --family validation-envelopes``)."""
+def envelopes_by_name(names: Sequence[str], manager=None, **options
+                      ) -> dict[str, ValidationEnvelope]:
+    """Build registered envelopes by name (``rotorid plugins --family validation-envelopes``)
+    from ``manager`` (default the current plugin manager)."""
     from rotorid.plugin.manager import create
 
-    return {name: create("validation-envelopes", name, **options) for name in names}
+    return {name: create("validation-envelopes", name, manager, **options) for name in names}
 
 
 # ----------------------------------------------------------------- sweep comparison
@@ -387,7 +389,7 @@ def _rms_ratio(model_outputs, maneuvers, column: int) -> float:
 
 def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
                  envelopes: Mapping[str, ValidationEnvelope] | Sequence[str] | None = None,
-                 segment: float | None = None, **options) -> VerificationResult:
+                 segment: float | None = None, manager=None, **options) -> VerificationResult:
     """Verify an identified model on sweeps not used for identification.
 
     Simulates ``structure`` at ``values`` (vector, name→value mapping or None) on the
@@ -407,13 +409,14 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
     segments of 2/σ s (at least 5 s) restarted from the data (:func:`segmented_simulation`).
     A slower instability is simulated in one piece. ``segment`` given explicitly simulates in
     segments of that length and uses the simulated comparison. The result's notes say which
-    was done. Other keyword options go to :func:`compare_sweeps`.
+    was done. Envelope names are built from ``manager`` (default the current plugin
+    manager). Other keyword options go to :func:`compare_sweeps`.
     """
     from rotorid.simulation.simulator import simulate
     from rotorid.simulation.transfer import frequency_response
 
     if envelopes is not None and not isinstance(envelopes, Mapping):
-        envelopes = envelopes_by_name(tuple(envelopes))
+        envelopes = envelopes_by_name(tuple(envelopes), manager)
     eigenvalues = np.linalg.eigvals(structure.matrices(values)[0])
     growth = float(np.max(eigenvalues.real))
     longest = max(m.duration for m in sweeps)

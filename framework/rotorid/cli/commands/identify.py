@@ -11,7 +11,9 @@ Usage::
 values (all zero: the estimator chooses its own start, see docs/estimation.md). DATA are
 maneuver files (CSV, NPZ, MAT), directories or glob patterns of the ``files`` data source; they
 are converted to the model's unit system. The report goes to stdout; stderr gets one line per
-accepted iteration (unless ``--quiet``) and one line per warning (an unidentifiable parameter
+accepted iteration (unless ``--quiet``; an observer plugin of the
+``rotorid_estimation_iteration`` hook, so it works with any estimator that reports through
+it) and one line per warning (an unidentifiable parameter
 combination, for instance). The estimate is written atomically as JSON (the format of
 :meth:`rotorid.estimation.estimate.Estimate.as_dict`, plus ``structure``: the model file's path relative
 to the JSON file, so that ``rotorid verify RESULT.json SWEEPS...`` finds it).
@@ -24,6 +26,8 @@ import os
 import sys
 import warnings
 from pathlib import Path
+
+from rotorid.plugin.hookspecs import hookimpl
 
 NAME = "identify"
 HELP = ("estimate the derivatives and delays of a model file from maneuver files; print the "
@@ -82,15 +86,17 @@ def _options(args) -> dict:
         options["output_biases"] = True
     if args.initial_states:
         options["initial_states"] = True
-    if not args.quiet:
-        options["callback"] = _print_progress
     return options
 
 
-def _print_progress(stage: str, record) -> None:
-    """One stderr line per accepted iteration: stage, iteration, cost det R, RMSE."""
-    print(f"[{stage}] iteration {record.iteration:3d}  cost {record.cost:.6g}  "
-          f"RMSE {record.rmse:.5g}", file=sys.stderr, flush=True)
+class ProgressPrinter:
+    """Observer plugin: one stderr line per accepted iteration (stage, iteration, cost, RMSE)."""
+
+    @hookimpl
+    def rotorid_estimation_iteration(self, stage, iteration, cost, rmse):
+        prefix = f"[{stage}] " if stage else ""
+        print(f"{prefix}iteration {iteration:3d}  cost {cost:.6g}  RMSE {rmse:.5g}",
+              file=sys.stderr, flush=True)
 
 
 def _estimator(name: str, options: dict):
@@ -115,16 +121,19 @@ def run(args) -> int:
     from rotorid.errors import ExitStatus, MissingFileError, RotoridWarning
     from rotorid.io import atomic_write
     from rotorid.model.modelfile import load_model
+    from rotorid.plugin.manager import new_plugin_manager, using
 
     structure = load_model(args.model)
     out = Path(args.out)
     if not out.parent.is_dir():
         raise MissingFileError(f"cannot write {out}: directory {out.parent} does not exist")
-    estimator = _estimator(args.estimator, _options(args))
-    maneuvers = _load_inputs(args.data, args.hold, structure.units.name)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", RotoridWarning)
-        estimate = estimator.estimate(structure, maneuvers)
+    manager = new_plugin_manager([] if args.quiet else [ProgressPrinter()])
+    with using(manager):
+        estimator = _estimator(args.estimator, _options(args))
+        maneuvers = _load_inputs(args.data, args.hold, structure.units.name)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", RotoridWarning)
+            estimate = estimator.estimate(structure, maneuvers)
     for warning in caught:
         print(f"rotorid identify: warning: {warning.message}", file=sys.stderr)
     atomic_write(out, json.dumps(_record(estimate, Path(args.model), out), indent=2))
