@@ -52,6 +52,9 @@ PROCESS_NOISE_STATES = ("u", "w", "q", "v", "p", "r")
 #: Measured output whose first differences size the start of each state's process noise.
 _START_OUTPUT = {"u": "ax", "w": "az", "v": "ay", "q": "q", "p": "p", "r": "r",
                  "theta": "theta", "phi": "phi"}
+#: Default start of F relative to the measurement-noise size of the state's output: small,
+#: because large process noise lets the filter follow the data, a poor local minimum.
+_PROCESS_START = 0.1
 #: Lower bound of a measurement-noise variance relative to its start value.
 _VARIANCE_FLOOR = 1e-8
 
@@ -164,8 +167,9 @@ class FilterErrorEstimator:
         max_iterations, cost_tolerance, step_tolerance: stopping rules (as output error's).
         process_noise: states the process noise enters (one ``F_<state>`` each).
         process_noise_start: optional ``F_<state>`` → start value (structure units per sample);
-            by default F starts at the measurement-noise size of the state's output (over one
-            sample for the velocities, from the accelerometers).
+            by default F starts at a tenth of the noise size of the state's output (over one
+            sample for the velocities, from the accelerometers): a large start lets the filter
+            follow the data and end in a poor local minimum.
         enforce_signs: use the sign priors as bounds.
         start: ``"auto"`` (equation error when every initial value is zero, else the initial
             values), ``"initial"`` or ``"equation-error"`` for the derivatives and delays.
@@ -224,7 +228,7 @@ class FilterErrorEstimator:
             initial = LinearModel(structure).start_values(maneuvers)
             note = "start values from equation error"
         variance = self._noise_start(problem.records)
-        steps = {s: np.sqrt(variance[OUTPUTS.index(_START_OUTPUT[s])])
+        steps = {s: _PROCESS_START * np.sqrt(variance[OUTPUTS.index(_START_OUTPUT[s])])
                  * (problem.records.dt if s in ("u", "w", "v") else 1.0)
                  for s in self.process_noise}
         steps.update({k[2:]: float(v) for k, v in dict(self.process_noise_start or {}).items()

@@ -1,0 +1,82 @@
+"""Wall time of one filter-error fit against one output-error fit on the paper-size hover problem.
+
+The problem is bench_estimation.py's (``tests/hover_reference.py``): 16 closed-loop maneuvers
+of 15 s at 50 Hz, 8 noisy outputs, all 60 six-DoF derivatives plus the delays of L_lat and
+M_long free from zero. The filter-error fit adds the process noise of the six force and moment
+equations and the eight measurement-noise variances (76 parameters in all). Both estimators
+run with their defaults (equation-error start; output error also with its horizon
+continuation), BLAS on one thread, in the same run; medians of ``--repeats`` fits.
+
+Printed: both wall times, iterations, each fit's largest distance from the true derivatives in
+its own Cramér-Rao bounds, and the ratio filter error / output error. Target: ≤ 3×.
+
+    .venv/bin/python benchmarks/bench_filter_error.py [--repeats 3] [--seed 3]
+"""
+
+from __future__ import annotations
+
+import os
+
+for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_variable] = "1"
+
+import argparse  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+
+import rotorid  # noqa: E402
+from hover_reference import closed_loop_maneuvers, true_structure  # noqa: E402
+from rotorid.errors import IdentifiabilityWarning  # noqa: E402
+
+TARGET = 3.0
+
+
+def timed_fit(name, structure, maneuvers):
+    """(wall time in s, estimate) of one fit with the named estimator."""
+    estimator = rotorid.create("estimators", name)
+    started = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
+        estimate = estimator.estimate(structure, maneuvers)
+    return time.perf_counter() - started, estimate
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3, help="fits timed per estimator")
+    parser.add_argument("--seed", type=int, default=3, help="noise seed of the data")
+    args = parser.parse_args(argv)
+
+    structure, truth = true_structure()
+    maneuvers = closed_loop_maneuvers(structure, truth, seed=args.seed)
+    zero = structure.with_initial({n: 0.0 for n in structure.parameter_names})
+    load = os.getloadavg()[0]
+    print(f"problem: {len(maneuvers)} maneuvers × {maneuvers[0].n_samples} samples, "
+          f"{structure.n_parameters} structure parameters from zero; {os.cpu_count()} CPU(s), "
+          f"load average {load:.1f}")
+    medians = {}
+    for name in ("output-error", "filter-error"):
+        runs = [timed_fit(name, zero, maneuvers) for _ in range(args.repeats)]
+        medians[name] = statistics.median(t for t, _ in runs)
+        estimate = runs[-1][1]
+        k = structure.n_parameters
+        miss = np.abs(estimate.values[:k] - truth) / estimate.cramer_rao[:k]
+        print(f"{name}: {medians[name]:.2f} s (median of {args.repeats}; "
+              f"{min(t for t, _ in runs):.2f}–{max(t for t, _ in runs):.2f}), "
+              f"{len(estimate.parameter_names)} parameters, {estimate.iterations} iterations, "
+              f"converged {estimate.converged}; max |value − truth| / CR = "
+              f"{np.max(miss[np.isfinite(miss)]):.1f}")
+    ratio = medians["filter-error"] / medians["output-error"]
+    print(f"ratio filter error / output error: {ratio:.2f}× (target ≤ {TARGET:g}×: "
+          f"{'met' if ratio <= TARGET else 'NOT met'})")
+
+
+if __name__ == "__main__":
+    main()
