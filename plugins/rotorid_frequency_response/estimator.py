@@ -71,8 +71,8 @@ class FrequencyResponseEstimator:
     n_points: int = 20
     threshold: float = COST_THRESHOLD
     band: tuple[float, float] = attrs.field(default=(0.0, np.inf), converter=tuple)
-    max_iterations: int = 100
-    cost_tolerance: float = 1e-9
+    max_iterations: int = 200
+    cost_tolerance: float = 1e-6
     step_tolerance: float = 1e-10
     enforce_signs: bool = False
     start: str = attrs.field(default="auto", validator=_check_start)
@@ -99,11 +99,7 @@ class FrequencyResponseEstimator:
             raise EstimationError(f"the {NAME} estimator fits a ModelStructure (its analytic "
                                   f"response); got {type(model).__name__}")
         maneuvers = data if isinstance(data, ManeuverSet) else None
-        prepared = list(data) if maneuvers is None else []
-        if prepared and all(isinstance(p, (PairData, str)) for p in prepared):
-            fitted, notes = self._usable(prepared)
-        else:
-            fitted, notes = self._usable(self.fit_data(data))
+        fitted, notes = self._usable(self._prepared(data))
         start_values, start_note = self._start_values(model, maneuvers, start)
         notes = [note for note in (start_note,) if note] + notes
         problem = MismatchProblem(model, fitted)
@@ -126,7 +122,22 @@ class FrequencyResponseEstimator:
             result = run(problem, start_values, self._bounds(model), settings, progress)
         return self._estimate(model, fitted, result, start_values, problem.n_points, notes)
 
+    def pair_costs(self, model: ModelStructure, values, data) -> dict[str, float]:
+        """J per pair of ``model`` at ``values`` (vector or name mapping) on ``data`` (as
+        for :meth:`estimate`): e.g. a time-domain estimate judged on the same responses."""
+        fitted, _ = self._usable(self._prepared(data))
+        mismatch = MismatchProblem(model, fitted).evaluate(model.as_vector(values),
+                                                           jacobian=False)
+        return dict(zip((p.pair for p in fitted), mismatch.pair_costs))
+
     # ----------------------------------------------------------------- steps
+    def _prepared(self, data) -> tuple[PairData | str, ...]:
+        if not isinstance(data, ManeuverSet):
+            data = list(data)
+            if data and all(isinstance(p, (PairData, str)) for p in data):
+                return tuple(data)
+        return self.fit_data(data)
+
     def _chosen(self, responses: Sequence[FrequencyResponse]) -> list[FrequencyResponse]:
         responses = list(responses)
         if not all(isinstance(r, FrequencyResponse) for r in responses):

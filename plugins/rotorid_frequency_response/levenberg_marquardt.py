@@ -25,8 +25,8 @@ _MAX_LAMBDA = 1e12
 class Settings:
     """Stopping rules and LM constants of one run."""
 
-    max_iterations: int = 100
-    cost_tolerance: float = 1e-9     # relative change of J between accepted steps
+    max_iterations: int = 200
+    cost_tolerance: float = 1e-6     # relative change of J between accepted steps
     step_tolerance: float = 1e-10    # relative parameter change
     initial_lambda: float = 1e-3
     factor: float = 10.0
