@@ -125,3 +125,23 @@ def test_units_are_a_known_unit_system():
     assert make(units="si-rad").units == "si"
     with pytest.raises(StructureError, match="unknown unit system 'feet'"):
         make(units="feet")
+
+
+def test_extra_channels_are_read_by_name_cut_with_the_record_and_checked():
+    base = make(n=10)
+    speed = 50.0 + np.arange(10.0)
+    maneuver = attrs.evolve(base, extra_channels={"V": speed})
+    speed[0] = -1.0                                           # the maneuver keeps its copy
+    np.testing.assert_array_equal(maneuver.channel("V"), 50.0 + np.arange(10.0))
+    assert not maneuver.channel("V").flags.writeable
+    np.testing.assert_array_equal(maneuver.head(0.1).channel("V"), [50.0, 51.0, 52.0, 53.0,
+                                                                    54.0, 55.0])
+    assert maneuver.with_outputs(np.zeros((10, 8))).channel("V")[9] == 59.0
+    with pytest.raises(DataError, match="unknown channel 'beta'; channels: time, .*, r, V$"):
+        maneuver.channel("beta")
+    with pytest.raises(DataError, match="extra channel 'q' repeats a fixed channel"):
+        attrs.evolve(base, extra_channels={"q": np.zeros(10)})
+    with pytest.raises(DataError, match=r"expected shape \(10, 1\) for channels V, got \(9, 1\)"):
+        attrs.evolve(base, extra_channels={"V": np.zeros(9)})
+    with pytest.raises(DataError, match="channel 'V' is NaN or infinite at row 3"):
+        attrs.evolve(base, extra_channels={"V": np.where(np.arange(10) == 3, np.nan, 1.0)})

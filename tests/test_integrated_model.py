@@ -5,6 +5,7 @@ maps and initial conditions, errors."""
 import re
 from pathlib import Path
 
+import attrs
 import numpy as np
 import pytest
 import rotorid
@@ -244,13 +245,9 @@ def test_bad_declarations_and_data():
         IntegratedModel(model).simulate(PENDULUM_TRUTH, data)
     estimated = IntegratedModel(model, channels=STICK_IN_LONG, maneuvers=data,
                                 initial=InitialConditions(estimated=("q",)))
-    other = ManeuverSet([attrs_renamed(data[0], "third")])
+    other = ManeuverSet([attrs.evolve(data[0], name="third")])
     with pytest.raises(StructureError, match="maneuver 'third' has no estimated initial state"):
         estimated.simulate(estimated.initial_values(), other)
-
-
-def attrs_renamed(maneuver, name):
-    return maneuver.with_outputs(maneuver.outputs, name=name)
 
 
 def test_the_models_page_example_declares_an_identifiable_model():
@@ -266,3 +263,26 @@ def test_the_models_page_example_declares_an_identifiable_model():
     np.testing.assert_array_equal(documented.simulate(PENDULUM_TRUTH, data)[0],
                                   IntegratedModel(model, channels=STICK_IN_LONG).simulate(
                                       PENDULUM_TRUTH, data)[0])
+
+
+class WithRollAcceleration(FirstOrder):
+    """FirstOrder with a third output, an angular acceleration not among the fixed channels."""
+
+    signals = ModelSignals(states=FirstOrder.signals.states, inputs=FirstOrder.signals.inputs,
+                           outputs=SignalSet([*FirstOrder.signals.outputs,
+                                              Signal("q_dot", "rad/s²", "angular-acceleration")]))
+
+    def outputs(self, t, x, u, theta):
+        return np.concatenate([super().outputs(t, x, u, theta),
+                               self.derivatives(t, x, u, theta)], axis=1)
+
+
+def test_extra_maneuver_channels_are_read_through_the_map():
+    (m, *_) = step_maneuvers()
+    recorded = attrs.evolve(m, extra_channels={"QDOT_DEG": np.full(m.n_samples, 90.0)})
+    model = IntegratedModel(WithRollAcceleration(), initial=InitialConditions(fixed={"q": 0.0}),
+                            channels=ChannelMap([ChannelLink("QDOT_DEG", "q_dot", "deg/s²")]))
+    (measured,) = model.measured(ManeuverSet([recorded]))
+    np.testing.assert_allclose(measured[:, 2], np.pi / 2)        # 90 deg/s² in rad/s²
+    (simulated,) = model.simulate([2.0, 0.5, -1.5], ManeuverSet([recorded]))
+    assert simulated[0, 2] == pytest.approx(0.5)                  # q̇(0) = b·1 from rest

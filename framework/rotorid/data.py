@@ -71,6 +71,9 @@ class Maneuver:
     Units are those of ``units`` (flight-test by default: ft/s², deg/s, deg, % of travel).
     ``metadata`` holds free-form descriptors such as ``condition`` (``"hover"``), ``kind``
     (``"3211"``, ``"2311"``, ``"sweep"``), ``axis`` (``"long"``) and ``direction`` (+1/−1).
+    ``extra_channels`` maps further channel names to (N,) time histories beyond the fixed
+    layout (e.g. ``V`` or ``alpha`` of an aeroplane), in whatever unit a channel map declares
+    for them; models of one's own read them by name (docs/models.md).
     Arrays are copied and made read-only, so a maneuver never aliases the caller's data.
     """
 
@@ -82,12 +85,20 @@ class Maneuver:
     units: str = attrs.field(default="flight-test", converter=lambda u: unit_system(u).name)
     initial_state: np.ndarray | None = attrs.field(
         default=None, converter=lambda x: None if x is None else _readonly(x))
+    extra_channels: Mapping[str, np.ndarray] = attrs.field(
+        factory=dict, converter=lambda m: {str(k): _readonly(v) for k, v in dict(m).items()})
 
     def __attrs_post_init__(self):
         where = f"maneuver {self.name!r}"
         check_time(self.time, where)
         _check_block(self.inputs, INPUT_CHANNELS, self.time.size, where)
         _check_block(self.outputs, OUTPUT_CHANNELS, self.time.size, where)
+        for name, values in self.extra_channels.items():
+            if name in ALL_CHANNELS:
+                raise DataError(f"{where}: extra channel {name!r} repeats a fixed channel; "
+                                "give it another name")
+            _check_block(values.reshape(-1, 1) if values.ndim <= 1 else values, (name,),
+                         self.time.size, where)
         if self.initial_state is not None and self.initial_state.shape != (8,):
             raise DataError(f"{where}: initial_state must have shape (8,), "
                             f"got {self.initial_state.shape}")
@@ -106,14 +117,17 @@ class Maneuver:
         return float(self.time[-1] - self.time[0])
 
     def channel(self, name: str) -> np.ndarray:
-        """Time history of one channel by name (``time``, an input or an output)."""
+        """Time history of one channel by name (``time``, an input, an output or an extra)."""
         if name == "time":
             return self.time
         if name in INPUT_CHANNELS:
             return self.inputs[:, INPUT_CHANNELS.index(name)]
         if name in OUTPUT_CHANNELS:
             return self.outputs[:, OUTPUT_CHANNELS.index(name)]
-        raise DataError(f"unknown channel {name!r}; channels: {', '.join(ALL_CHANNELS)}")
+        if name in self.extra_channels:
+            return self.extra_channels[name]
+        raise DataError(f"unknown channel {name!r}; channels: "
+                        f"{', '.join(ALL_CHANNELS + tuple(self.extra_channels))}")
 
     def with_outputs(self, outputs, name: str | None = None) -> "Maneuver":
         """A copy with other outputs (e.g. a simulation), same time and inputs."""
@@ -123,7 +137,8 @@ class Maneuver:
         """The first ``duration`` seconds (at least two samples)."""
         n = max(2, int(np.floor(duration / self.dt + 1e-9)) + 1)
         return attrs.evolve(self, time=self.time[:n], inputs=self.inputs[:n],
-                            outputs=self.outputs[:n])
+                            outputs=self.outputs[:n],
+                            extra_channels={k: v[:n] for k, v in self.extra_channels.items()})
 
 
 def _check_hold(instance, attribute, value):

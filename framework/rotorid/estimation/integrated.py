@@ -46,14 +46,13 @@ class InitialConditions:
 
 @attrs.frozen
 class _Record:
-    """One maneuver in the model's signals: inputs (N, m), measured outputs (N, ny) and the
-    initial state (n,) from the fixed values and the data."""
+    """One maneuver in the model's signals: inputs (N, m) and the initial state (n,) from the
+    fixed values and the data."""
 
     name: str
     t0: float
     dt: float
     inputs: np.ndarray
-    measured: np.ndarray
     initial_state: np.ndarray
 
 
@@ -133,7 +132,7 @@ class IntegratedModel:
 
     def measured(self, maneuvers: ManeuverSet) -> list[np.ndarray]:
         """Measured outputs (N_i, ny) per maneuver, in the output signals' units."""
-        return [r.measured for r in self._records(maneuvers)]
+        return [self._read(m, self.output_names) for m in maneuvers]
 
     def simulate(self, values, maneuvers: ManeuverSet) -> list[np.ndarray]:
         """Outputs (N_i, ny) per maneuver; non-finite where the simulation blew up."""
@@ -155,20 +154,19 @@ class IntegratedModel:
             self._cache[id(maneuvers)] = cached
         return cached[1]
 
-    def _record(self, maneuver: Maneuver) -> _Record:
+    def _read(self, maneuver: Maneuver, names) -> np.ndarray:
+        """The signals called ``names`` from ``maneuver``, (N, len(names)), signal units."""
         columns, units = maneuver_columns(maneuver)
-        where = f"maneuver {maneuver.name!r}"
-        everything = self.signals.all
+        return self.channels.read(columns, self.signals.all, names,
+                                  f"maneuver {maneuver.name!r}", units)
 
-        def read(names):
-            return self.channels.read(columns, everything, names, where, units)
-
+    def _record(self, maneuver: Maneuver) -> _Record:
         states = self.signals.states
         from_data = [s for s in states.names if s not in self.initial.fixed]
         initial = np.array([self.initial.fixed.get(s, np.nan) for s in states.names])
-        initial[states.indices(from_data)] = read(from_data)[0]
+        initial[states.indices(from_data)] = self._read(maneuver, from_data)[0]
         return _Record(maneuver.name, float(maneuver.time[0]), maneuver.dt,
-                       read(self.signals.inputs.names), read(self.output_names), initial)
+                       self._read(maneuver, self.signals.inputs.names), initial)
 
     # ------------------------------------------------------------ simulation
     def _expand(self, batch: np.ndarray, records: list[_Record]):
@@ -288,8 +286,10 @@ class IntegratedModel:
 
 
 def maneuver_columns(maneuver: Maneuver) -> tuple[dict[str, np.ndarray], dict[str, str]]:
-    """A maneuver's channels by name, and the units of those its unit system knows (the
-    outputs; controls carry whatever unit the data have)."""
+    """A maneuver's channels by name (extra channels included), and the units of those its
+    unit system knows (the outputs; controls and extra channels carry whatever unit the data
+    have)."""
     system = unit_system(maneuver.units)
-    columns = {c: maneuver.channel(c) for c in ("time",) + INPUT_CHANNELS + OUTPUT_CHANNELS}
-    return columns, {c: system.label(c) for c in OUTPUT_CHANNELS}
+    names = ("time",) + INPUT_CHANNELS + OUTPUT_CHANNELS + tuple(maneuver.extra_channels)
+    return ({c: maneuver.channel(c) for c in names},
+            {c: system.label(c) for c in OUTPUT_CHANNELS})
