@@ -124,8 +124,11 @@ def test_options_reach_the_estimator(case, tmp_path, capsys):
                        "--quiet"])
     captured = capsys.readouterr()
     assert status == 0, captured.err
-    assert captured.err == ""
+    assert "] iteration" not in captured.err                  # --quiet: no progress lines
     record = json.loads(out.read_text(encoding="utf-8"))
+    assert captured.err == ("" if record["converged"] else
+                            f"rotorid identify: warning: the fit did not converge "
+                            f"({record['stop_reason']}); --strict makes this an error\n")
     assert record["outputs"] == ["q", "theta", "p", "phi", "r", "ax", "ay", "az"]
     covariance = np.array(record["noise_covariance"])
     assert np.array_equal(covariance, np.diag(np.diag(covariance)))
@@ -153,7 +156,7 @@ def test_a_fit_that_does_not_converge_warns_and_strict_makes_it_an_error(case, t
     assert cli.main(argv) == ExitStatus.OK
     assert json.loads(out.read_text(encoding="utf-8"))["converged"] is False
     assert "warning: the fit did not converge" in capsys.readouterr().err
-    assert cli.main([*argv, "--strict"]) == ExitStatus.NOT_CONVERGED
+    assert cli.main([*argv, "--strict", "--force"]) == ExitStatus.NOT_CONVERGED
     err = capsys.readouterr().err
     assert err.startswith("rotorid identify: error: the fit did not converge (")
     assert out.is_file()

@@ -17,6 +17,12 @@ import numpy as np
 
 from rotorid.errors import DataError
 from rotorid.model.structure import CONTROLS, OUTPUTS
+from rotorid.notebook import (
+    maneuver_html,
+    maneuver_set_html,
+    maneuver_set_summary,
+    maneuver_summary,
+)
 from rotorid.units import unit_system
 
 INPUT_CHANNELS = CONTROLS
@@ -103,6 +109,12 @@ class Maneuver:
             raise DataError(f"{where}: initial_state must have shape (8,), "
                             f"got {self.initial_state.shape}")
 
+    def __repr__(self) -> str:
+        return maneuver_summary(self)
+
+    def _repr_html_(self) -> str:
+        return maneuver_html(self, ALL_CHANNELS)
+
     @property
     def dt(self) -> float:
         """Sample time in s."""
@@ -164,6 +176,12 @@ class ManeuverSet:
         units = {m.units for m in self.maneuvers}
         if len(units) > 1:
             raise DataError(f"maneuvers mix unit systems {sorted(units)}; convert them first")
+
+    def __repr__(self) -> str:
+        return maneuver_set_summary(self)
+
+    def _repr_html_(self) -> str:
+        return maneuver_set_html(self)
 
     def __len__(self) -> int:
         return len(self.maneuvers)

@@ -18,7 +18,9 @@ worker dies, is reported by name; the other tasks still finish and are returned.
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
+import time
 from collections.abc import Callable, Hashable, Iterator, Mapping
 from concurrent.futures import Executor, ProcessPoolExecutor
 
@@ -28,6 +30,8 @@ from rotorid.errors import PluginError, StudyError
 KINDS = ("serial", "process", "dask")
 #: Seconds to wait for a Dask scheduler before giving up.
 CONNECT_TIMEOUT = 10.0
+
+_log = logging.getLogger("rotorid.executors")
 
 
 def cpu_count() -> int:
@@ -90,14 +94,20 @@ class _Deferred:
 
 
 def _collect(futures: Mapping, label) -> tuple[dict, dict]:
+    """Wait for every task in order; with several, log each one's end and the time left."""
     results, failures = {}, {}
-    for key, future in futures.items():
+    started = time.monotonic()
+    for done, (key, future) in enumerate(futures.items(), start=1):
         try:
             results[key] = future.result()
         except Exception as error:  # one task's failure must not lose the others
             detail = str(error) if isinstance(error, StudyError) else (
                 f"{type(error).__name__}: {error}")
             failures[key] = f"{label(key)}: {detail}"
+        if len(futures) > 1:
+            left = (time.monotonic() - started) / done * (len(futures) - done)
+            _log.info("%s %s (%d/%d, about %.0f s left)", label(key),
+                      "failed" if key in failures else "done", done, len(futures), left)
     return results, failures
 
 

@@ -10,7 +10,9 @@ model errors (3) (:class:`rotorid.errors.ExitStatus`, docs/conventions.md).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import logging
 import pkgutil
 import sys
 
@@ -59,13 +61,31 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return ExitStatus.USAGE
     try:
-        return int(args.run(args) or ExitStatus.OK)
+        with _progress_on_stderr():
+            return int(args.run(args) or ExitStatus.OK)
     except (RotoridError, OSError) as error:
         print(f"rotorid {args.command}: error: {error}", file=sys.stderr)
         return ExitStatus.USAGE if isinstance(error, UsageError) else ExitStatus.ERROR
     except KeyboardInterrupt:
         print(f"rotorid {args.command}: interrupted", file=sys.stderr)
         return ExitStatus.INTERRUPTED
+
+
+@contextlib.contextmanager
+def _progress_on_stderr():
+    """While a command runs, the ``rotorid`` logger's INFO messages (progress) go to stderr,
+    one line each."""
+    logger = logging.getLogger("rotorid")
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("%(message)s"))
+    level = logger.level
+    logger.addHandler(handler)
+    logger.setLevel(logging.INFO)
+    try:
+        yield
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(level)
 
 
 if __name__ == "__main__":

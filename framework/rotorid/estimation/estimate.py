@@ -21,6 +21,7 @@ import numpy as np
 
 from rotorid.errors import EstimationError, IdentifiabilityWarning
 from rotorid.model.structure import ModelStructure
+from rotorid.notebook import estimate_html, estimate_summary
 
 #: Condition number of the scaled information matrix above which parameters count as nearly
 #: unidentifiable.
@@ -227,6 +228,12 @@ class Estimate:
                    unidentifiable=stats.unidentifiable,
                    **{"iterations": 0, "converged": True, "stop_reason": "converged",
                       **derived})
+
+    def __repr__(self) -> str:
+        return estimate_summary(self)
+
+    def _repr_html_(self) -> str:
+        return estimate_html(self)
 
     # ----------------------------------------------------------------- access
     def index(self, name: str) -> int:

@@ -58,10 +58,12 @@ class IdentifiedModel:
         label = f", model {self.model!r}" if self.model else ""
         delays = len(self.structure.free_delays)
         return (f"IdentifiedModel({self.source}{label}: {len(self.values) - delays} "
-                f"derivatives, {delays} delays, {self.structure.units.name} units)")
+                f"derivatives, {delays} delay{'s' * (delays != 1)}, "
+                f"{self.structure.units.name} units)")
 
     def state_space(self, pade_order: int = 0) -> NamedStateSpace:
-        """The model as a named state-space system (see :func:`rotorid.model.statespace.state_space`)."""
+        """The model as a named state-space system
+        (:func:`rotorid.model.statespace.state_space`)."""
         return state_space(self.structure, self.values, pade_order=pade_order)
 
     def to_statespace(self, pade_order: int = 0):

@@ -16,7 +16,7 @@ the report. Every file is written atomically; a rerun with ``resume=True`` skips
 from __future__ import annotations
 
 import json
-import sys
+import logging
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
@@ -42,6 +42,7 @@ from rotorid.executors import check_executor, failure_error, run_tasks
 from rotorid.io import atomic_write, jsonable
 from rotorid.model.modelfile import parse_model
 from rotorid.model.structure import FlightCondition, ModelStructure
+from rotorid.notebook import case_result_html, case_result_summary
 from rotorid.plugin.contracts import Removal
 from rotorid.plugin.manager import create, notify, using
 from rotorid.simulation.simulator import simulate
@@ -59,9 +60,11 @@ MODELS = ("no delays", "with delays")
 KEY_DERIVATIVES = ("M_w", "L_v", "N_v", "Z_w", "M_u", "X_u", "X_v", "Y_u", "Y_v")
 
 
-def print_progress(case: str, message: str) -> None:
-    """Default progress reporter: one line on stderr."""
-    print(f"[{case}] {message}", file=sys.stderr, flush=True)
+def log_progress(case: str, message: str) -> None:
+    """Default progress reporter: ``[case] message`` at INFO level on the ``rotorid.study``
+    logger (the ``rotorid`` command shows it on stderr; in Python enable it with
+    ``logging.basicConfig(level=logging.INFO)``)."""
+    logging.getLogger("rotorid.study").info("[%s] %s", case, message)
 
 
 @attrs.frozen(eq=False)
@@ -86,6 +89,12 @@ class CaseResult:
     @property
     def name(self) -> str:
         return self.case.name
+
+    def __repr__(self) -> str:
+        return case_result_summary(self)
+
+    def _repr_html_(self) -> str:
+        return case_result_html(self)
 
     def simulated(self, model: str, maneuvers: ManeuverSet | None = None) -> list[np.ndarray]:
         """Outputs of one identified model on ``maneuvers`` (default: identification data)."""
@@ -261,7 +270,7 @@ class ReportWriter(Protocol):
 
 
 def run_case(case: FlightCase, out_dir: str | Path, resume: bool = True,
-             progress: Callable[[str, str], None] | None = print_progress,
+             progress: Callable[[str, str], None] | None = log_progress,
              report_writer: ReportWriter | None = None, manager=None) -> CaseResult:
     """Run one flight case end to end and write its results under ``out_dir/<case>``; with a
     ``report_writer``, also its figures and report. Plugins come from ``manager`` (a
@@ -436,7 +445,7 @@ def _undetermined_delay(estimate: Estimate, threshold: float) -> str | None:
 
 
 # ----------------------------------------------------------------- study
-def run_case_task(case: FlightCase, progress: Callable[[str, str], None] | None = print_progress,
+def run_case_task(case: FlightCase, progress: Callable[[str, str], None] | None = log_progress,
                   **options) -> CaseResult:
     """:func:`run_case` as an independent task: a failure names the case's last progress
     message (its reduction step, when it got that far) and the error."""
@@ -485,7 +494,7 @@ class Study:
 
     def __init__(self, cases: Sequence[FlightCase | str], out_dir: str | Path,
                  executor: Executor | str | None = None, resume: bool = False,
-                 progress: Callable[[str, str], None] | None = print_progress,
+                 progress: Callable[[str, str], None] | None = log_progress,
                  report_writer: ReportWriter | None = None, manager=None):
         self.cases = [c if isinstance(c, FlightCase) else FlightCase.load(c) for c in cases]
         names = [c.name for c in self.cases]

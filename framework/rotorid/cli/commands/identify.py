@@ -5,7 +5,7 @@ Usage::
     rotorid identify MODEL.toml DATA... [--estimator output-error] [--out result.json]
                      [--outputs ax,az,...] [--noise full|diagonal] [--max-iterations N]
                      [--enforce-signs] [--output-biases] [--initial-states]
-                     [--hold zoh|foh] [--quiet] [--strict]
+                     [--hold zoh|foh] [--quiet] [--strict] [--force]
 
 ``MODEL.toml`` is a model file (:mod:`rotorid.model.modelfile`); its initial values are the start
 values (all zero: the estimator chooses its own start, see docs/estimation.md). DATA are
@@ -59,6 +59,8 @@ def add_arguments(parser) -> None:
                         help="input hold between samples (default zoh)")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress lines on stderr")
+    parser.add_argument("--force", action="store_true",
+                        help="overwrite RESULT.json if it exists")
     parser.add_argument("--strict", action="store_true",
                         help="exit with status 4 when the fit does not converge (the estimate "
                              "is written all the same)")
@@ -118,13 +120,14 @@ def _record(estimate, model_path: Path, out: Path) -> dict:
 
 def run(args) -> int:
     from rotorid.cli.commands.simulate import _load_inputs
+    from rotorid.cli.files import refuse_overwrite
     from rotorid.errors import ExitStatus, MissingFileError, RotoridWarning
     from rotorid.io import atomic_write
     from rotorid.model.modelfile import load_model
     from rotorid.plugin.manager import new_plugin_manager, using
 
     structure = load_model(args.model)
-    out = Path(args.out)
+    out = refuse_overwrite(args.out, args.force)
     if not out.parent.is_dir():
         raise MissingFileError(f"cannot write {out}: directory {out.parent} does not exist")
     manager = new_plugin_manager([] if args.quiet else [ProgressPrinter()])

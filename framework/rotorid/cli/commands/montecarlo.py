@@ -23,23 +23,27 @@ def add_arguments(parser) -> None:
     parser.add_argument("--quick", action="store_true", help="the case's --quick variant")
     parser.add_argument("--seed", type=int,
                         help="first noise seed S; run k uses S + k (default: the case's seed)")
+    parser.add_argument("--force", action="store_true",
+                        help="overwrite the case's montecarlo.json if it exists")
     add_executor_arguments(parser, "runs")
 
 
 def run(args) -> int:
+    from rotorid.cli.files import refuse_overwrite
     from rotorid.executors import open_executor
     from rotorid.report.plots.case import save_figure
     from rotorid.report.plots.montecarlo import plot_monte_carlo
     from rotorid.study.case import FlightCase
     from rotorid.study.montecarlo import case_monte_carlo
-    from rotorid.study.pipeline import print_progress
+    from rotorid.study.pipeline import log_progress
 
     case = FlightCase.load(args.case)
     if args.quick:
         case = case.quick()
+    refuse_overwrite(Path(args.out) / case.name / "montecarlo.json", args.force)
     with open_executor(args.executor, args.scheduler) as executor:
         result = case_monte_carlo(case, args.runs, args.out, seed=args.seed,
-                                  executor=executor, progress=print_progress)
+                                  executor=executor, progress=log_progress)
     save_figure(plot_monte_carlo(result), Path(args.out) / case.name / "montecarlo")
     print(result.report())
     print(f"written: {args.out}/{case.name}/montecarlo.json, montecarlo.png, montecarlo.svg")

@@ -25,6 +25,7 @@ on) and, per pair, ``error_<output>_<input>.png`` and ``bode_<output>_<input>.pn
 from __future__ import annotations
 
 import json
+import logging
 from pathlib import Path
 
 NAME = "verify"
@@ -143,12 +144,15 @@ def run(args) -> int:
         raise VerificationError("no pair can be verified: " + "; ".join(
             f"{pair}: {reason}" for pair, reason in selection.skipped.items()))
     envelopes = envelopes_by_name([e.strip() for e in args.envelopes.split(",") if e.strip()])
+    logging.getLogger("rotorid.verify").info(
+        "verifying %s on %d sweep(s)", ", ".join(selection.pairs), len(sweeps))
     verification = verify_model(structure, values, sweeps, selection.pairs, envelopes)
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     shown = [e for e in envelopes.values() if e.kind == "bounds"]
     for item in () if args.no_figures else verification.pairs:
+        logging.getLogger("rotorid.verify").info("figures of %s", item.pair)
         stem = item.pair.replace("/", "_")
         save_figure(plot_error(item, shown), out / f"error_{stem}", formats=("png",))
         save_figure(plot_bode(item, structure.units.label(item.truth.output)),
