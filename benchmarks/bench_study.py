@@ -36,7 +36,8 @@ def main() -> None:
         start = time.perf_counter()
         result = run_case(case, out, resume=False, progress=None)
         study = time.perf_counter() - start
-        ident, _, condition, _ = load_data(case, f"{out}/{case.name}/data")
+        data, condition = load_data(case, f"{out}/{case.name}/data")
+        ident = data.identification
         structure = base_structure(case, condition, ident.units)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", IdentifiabilityWarning)

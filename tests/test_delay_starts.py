@@ -7,7 +7,7 @@ import pytest
 import rotorid
 from rotorid.errors import DataFileError
 from rotorid.study.case import FlightCase
-from rotorid.study.pipeline import best_delayed_fit
+from rotorid.study.delays import best_delayed_fit
 from test_output_error import (
     SMALL_TRUTH,
     doublet_maneuvers,

@@ -12,7 +12,8 @@ from rotorid.cli.main import main
 from rotorid.errors import DataError, ExitStatus, PluginError, StudyError
 from rotorid.executors import connect_dask, open_executor
 from rotorid.study.case import FlightCase
-from rotorid.study.pipeline import MODELS, Study
+from rotorid.study.pipeline import Study
+from rotorid.study.result import MODELS
 from rotorid.study.sweep import case_name, parse_speeds, speed_sweep
 from test_output_error import doublet_maneuvers, with_outputs
 from test_reduction_study import HOVER, TRUE, files_case
@@ -149,7 +150,7 @@ def test_speed_lists_and_case_names():
 
 def test_a_speed_sweep_needs_generated_data(tmp_path):
     template = FlightCase(name="flight", data={"source": "files", "identification": "x"})
-    with pytest.raises(DataError, match="needs the 'helisim' data source"):
+    with pytest.raises(DataError, match="needs generated data flown at"):
         speed_sweep([0, 10], template)
     assert main(["study", "hover", "--speeds", "0,10", "--out", str(tmp_path)]) == ExitStatus.USAGE
 

@@ -111,10 +111,12 @@ def test_record_report_and_figure(problem, tmp_path):
 
 def test_helisim_noise_realisations_equal_data_generated_with_that_seed(tmp_path):
     source = rotorid.create("data-sources", "helisim")
-    settings = {"condition": "hover", "duration_scale": 0.3, "kinds": ["3211"],
-                "axes": ["long", "ped"], "directions": [1]}
-    direct, _ = source.generate_into({**settings, "seed": 5}, tmp_path / "direct")
-    realisations = source.noise_realisations(settings, tmp_path / "clean")
+    settings = {"condition": "hover", "duration_scale": 0.3, "axes": ["long", "ped"],
+                "directions": [1]}
+    direct, _ = source.generate_into({**settings, "kinds": ["3211"], "seed": 5},
+                                     tmp_path / "direct")
+    realisations = source.noise_realisations(
+        {**settings, "identification": ["3211"], "verification": ["sweep"]}, tmp_path / "clean")
     again, other = realisations(5), realisations(6)
     assert again.names == direct.names
     for a, b, c in zip(direct, again, other):

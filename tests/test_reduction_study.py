@@ -174,5 +174,6 @@ def test_data_paths_in_a_case_file_are_relative_to_the_file(tmp_path, data, monk
     monkeypatch.chdir(elsewhere)
     case = FlightCase.load(tmp_path / "cases" / "own.toml")
     assert case.data["identification"] == str(tmp_path / "cases" / "flight")
-    ident, verif, condition, _ = load_data(case, tmp_path / "out")
-    assert len(ident) == len(data) and verif is None
+    data_of_case, condition = load_data(case, tmp_path / "out")
+    assert len(data_of_case.identification) == len(data) and data_of_case.verification is None
+    assert data_of_case.truth is None and condition == FlightCondition.from_airspeed(0.0)

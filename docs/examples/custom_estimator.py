@@ -67,7 +67,9 @@ from rotorid.estimation.equation_error import reconstructed_states
 from rotorid.estimation.estimate import Estimate, statistics
 from rotorid.model.structure import CONTROLS, STATES, ModelStructure
 from rotorid.study.case import FlightCase
-from rotorid.study.pipeline import KEY_DERIVATIVES, CaseResult, Study, truth_derivatives
+from rotorid.study.pipeline import Study
+from rotorid.study.result import KEY_DERIVATIVES, CaseResult
+from rotorid.study.truth import truth_derivatives
 
 NAME = "ls-equation-error"
 #: Measured left-hand side of each equation: a specific force, or a rate to differentiate.

@@ -67,7 +67,7 @@ import rotorid
 from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS
 from rotorid.io import atomic_write
 from rotorid.study.case import FlightCase
-from rotorid.study.pipeline import CaseResult
+from rotorid.study.result import CaseResult
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 

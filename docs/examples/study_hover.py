@@ -49,7 +49,8 @@ from collections import defaultdict
 
 from rotorid.report.html import StudyReport
 from rotorid.study.case import FlightCase
-from rotorid.study.pipeline import MODELS, CaseResult, Study
+from rotorid.study.pipeline import Study
+from rotorid.study.result import MODELS, CaseResult
 
 #: Envelopes whose pass/fail the summary shows per pair.
 ENVELOPES = ("muad", "aee")

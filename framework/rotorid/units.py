@@ -65,7 +65,7 @@ class UnitSystem:
 
     Attributes:
         name: ``"flight-test"`` or ``"si"``.
-        length_per_metre: length unit per metre (1/0.3048 for feet, 1 for metres).
+        length_per_metre: length unit per metre (1/FOOT for feet, 1 for metres).
         angle_per_radian: angle unit per radian (180/π for degrees, 1 for radians).
         length_label, angle_label: labels used in reports and plots.
     """

@@ -2,6 +2,11 @@
 
 One file holds one maneuver; the format follows the suffix. Every writer is atomic. See
 :mod:`rotorid_files.csvfile` and :mod:`rotorid_files.arrays` for the layouts.
+
+In a flight case (:meth:`FileSource.case_data`) the ``[data]`` settings are
+``identification`` and optionally ``verification`` (each a file, a directory, a glob or a list
+of them; relative ones are read from the case file's folder), ``hold`` and ``units``. Flight
+data carry no trim and no truth model: the case's ``[condition]`` table gives the trim.
 """
 
 from __future__ import annotations
@@ -9,14 +14,16 @@ from __future__ import annotations
 import glob
 import os
 import re
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from pathlib import Path
+from typing import ClassVar
 
 import attrs
 from rotorid.data import HOLDS, OUTPUT_CHANNELS, Maneuver, ManeuverSet
 from rotorid.errors import DataError, DataFileError, MissingFileError
 from rotorid.io import atomic_write
 from rotorid.model.structure import STATES
+from rotorid.plugin.contracts import CaseData
 from rotorid.units import channel_scale, unit_system
 
 from . import arrays, csvfile
@@ -67,6 +74,8 @@ def convert_units(maneuver: Maneuver, units) -> Maneuver:
 
 
 def _expand(location) -> list[Path]:
+    if isinstance(location, (list, tuple)):
+        return [path for item in location for path in _expand(item)]
     path = Path(location)
     if path.is_file():
         return [path]
@@ -105,10 +114,13 @@ class FileSource:
 
     hold: str = attrs.field(default="zoh", validator=_check_hold)
     units: str | None = attrs.field(default=None, converter=_optional_units)
+    #: Case settings that name files: the study reads relative ones from the case's folder.
+    path_settings: ClassVar[tuple[str, ...]] = ("identification", "verification")
 
-    def load(self, location: str | os.PathLike) -> ManeuverSet:
+    def load(self, location) -> ManeuverSet:
         """Every maneuver in ``location``: one file, a directory (its ``.csv``, ``.npz`` and
-        ``.mat`` files, sorted by name) or a glob pattern such as ``"data/hover_*.csv"``."""
+        ``.mat`` files, sorted by name), a glob pattern such as ``"data/hover_*.csv"``, or a
+        list of these."""
         maneuvers, origin = [], {}
         for path in _expand(location):
             maneuver = read_maneuver(path)
@@ -123,6 +135,25 @@ class FileSource:
             raise DataFileError(f"{location}: files mix unit systems {sorted(units)}; load with "
                                 f"FileSource(units='flight-test') to convert them")
         return ManeuverSet(maneuvers, hold=self.hold)
+
+    def case_data(self, settings: Mapping, directory) -> CaseData:
+        """A flight case's maneuvers from the files its settings name (``directory`` is not
+        used: the files stay where they are)."""
+        known = (*self.path_settings, "hold", "units")
+        unknown = sorted(set(settings) - set(known))
+        if unknown:
+            raise DataFileError(f"files data: unknown [data] setting(s) {unknown}; known: "
+                                f"{', '.join(known)} (a seed or an airspeed only applies to "
+                                f"generated data)")
+        if "identification" not in settings:
+            raise DataFileError("files data: [data] needs identification (files, a directory "
+                                "or a glob)")
+        reader = attrs.evolve(self, **{k: settings[k] for k in ("hold", "units")
+                                       if k in settings})
+        verification = settings.get("verification")
+        return CaseData(reader.load(settings["identification"]),
+                        None if verification is None else reader.load(verification),
+                        None, None)
 
     def save(self, maneuvers: ManeuverSet | Iterable[Maneuver], directory: str | os.PathLike,
              format: str = "csv") -> tuple[Path, ...]:

@@ -4,6 +4,11 @@
 ``generate_many(["hover", "forward"])`` flies both conditions in one batch. With a
 ``cache_dir`` each condition's set is stored in ``cache_dir/<condition>/`` and read back while
 its configuration (including the seed) is unchanged.
+
+In a flight case (:meth:`HelisimSource.case_data`) the ``[data]`` settings are the data set's
+(:class:`~.datasets.DataSetConfig`) with ``identification`` and ``verification`` naming the
+maneuver kinds of each set (default: the paper's 3211/2311 multisteps and sweeps); the source
+also serves as the case's truth model.
 """
 
 from __future__ import annotations
@@ -15,10 +20,16 @@ import attrs
 import numpy as np
 from rotorid.data import ManeuverSet
 from rotorid.errors import DataError
+from rotorid.model.structure import FlightCondition
+from rotorid.plugin.contracts import CaseData
 
 from . import store
 from .datasets import DataSetConfig, Job, fly_jobs
 from .sensors import NoiseRealisations, SensorNoise
+
+#: The paper's split of a data set: multisteps identify, sweeps verify.
+IDENTIFICATION_KINDS = ("3211", "2311")
+VERIFICATION_KINDS = ("sweep",)
 
 
 def resolve_case(case) -> DataSetConfig:
@@ -128,16 +139,50 @@ class HelisimSource:
         store.save(flown, directory, digest, config.as_dict())
         return flown, False
 
-    def noise_realisations(self, case, directory) -> NoiseRealisations:
-        """The data sets of ``case`` for any noise seed, for Monte Carlo runs: the noise-free
-        set is flown once (stored in ``directory``) and each seed adds its own noise."""
-        config = resolve_case(case)
+    def case_data(self, settings: Mapping, directory) -> CaseData:
+        """A flight case's identification and verification maneuvers, flown at their trim
+        (stored in ``directory``), with this source as the truth model."""
+        config, identification, verification = case_config(settings)
+        flown, _ = self.generate_into(config, directory)
+        condition = FlightCondition.from_airspeed(*(flown[0].metadata[key] for key in (
+            "airspeed_kt", "trim_theta_deg", "trim_phi_deg")))
+        return CaseData(_of_kinds(flown, identification), _of_kinds(flown, verification),
+                        condition, self)
+
+    def noise_realisations(self, settings: Mapping, directory) -> NoiseRealisations:
+        """A case's identification maneuvers for any noise seed, for Monte Carlo runs: the
+        noise-free set is flown once (stored in ``directory``) and each seed adds its own
+        noise (equal to :meth:`case_data`'s for the same seed)."""
+        config, identification, _ = case_config(settings)
         if config.turbulence is not None:
             raise DataError("noise realisations share one flight, but in turbulence every seed "
                             "flies its own gusts; generate each seed's set instead")
-        quiet = attrs.evolve(config, noise=SensorNoise({c: 0.0 for c in config.noise.sigma}))
+        quiet = attrs.evolve(config, kinds=identification,
+                             noise=SensorNoise({c: 0.0 for c in config.noise.sigma}))
         clean, _ = self.generate_into(quiet, directory)
         return NoiseRealisations(clean, config.noise)
 
     def _directory(self, config: DataSetConfig) -> Path:
         return Path(self.cache_dir) / config.condition
+
+
+def case_config(settings: Mapping) -> tuple[DataSetConfig, tuple[str, ...], tuple[str, ...]]:
+    """The data set a case's ``[data]`` settings fly (every kind either set uses), and the
+    identification and verification kinds."""
+    settings = dict(settings)
+    if "kinds" in settings:
+        raise DataError("helisim case data: name the maneuver kinds as identification = [...] "
+                        "and verification = [...] instead of kinds")
+    identification = tuple(settings.pop("identification", IDENTIFICATION_KINDS))
+    verification = tuple(settings.pop("verification", VERIFICATION_KINDS))
+    if not identification:
+        raise DataError("helisim case data: identification names no maneuver kind; use e.g. "
+                        "identification = [\"3211\", \"2311\"]")
+    config = DataSetConfig.from_mapping({**settings, "kinds": identification + verification})
+    return config, identification, verification
+
+
+def _of_kinds(maneuvers: ManeuverSet, kinds: tuple[str, ...]) -> ManeuverSet | None:
+    """The maneuvers of ``kinds``, or ``None`` when there are none."""
+    chosen = [m for m in maneuvers if m.metadata.get("kind") in kinds]
+    return ManeuverSet(chosen, hold=maneuvers.hold) if chosen else None

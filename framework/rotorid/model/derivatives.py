@@ -23,6 +23,21 @@ VARIABLES = STATE_VARIABLES + CONTROL_VARIABLES
 
 #: Equation (state derivative) each letter drives.
 EQUATION_OF_LETTER = {"X": "u", "Y": "v", "Z": "w", "L": "p", "M": "q", "N": "r"}
+#: Prefix of a delay's parameter name: ``tau_L_lat`` is the delay on ``L_lat``.
+DELAY_PREFIX = "tau_"
+
+
+def delay_parameter(derivative: str) -> str:
+    """Parameter name of the delay on ``derivative``: ``"L_lat"`` → ``"tau_L_lat"``."""
+    return f"{DELAY_PREFIX}{derivative}"
+
+
+def delayed_derivative(parameter: str) -> str | None:
+    """The derivative a delay parameter delays (``"tau_L_lat"`` → ``"L_lat"``), or ``None``
+    when ``parameter`` is not a delay."""
+    if parameter.startswith(DELAY_PREFIX):
+        return parameter[len(DELAY_PREFIX):]
+    return None
 
 
 class Sign(enum.Enum):
@@ -204,7 +219,7 @@ class Derivative:
     @property
     def delay_name(self) -> str:
         """Parameter name of this derivative's delay, e.g. ``tau_L_lat``."""
-        return f"tau_{self.name}"
+        return delay_parameter(self.name)
 
     def with_delay(self, initial: float = 0.0, upper: float | None = None, fixed: bool = False):
         """Return a copy carrying a delay."""

@@ -36,8 +36,9 @@ from rotorid.model.derivatives import (
     Delay,
     Derivative,
     Sign,
+    delayed_derivative,
 )
-from rotorid.units import FLIGHT_TEST, KNOT, UnitSystem, unit_system
+from rotorid.units import FLIGHT_TEST, FOOT, KNOT, UnitSystem, unit_system
 
 STATES = ("u", "w", "q", "theta", "v", "p", "phi", "r")
 CONTROLS = CONTROL_VARIABLES
@@ -116,7 +117,7 @@ class FlightCondition:
             si, ft = settings.get(f"{axis}_mps"), settings.get(f"{axis}_fps")
             if si is not None and ft is not None:
                 raise StructureError(f"[condition]: give {axis}_mps or {axis}_fps, not both")
-            velocity[axis] = si if si is not None else (ft * 0.3048 if ft is not None else 0.0)
+            velocity[axis] = si if si is not None else (ft * FOOT if ft is not None else 0.0)
         return cls(theta0=math.radians(theta), phi0=math.radians(phi), **velocity)
 
     @property
@@ -291,8 +292,9 @@ class ModelStructure:
         ``tau_<name>``)."""
         structure = self
         for key, value in values.items():
-            if key.startswith("tau_"):
-                d = structure.derivative(key[4:])
+            delayed = delayed_derivative(key)
+            if delayed is not None:
+                d = structure.derivative(delayed)
                 if d.delay is None:
                     raise StructureError(f"{key}: derivative {d.name} has no delay")
                 new = attrs.evolve(d, delay=attrs.evolve(d.delay, initial=value))

@@ -202,10 +202,14 @@ class DataSource(Protocol):
     """Family ``data-sources``: the data of a flight case."""
 
     def case_data(self, settings: Mapping[str, Any], directory: Path) -> CaseData:
-        """The case's data from its ``[data]`` settings.
+        """The case's data from its ``[data]`` settings (without ``source``).
 
-        ``directory`` is where the case's outputs go (a simulator may cache there) and what
-        relative paths in ``settings`` are resolved against.
+        ``directory`` is the case's data directory, where a source may store what it produces
+        (a simulator's flown set). Optional members the study uses when present:
+        ``path_settings``, the names of settings that hold file paths (relative ones in a
+        case file are resolved against its folder), and ``noise_realisations(settings,
+        directory)``, a picklable ``data(seed) -> ManeuverSet`` of the identification
+        maneuvers with that noise seed (``rotorid montecarlo``).
         """
 
 

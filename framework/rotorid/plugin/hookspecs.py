@@ -92,8 +92,9 @@ def rotorid_validation_envelopes():
 def rotorid_data_sources():
     """Register data sources.
 
-    Return an iterable of :class:`PluginDescriptor` whose factory builds an object with
-    ``load(location) -> ManeuverSet`` (files) or ``generate(case) -> ManeuverSet`` (simulators).
+    Return an iterable of :class:`PluginDescriptor` whose factory builds a
+    :class:`~rotorid.plugin.contracts.DataSource`: ``case_data(settings, directory) ->
+    CaseData`` (a flight case's maneuvers, trim and truth model).
     """
 
 

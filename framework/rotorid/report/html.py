@@ -30,10 +30,11 @@ import numpy as np
 
 from rotorid.data import ManeuverSet
 from rotorid.io import atomic_write
+from rotorid.model.derivatives import delayed_derivative
 from rotorid.report.plots.case import plot_rmse_path, plot_time_histories, save_figure
 from rotorid.report.plots.frequency import plot_bode, plot_error
 from rotorid.study.expectations import check_signs
-from rotorid.study.pipeline import KEY_DERIVATIVES, MODELS
+from rotorid.study.result import KEY_DERIVATIVES, MODELS
 from rotorid.units import unit_system
 from rotorid.verification.compare import (
     COHERENCE_THRESHOLD,
@@ -107,12 +108,13 @@ def paper_checks(result) -> list[Check]:
     low, high = DELAY_RANGE
     truth = {} if result.truth_delays is None else result.truth_delays.delays
     for i, name in enumerate(estimate.parameter_names):
-        if name.startswith("tau_"):
+        derivative = delayed_derivative(name)
+        if derivative is not None:
             value = float(estimate.values[i])
             measured = f"{value:.3f} s"
-            if name[4:] in truth:
-                measured += f"; truth model's equivalent delay {truth[name[4:]]:.3f} s"
-            checks.append(Check(f"delay on {name[4:]} within {low:g}–{high:g} s", measured,
+            if derivative in truth:
+                measured += f"; truth model's equivalent delay {truth[derivative]:.3f} s"
+            checks.append(Check(f"delay on {derivative} within {low:g}–{high:g} s", measured,
                                 low <= value <= high))
     for sign in key_derivative_checks(result):
         if sign.verdict in ("agrees", "differs"):
@@ -309,8 +311,8 @@ def _images(files: Sequence[str], prefix: str = "figures/") -> str:
 
 def _delays_text(result) -> str:
     estimate = result.estimates["with delays"]
-    parts = [f"{n[4:]} {estimate.values[i]:.3f} ± {estimate.cramer_rao[i]:.3f} s"
-             for i, n in enumerate(estimate.parameter_names) if n.startswith("tau_")]
+    parts = [f"{delayed_derivative(n)} {estimate.values[i]:.3f} ± {estimate.cramer_rao[i]:.3f} s"
+             for i, n in enumerate(estimate.parameter_names) if delayed_derivative(n)]
     text = ", ".join(parts) or "none"
     if result.dropped_delays:
         text += (f" (dropped as undetermined: {', '.join(result.dropped_delays)})")
@@ -322,6 +324,11 @@ def _delays_text(result) -> str:
                  f"{truth.relative_rms:.1%}): " + ", ".join(
                      f"{n} {v:.3f} s" for n, v in truth.delays.items()))
     return text
+
+
+def _kinds(maneuvers) -> list[str]:
+    """The distinct maneuver kinds of a set (metadata ``kind``), in order of appearance."""
+    return list(dict.fromkeys(str(m.metadata.get("kind", "unspecified")) for m in maneuvers))
 
 
 def case_html(result, figures: Mapping[str, list[str]], claims: Sequence[Check]) -> str:
@@ -338,7 +345,8 @@ def case_html(result, figures: Mapping[str, list[str]], claims: Sequence[Check])
     body = [
         f"<p>{html.escape(case.description)}. Trim: {html.escape(result.condition.describe())}. "
         f"{len(result.identification)} identification maneuvers "
-        f"({', '.join(case.identification_kinds)}), {verification_count} verification sweeps; "
+        f"({', '.join(_kinds(result.identification))}), {verification_count} verification "
+        f"maneuvers; "
         f"{'quick' if case.is_quick else 'full'} set. Units: {estimates['no delays'].units}. "
         f"Time: {html.escape(seconds)}.</p>",
         "<p>Machine-readable results: <a href=\"result.json\">result.json</a>; tables: "

@@ -1,9 +1,10 @@
 """Flight cases: what a study identifies at one flight condition, declared as data.
 
-A case names its data source and the maneuvers for identification and verification, the
-structure, the estimator, the reduction criteria, the delays added after selection and the
-verification envelopes. The built-in cases ``hover`` and ``forward`` (70 kt) ship as TOML files
-in :mod:`rotorid.study.cases`; a user's own case is a TOML file of the same form, e.g. flight data::
+A case names its data source and the data settings, the structure, the estimator, the
+reduction criteria, the delays added after selection and the verification pairs and
+envelopes. The built-in cases ``hover`` and ``forward`` (70 kt) ship as TOML files in
+:mod:`rotorid.study.cases`; a user's own case is a TOML file of the same form, e.g. flight
+data::
 
     name = "my-hover"
     [data]
@@ -14,81 +15,72 @@ in :mod:`rotorid.study.cases`; a user's own case is a TOML file of the same form
     airspeed_kt = 0.0
     theta0_deg = 2.5
     phi0_deg = -2.0
+
+Every setting is checked when the case is read (:mod:`rotorid.study.checks`), before any
+data exist.
 """
 
 from __future__ import annotations
 
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from importlib import resources
 from pathlib import Path
 
 import attrs
 
-from rotorid.errors import DataFileError, MissingFileError, StructureError
+from rotorid.errors import DataFileError, MissingFileError
+from rotorid.model.structure import PAPER_DELAYED
+from rotorid.plugin.manager import create
+from rotorid.study.checks import check_case, check_registered
+from rotorid.verification.compare import PAPER_ENVELOPES, PAPER_PAIRS
 
 BUILTIN = ("hover", "forward")
-_SECTIONS = {"name", "description", "data", "condition", "identification", "verification",
-             "structure", "derivatives", "estimator", "reduction", "delays", "quick"}
-_REDUCTION_KEYS = {"criteria", "continue_to_zero", "rule", "rmse_tolerance", "warm_start"}
-_QUICK_KEYS = {"duration_scale", "continue_to_zero", "warm_start"}
+#: Tables of a case file and the keys each may hold (``None``: checked where it is used).
+_TABLES = {
+    "data": None, "condition": None, "structure": None, "derivatives": None, "estimator": None,
+    "verification": {"pairs", "envelopes"},
+    "reduction": {"criteria", "continue_to_zero", "rule", "rmse_tolerance", "warm_start"},
+    "delays": {"derivatives", "initial", "upper", "threshold", "starts", "seed"},
+    "quick": {"duration_scale", "continue_to_zero", "warm_start"},
+}
+_TOP_LEVEL = {"name", "description", *_TABLES}
+#: Case settings by table and key: the :class:`FlightCase` field and its converter.
+_FIELDS = {
+    ("verification", "pairs"): ("pairs", tuple),
+    ("verification", "envelopes"): ("envelopes", tuple),
+    ("reduction", "continue_to_zero"): ("continue_to_zero", bool),
+    ("reduction", "rule"): ("rule", str),
+    ("reduction", "rmse_tolerance"): ("rmse_tolerance", float),
+    ("reduction", "warm_start"): ("warm_start", bool),
+    ("delays", "derivatives"): ("delay_derivatives", tuple),
+    ("delays", "initial"): ("delay_initial", float),
+    ("delays", "upper"): ("delay_upper", float),
+    ("delays", "threshold"): ("delay_threshold", float),
+    ("delays", "starts"): ("delay_starts", int),
+    ("delays", "seed"): ("delay_seed", int),
+}
 
-
-def _table(mapping: Mapping, key: str, source: str) -> dict:
-    value = mapping.get(key, {})
-    if not isinstance(value, Mapping):
-        raise DataFileError(f"{source}: [{key}] must be a table")
-    return dict(value)
-
-
-def _criteria(entries, source: str) -> tuple[tuple[str, dict], ...]:
-    result = []
-    for entry in entries:
-        if isinstance(entry, str):
-            result.append((entry, {}))
-        elif isinstance(entry, Mapping) and "name" in entry:
-            options = {k: v for k, v in entry.items() if k != "name"}
-            result.append((entry["name"], options))
-        else:
-            raise DataFileError(f"{source}: each reduction criterion is a name or a table with "
-                                f"'name' (and options such as threshold), got {entry!r}")
-    if not result:
-        raise DataFileError(f"{source}: [reduction] criteria must name at least one criterion")
-    return tuple(result)
-
-
-def _relative_to(mapping: Mapping, base: Path) -> dict:
-    """The case with relative data-file paths (or globs) resolved against ``base``, the case
-    file's folder, so that a case runs the same from any working directory."""
-    data = mapping.get("data")
-    if not isinstance(data, Mapping) or data.get("source") != "files":
-        return dict(mapping)
-
-    def resolve(entry):
-        if isinstance(entry, str):
-            return entry if Path(entry).is_absolute() else str(base / entry)
-        if isinstance(entry, list):
-            return [resolve(item) for item in entry]
-        return entry
-
-    data = {key: resolve(value) if key in ("identification", "verification") else value
-            for key, value in data.items()}
-    return {**mapping, "data": data}
+#: What each converter of :data:`_FIELDS` reads, for the error messages.
+_KINDS = {tuple: "a list", bool: "true or false", float: "a number", int: "an integer",
+          str: "a string"}
 
 
 @attrs.frozen
 class FlightCase:
-    """One flight case of a study (see the module docstring for the file form)."""
+    """One flight case of a study (see the module docstring for the file form).
+
+    ``data`` is the ``[data]`` table: ``source`` names the data source, the other keys are
+    its settings. Delay bounds and the initial delay are in s; ``delay_threshold`` is the
+    normalised Cramér-Rao bound (%) above which a delay counts as undetermined and is dropped.
+    """
 
     name: str
     description: str = ""
     data: Mapping = attrs.field(factory=dict, converter=dict)
     condition: Mapping = attrs.field(factory=dict, converter=dict)
-    identification_kinds: tuple[str, ...] = ("3211", "2311")
-    verification_kinds: tuple[str, ...] = ("sweep",)
-    pairs: tuple[str, ...] = ("q/long", "p/long", "q/lat", "p/lat", "r/coll", "az/coll",
-                              "r/ped", "ay/ped")
-    envelopes: tuple[str, ...] = ("muad", "aee", "mismatch-cost")
+    pairs: tuple[str, ...] = PAPER_PAIRS
+    envelopes: tuple[str, ...] = PAPER_ENVELOPES
     structure: Mapping = attrs.field(factory=lambda: {"populate": "six-dof"}, converter=dict)
     derivatives: Mapping = attrs.field(factory=dict, converter=dict)
     estimator: str = "output-error"
@@ -98,73 +90,55 @@ class FlightCase:
     rule: str = "lowest-rmse"
     rmse_tolerance: float = 0.01
     warm_start: bool = False
-    delay_derivatives: tuple[str, ...] = ("L_p", "L_q", "L_long", "L_lat", "M_p", "M_q",
-                                          "M_long", "M_lat")
+    delay_derivatives: tuple[str, ...] = PAPER_DELAYED
     delay_initial: float = 0.0
-    delay_upper: float | None = 0.3
+    delay_upper: float = 0.3
+    delay_threshold: float = 20.0        # the paper's Cramér-Rao threshold
     delay_starts: int = attrs.field(default=1, validator=attrs.validators.ge(1))
     delay_seed: int = 0
     quick_settings: Mapping = attrs.field(factory=dict, converter=dict)
     is_quick: bool = False
 
+    @property
+    def data_source(self) -> str:
+        """Name of the registered data source (``[data] source``)."""
+        return self.data["source"]
+
+    @property
+    def data_settings(self) -> dict:
+        """The data source's settings: ``[data]`` without ``source``."""
+        return {k: v for k, v in self.data.items() if k != "source"}
+
     # ----------------------------------------------------------------- construction
     @classmethod
-    def from_mapping(cls, mapping: Mapping, source: str = "<case>") -> "FlightCase":
-        """Build a case from a parsed TOML document; unknown keys are errors."""
-        unknown = set(mapping) - _SECTIONS
-        if unknown:
-            raise DataFileError(f"{source}: unknown key(s) {sorted(unknown)}; "
-                                f"known: {', '.join(sorted(_SECTIONS))}")
+    def from_mapping(cls, mapping: Mapping, source: str = "<case>",
+                     folder: Path | None = None) -> "FlightCase":
+        """Build and check a case from a parsed TOML document (``source`` names it in
+        errors); relative file settings of its data source are read from ``folder``."""
+        tables = _tables(mapping, source)
         if "name" not in mapping:
-            raise DataFileError(f"{source}: a case needs a name")
-        data = _table(mapping, "data", source)
+            raise DataFileError(f"{source}: a case needs a name, e.g. name = \"my-hover\"")
+        data = tables["data"]
         if "source" not in data:
-            raise DataFileError(f"{source}: [data] needs a source ('helisim' or 'files')")
-        ident = _table(mapping, "identification", source)
-        verif = _table(mapping, "verification", source)
-        estimator = _table(mapping, "estimator", source)
-        reduction = _table(mapping, "reduction", source)
-        delays = _table(mapping, "delays", source)
-        quick = _table(mapping, "quick", source)
-        for table, keys, label in ((reduction, _REDUCTION_KEYS, "reduction"),
-                                   (quick, _QUICK_KEYS, "quick"),
-                                   (delays, {"derivatives", "initial", "upper", "starts",
-                                             "seed"}, "delays")):
-            extra = set(table) - keys
-            if extra:
-                raise DataFileError(f"{source}: [{label}] unknown key(s) {sorted(extra)}; "
-                                    f"known: {', '.join(sorted(keys))}")
-        if int(delays.get("starts", 1)) < 1:
-            raise DataFileError(f"{source}: [delays] starts must be at least 1 (the fit from "
-                                f"the initial delays), got {delays['starts']}")
-        defaults = cls(name="defaults")
-        kwargs = dict(
-            name=str(mapping["name"]), description=str(mapping.get("description", "")),
-            data=data, condition=_table(mapping, "condition", source),
-            identification_kinds=tuple(ident.get("kinds", defaults.identification_kinds)),
-            verification_kinds=tuple(verif.get("kinds", defaults.verification_kinds)),
-            pairs=tuple(verif.get("pairs", defaults.pairs)),
-            envelopes=tuple(verif.get("envelopes", defaults.envelopes)),
-            structure=_table(mapping, "structure", source) or defaults.structure,
-            derivatives=_table(mapping, "derivatives", source),
-            estimator=str(estimator.pop("name", defaults.estimator)),
-            estimator_options=estimator,
-            delay_derivatives=tuple(delays.get("derivatives", defaults.delay_derivatives)),
-            delay_initial=float(delays.get("initial", defaults.delay_initial)),
-            delay_upper=delays.get("upper", defaults.delay_upper),
-            delay_starts=int(delays.get("starts", defaults.delay_starts)),
-            delay_seed=int(delays.get("seed", defaults.delay_seed)),
-            quick_settings=quick)
-        if "criteria" in reduction:
-            kwargs["criteria"] = _criteria(reduction.pop("criteria"), source)
-        kwargs.update(reduction)
-        return cls(**kwargs)
+            raise DataFileError(f"{source}: [data] needs a source, e.g. source = \"files\"")
+        check_registered("data-sources", data["source"], source, "[data] source")
+        estimator = dict(tables["estimator"])
+        case = cls(name=str(mapping["name"]), description=str(mapping.get("description", "")),
+                   data=_resolved(data, folder), condition=tables["condition"],
+                   structure=tables["structure"] or {"populate": "six-dof"},
+                   derivatives=tables["derivatives"],
+                   estimator=str(estimator.pop("name", "output-error")),
+                   estimator_options=estimator, quick_settings=tables["quick"],
+                   **_settings(tables, source))
+        check_case(case, source)
+        return case
 
     @classmethod
     def load(cls, name_or_path: str | Path) -> "FlightCase":
         """A built-in case by name (``hover``, ``forward``) or a case TOML file."""
         if str(name_or_path) in BUILTIN:
-            text = resources.files("rotorid.study.cases").joinpath(f"{name_or_path}.toml").read_text()
+            text = resources.files("rotorid.study.cases").joinpath(
+                f"{name_or_path}.toml").read_text()
             return cls.from_mapping(tomllib.loads(text), f"built-in case {name_or_path}")
         path = Path(name_or_path)
         if not path.is_file():
@@ -174,7 +148,7 @@ class FlightCase:
             mapping = tomllib.loads(path.read_text(encoding="utf-8"))
         except tomllib.TOMLDecodeError as error:
             raise DataFileError(f"{path}: not valid TOML: {error}") from None
-        return cls.from_mapping(_relative_to(mapping, path.parent), str(path))
+        return cls.from_mapping(mapping, str(path), path.parent)
 
     # ----------------------------------------------------------------- variants
     def quick(self) -> "FlightCase":
@@ -186,11 +160,88 @@ class FlightCase:
         return attrs.evolve(self, data=data, is_quick=True, **settings)
 
     def with_seed(self, seed: int) -> "FlightCase":
-        """The case with another noise seed for generated data."""
-        if self.data.get("source") != "helisim":
-            raise StructureError(f"case {self.name}: a seed only applies to generated data")
+        """The case with another noise seed for generated data (``[data] seed``)."""
         return attrs.evolve(self, data={**self.data, "seed": int(seed)})
 
     def as_dict(self) -> dict:
         """Plain settings, as recorded in ``result.json``."""
         return attrs.asdict(self)
+
+
+def _tables(mapping: Mapping, source: str) -> dict[str, dict]:
+    """Every table of a case file (empty when absent), checked for unknown keys."""
+    unknown = set(mapping) - _TOP_LEVEL
+    if unknown:
+        raise DataFileError(f"{source}: unknown key(s) {sorted(unknown)}; known: "
+                            f"{', '.join(sorted(_TOP_LEVEL))}")
+    tables = {}
+    for key, known in _TABLES.items():
+        table = mapping.get(key, {})
+        if not isinstance(table, Mapping):
+            raise DataFileError(f"{source}: [{key}] must be a table")
+        extra = set(table) - known if known is not None else set()
+        if extra:
+            raise DataFileError(f"{source}: [{key}] unknown key(s) {sorted(extra)}; known: "
+                                f"{', '.join(sorted(known))}")
+        tables[key] = dict(table)
+    return tables
+
+
+def _settings(tables: Mapping[str, dict], source: str) -> dict:
+    """The :class:`FlightCase` fields the case's tables set, converted."""
+    fields = {}
+    for (table, key), (field, convert) in _FIELDS.items():
+        if key in tables[table]:
+            fields[field] = _converted(tables[table][key], convert, source, f"[{table}] {key}")
+    if "criteria" in tables["reduction"]:
+        fields["criteria"] = _criteria(tables["reduction"]["criteria"], source)
+    if fields.get("delay_starts", 1) < 1:
+        raise DataFileError(f"{source}: [delays] starts must be at least 1 (the fit from the "
+                            f"initial delays), got {fields['delay_starts']}")
+    return fields
+
+
+def _converted(value, convert: Callable, source: str, key: str):
+    if (convert is tuple and isinstance(value, str)) or (convert is bool
+                                                          and not isinstance(value, bool)):
+        raise DataFileError(f"{source}: {key} must be {_KINDS[convert]}, got {value!r}")
+    try:
+        return convert(value)
+    except (TypeError, ValueError):
+        raise DataFileError(f"{source}: {key} must be {_KINDS[convert]}, got "
+                            f"{value!r}") from None
+
+
+def _criteria(entries, source: str) -> tuple[tuple[str, dict], ...]:
+    result = []
+    for entry in entries if isinstance(entries, list) else [entries]:
+        if isinstance(entry, str):
+            result.append((entry, {}))
+        elif isinstance(entry, Mapping) and "name" in entry:
+            options = {k: v for k, v in entry.items() if k != "name"}
+            result.append((entry["name"], options))
+        else:
+            raise DataFileError(f"{source}: [reduction] criteria: each is a name or a table "
+                                f"with 'name' (and options such as threshold), got {entry!r}")
+    if not result:
+        raise DataFileError(f"{source}: [reduction] criteria must name at least one criterion")
+    return tuple(result)
+
+
+def _resolved(data: Mapping, folder: Path | None) -> dict:
+    """``data`` with the relative file settings its source declares (``path_settings``)
+    resolved against ``folder``, the case file's, so that a case runs the same from any
+    working directory."""
+    if folder is None:
+        return dict(data)
+    source = create("data-sources", data["source"])
+
+    def resolve(entry):
+        if isinstance(entry, str):
+            return entry if Path(entry).is_absolute() else str(folder / entry)
+        if isinstance(entry, list):
+            return [resolve(item) for item in entry]
+        return entry
+
+    return {key: resolve(value) if key in getattr(source, "path_settings", ()) else value
+            for key, value in data.items()}

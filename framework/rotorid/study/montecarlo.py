@@ -222,6 +222,9 @@ def case_monte_carlo(case, runs: int, out_dir: str | Path, *, seed: int | None =
                      executor=None, progress=None) -> MonteCarloResult:
     """Monte Carlo of a flight case's final estimation.
 
+    The case's data source must generate data: besides ``case_data`` it has the optional
+    ``noise_realisations(settings, directory)``, which returns a picklable
+    ``data(seed) -> ManeuverSet`` of the case's identification maneuvers with that noise seed.
     The case's study result in ``out_dir/<case>`` is reused when it is there (it is run
     first otherwise, without figures). Each run regenerates the case's data with noise seed
     ``seed + k`` (k = 0 … runs − 1; ``seed`` defaults to the case's own, so run 0 repeats
@@ -233,19 +236,14 @@ def case_monte_carlo(case, runs: int, out_dir: str | Path, *, seed: int | None =
 
     if runs < 2:
         raise DataError(f"a Monte Carlo needs at least 2 runs to estimate a spread, got {runs}")
-    source = case.data.get("source")
-    generator = create("data-sources", source)
-    if not hasattr(generator, "noise_realisations"):
+    source = create("data-sources", case.data_source)
+    if not hasattr(source, "noise_realisations"):
         raise DataError(f"case {case.name}: a Monte Carlo regenerates the data with new noise, "
-                        f"which the {source!r} data source cannot do; use generated data "
-                        f"(source 'helisim')")
+                        f"which the {case.data_source!r} data source cannot do; use generated "
+                        f"data (a source with noise_realisations, docs/plugins.md)")
     study = run_case(case, out_dir, resume=True, progress=progress)
     directory = Path(out_dir) / case.name
-    # Only the identification maneuvers are flown and given noise: each maneuver is its own
-    # row of the flight and its noise is seeded by its name, so they equal the study's.
-    settings = {**{k: v for k, v in case.data.items() if k != "source"},
-                "kinds": list(case.identification_kinds)}
-    data = generator.noise_realisations(settings, directory / "montecarlo-data")
+    data = source.noise_realisations(case.data_settings, directory / "montecarlo-data")
     first = int(case.data.get("seed", 0) if seed is None else seed)
     estimate = study.estimates["with delays"]
     result = monte_carlo(

@@ -74,10 +74,10 @@ def case_name(airspeed_kt: float) -> str:
 
 def speed_case(template: FlightCase, airspeed_kt: float) -> FlightCase:
     """``template`` with its generated data trimmed and flown at ``airspeed_kt``."""
-    if template.data.get("source") != "helisim":
+    if "airspeed_kt" not in template.data:
         raise DataError(f"a speed sweep regenerates data at each airspeed, so its template "
-                        f"case needs the 'helisim' data source; case {template.name} reads "
-                        f"{template.data.get('source')!r}")
+                        f"case needs generated data flown at [data] airspeed_kt; case "
+                        f"{template.name} reads {template.data_source!r} data without one")
     name = case_name(airspeed_kt)
     data = {**template.data, "condition": name, "airspeed_kt": float(airspeed_kt)}
     return attrs.evolve(template, name=name, data=data,

@@ -43,6 +43,8 @@ DRIFT_RATIO = 10.0
 DRIFT_LIMIT = 100.0
 #: The paper's verification pairs (figs. 4, 5, 12, 14): ``output/input``.
 PAPER_PAIRS = ("q/long", "p/long", "q/lat", "p/lat", "r/coll", "az/coll", "r/ped", "ay/ped")
+#: The paper's envelopes on ``ε``: MUAD, the AEE tables and the mismatch cost J.
+PAPER_ENVELOPES = ("muad", "aee", "mismatch-cost")
 
 
 def parse_pair(pair: str) -> tuple[str, str]:
@@ -322,7 +324,7 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
     if not parsed:
         raise VerificationError("no response pairs given; e.g. pairs=['q/long', 'p/long']")
     if envelopes is None:
-        envelopes = envelopes_by_name(("muad", "aee", "mismatch-cost"))
+        envelopes = envelopes_by_name(PAPER_ENVELOPES)
     if len(model_outputs) != len(sweeps):
         raise VerificationError(f"{len(model_outputs)} model output arrays for {len(sweeps)} "
                                 f"sweeps; simulate every sweep")

@@ -1,0 +1,107 @@
+"""Checks of flight cases before any data exist: a misspelt derivative, an unknown envelope or
+an unsafe case name is reported at once, one line naming the case file (or case) and the key,
+instead of after the data have been flown.
+
+:func:`check_case` checks one case (:class:`~rotorid.study.case.FlightCase`);
+:func:`check_cases` every case of a study and that their names differ.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+
+from rotorid.errors import DataFileError, RotoridError
+from rotorid.estimation.reduction import RULES
+from rotorid.model.modelfile import parse_model
+from rotorid.model.structure import FlightCondition
+from rotorid.plugin.manager import registry
+from rotorid.verification.compare import parse_pair
+
+#: A case name is a directory of the results: letters, digits and ``_ . + -``, never a path.
+SAFE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+-]*")
+
+
+def check_cases(cases: Sequence) -> None:
+    """Check every case (:func:`check_case`) and that no two share a name (a results
+    directory)."""
+    names = [case.name for case in cases]
+    twice = sorted({name for name in names if names.count(name) > 1})
+    if twice:
+        raise DataFileError(f"case name(s) {', '.join(twice)} used twice; give each case its "
+                            f"own name (it is its results directory)")
+    for case in cases:
+        check_case(case, f"case {case.name}")
+
+
+def check_case(case, where: str) -> None:
+    """Raise :class:`~rotorid.errors.DataFileError` naming ``where`` (the case file) and the
+    key of the first setting of ``case`` that cannot work."""
+    _check_name(case.name, where)
+    check_registered("data-sources", case.data_source, where, "[data] source")
+    names = _structure_names(case, where)
+    _check_delays(case, names, where)
+    for pair in case.pairs:
+        _wrapped(lambda: parse_pair(pair), where, "[verification] pairs")
+    for envelope in case.envelopes:
+        check_registered("validation-envelopes", envelope, where, "[verification] envelopes")
+    check_registered("estimators", case.estimator, where, "[estimator] name")
+    for criterion, _ in case.criteria:
+        check_registered("reduction-criteria", criterion, where, "[reduction] criteria")
+    if case.rule not in RULES:
+        raise DataFileError(f"{where}: [reduction] rule {case.rule!r} is unknown; use "
+                            f"{' or '.join(RULES)}")
+    if not (math.isfinite(case.rmse_tolerance) and case.rmse_tolerance >= 0):
+        raise DataFileError(f"{where}: [reduction] rmse_tolerance must be a fraction ≥ 0 "
+                            f"(e.g. 0.01), got {case.rmse_tolerance!r}")
+
+
+def _check_name(name: str, where: str) -> None:
+    if not SAFE_NAME.fullmatch(name):
+        raise DataFileError(f"{where}: name {name!r} cannot name a results directory; use "
+                            f"letters, digits and _ . + - only, starting with a letter or digit")
+
+
+def check_registered(family: str, name: str, where: str, key: str) -> None:
+    """Raise when no plugin of ``family`` is registered as ``name`` (the setting ``key``)."""
+    known = registry(family)
+    if name not in known:
+        raise DataFileError(f"{where}: {key} {name!r} is not registered in the {family} "
+                            f"family; use one of {', '.join(known)} (rotorid plugins)")
+
+
+def _wrapped(check, where: str, key: str | None = None):
+    """``check()``, its rotorid error reported as one line naming ``where`` and ``key`` (when
+    the error does not name it already)."""
+    try:
+        return check()
+    except RotoridError as error:
+        raise DataFileError(f"{where}: {f'{key}: ' if key else ''}{error}") from None
+
+
+def _structure_names(case, where: str) -> tuple[str, ...]:
+    """The derivatives of the case's starting structure (its ``[structure]`` and
+    ``[derivatives]`` tables checked at a placeholder trim), after checking ``[condition]``."""
+    if case.condition:
+        _wrapped(lambda: FlightCondition.from_mapping(case.condition), where)
+    mapping = {"condition": {"airspeed_kt": 0.0}, "structure": dict(case.structure),
+               "derivatives": dict(case.derivatives)}
+    return parse_model(mapping, where).names
+
+
+def _check_delays(case, names: tuple[str, ...], where: str) -> None:
+    unknown = [name for name in case.delay_derivatives if name not in names]
+    if unknown:
+        raise DataFileError(f"{where}: [delays] derivatives {', '.join(unknown)} are not in "
+                            f"the case's structure; delay only derivatives it declares")
+    upper, initial = case.delay_upper, case.delay_initial
+    if not upper > 0 or not math.isfinite(upper):
+        raise DataFileError(f"{where}: [delays] upper must be a positive time in s (the "
+                            f"paper's delays stay below 0.3 s), got {upper!r}")
+    if not (math.isfinite(initial) and 0 <= initial <= upper):
+        raise DataFileError(f"{where}: [delays] initial must lie in [0, upper = {upper:g}] s, "
+                            f"got {initial!r}")
+    if not (math.isfinite(case.delay_threshold) and case.delay_threshold > 0):
+        raise DataFileError(f"{where}: [delays] threshold must be a positive percentage (a "
+                            f"normalised Cramér-Rao bound), got {case.delay_threshold!r}")

@@ -1,0 +1,103 @@
+"""A case's results directory: the resume points and the records, all written atomically.
+
+``<out>/<case>/`` holds ``case.json`` (the settings the results belong to), ``steps/`` (one
+``step_NNN.json`` per finished reduction step), ``delays.json`` (the delayed fit of the
+selected step) and ``result.json``.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import attrs
+import numpy as np
+
+from rotorid.errors import RotoridError
+from rotorid.estimation.estimate import Estimate
+from rotorid.estimation.reduction import ReductionStep
+from rotorid.plugin.contracts import Removal
+from rotorid.io import atomic_write, jsonable
+from rotorid.model.structure import ModelStructure
+from rotorid.study.case import FlightCase
+from rotorid.study.result import CaseResult
+
+
+def prepare_directory(directory: Path, case: FlightCase, resume: bool) -> None:
+    """Create ``directory`` for ``case`` and record its settings; without ``resume`` remove
+    earlier resume points. Resuming results of other settings is an error."""
+    (directory / "steps").mkdir(parents=True, exist_ok=True)
+    marker = directory / "case.json"
+    settings = json.dumps(jsonable(case.as_dict()), sort_keys=True)
+    if marker.is_file() and resume and marker.read_text() != settings:
+        raise RotoridError(f"{directory} holds results of a different configuration of case "
+                           f"{case.name}; choose another --out directory or run without "
+                           f"--resume to start afresh")
+    if not resume:
+        for old in list(directory.glob("steps/step_*.json")) + [directory / "delays.json"]:
+            if old.is_file():
+                old.unlink()
+    atomic_write(marker, settings)
+
+
+def _step_file(directory: Path, index: int) -> Path:
+    return directory / "steps" / f"step_{index:03d}.json"
+
+
+def save_step(directory: Path, step: ReductionStep) -> None:
+    """Write a finished reduction step."""
+    removal = None if step.removal is None else attrs.asdict(step.removal)
+    record = {"index": step.index, "removal": removal, "estimate": step.estimate.as_dict()}
+    atomic_write(_step_file(directory, step.index), json.dumps(jsonable(record), indent=1))
+
+
+def load_steps(directory: Path, base: ModelStructure) -> list[ReductionStep]:
+    """The finished reduction steps of ``base`` saved in ``directory``, in order."""
+    steps, structure = [], base
+    index = 0
+    while _step_file(directory, index).is_file():
+        record = json.loads(_step_file(directory, index).read_text())
+        removal = None
+        if record["removal"] is not None:
+            removal = Removal(**{k: (np.inf if v is None else v)
+                                 for k, v in record["removal"].items()})
+            structure = structure.without(removal.parameter)
+        if not structure.parameter_names:
+            break
+        steps.append(ReductionStep(index, removal, Estimate.from_dict(record["estimate"]),
+                                   structure))
+        index += 1
+    return steps
+
+
+def load_delays(directory: Path, selected_step: int) -> tuple[tuple[str, ...], Estimate] | None:
+    """The dropped delays and the delayed fit saved for ``selected_step``, or ``None``."""
+    saved = directory / "delays.json"
+    if not saved.is_file():
+        return None
+    record = json.loads(saved.read_text())
+    if record.get("selected_step") != selected_step:
+        return None
+    return tuple(record["dropped"]), Estimate.from_dict(record["estimate"])
+
+
+def save_delays(directory: Path, selected_step: int, dropped: tuple[str, ...],
+                estimate: Estimate) -> None:
+    """Write the delayed fit of ``selected_step`` and the delays it dropped."""
+    atomic_write(directory / "delays.json",
+                 json.dumps(jsonable({"selected_step": selected_step, "dropped": list(dropped),
+                                      "estimate": estimate.as_dict()}), indent=1))
+
+
+def save_result(directory: Path, result: CaseResult) -> None:
+    """Write ``result.json``."""
+    atomic_write(directory / "result.json",
+                 json.dumps(jsonable(result.as_dict()), indent=1, default=_json_default))
+
+
+def _json_default(value):
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (np.floating, np.integer, np.bool_)):
+        return value.item()
+    raise TypeError(f"cannot write {type(value).__name__} to JSON")

@@ -1,0 +1,92 @@
+"""What one flight case produced: :class:`CaseResult` and its ``result.json`` record."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import attrs
+import numpy as np
+
+from rotorid.data import ManeuverSet
+from rotorid.estimation.estimate import Estimate
+from rotorid.estimation.reduction import ReductionPath
+from rotorid.model.structure import FlightCondition, ModelStructure
+from rotorid.notebook import case_result_html, case_result_summary
+from rotorid.simulation.simulator import simulate
+from rotorid.study.case import FlightCase
+from rotorid.verification.compare import VerificationResult
+from rotorid.verification.equivalent_delays import EquivalentDelays
+from rotorid.verification.metrics import TimeDomainMetrics
+
+#: The two identified models of a case: the selected structure, and it with delays.
+MODELS = ("no delays", "with delays")
+#: Derivatives the paper checks for sign and magnitude (truth-model.md §8).
+KEY_DERIVATIVES = ("M_w", "L_v", "N_v", "Z_w", "M_u", "X_u", "X_v", "Y_u", "Y_v")
+
+
+@attrs.frozen(eq=False)
+class CaseResult:
+    """Everything one flight case produced (immutable)."""
+
+    case: FlightCase
+    condition: FlightCondition
+    identification: ManeuverSet
+    verification_data: ManeuverSet | None
+    path: ReductionPath
+    structures: Mapping[str, ModelStructure]      # by model label (MODELS)
+    estimates: Mapping[str, Estimate]
+    time_metrics: Mapping[str, TimeDomainMetrics]
+    verification: Mapping[str, VerificationResult]
+    truth_derivatives: Mapping[str, float] | None
+    seconds: Mapping[str, float]
+    dropped_delays: tuple[str, ...] = ()
+    resumed_steps: int = 0           # finished reduction steps reused from an earlier run
+    truth_delays: EquivalentDelays | None = None   # the truth model's equivalent delays
+
+    @property
+    def name(self) -> str:
+        return self.case.name
+
+    def __repr__(self) -> str:
+        return case_result_summary(self)
+
+    def _repr_html_(self) -> str:
+        return case_result_html(self)
+
+    def simulated(self, model: str, maneuvers: ManeuverSet | None = None) -> list[np.ndarray]:
+        """Outputs of one identified model on ``maneuvers`` (default: identification data)."""
+        data = self.identification if maneuvers is None else maneuvers
+        return simulate(self.structures[model], self.estimates[model].values, data)
+
+    def key_derivatives(self) -> dict:
+        """Identified key derivatives of the delayed model, and the truth's linearisation."""
+        estimate = self.estimates["with delays"]
+        table = {}
+        for name in KEY_DERIVATIVES:
+            identified = (estimate.value(name) if name in estimate.parameter_names else None)
+            truth = None if self.truth_derivatives is None else self.truth_derivatives.get(name)
+            table[name] = {"identified": identified, "truth_linearisation": truth}
+        return table
+
+    def as_dict(self) -> dict:
+        """The ``result.json`` record."""
+        path = self.path
+        return {
+            "case": self.case.as_dict(),
+            "condition": attrs.asdict(self.condition),
+            "reduction": {"rule": path.rule, "rmse_tolerance": path.rmse_tolerance,
+                          "selected_step": path.selected_index,
+                          "removed": list(path.removed),
+                          "steps": [s.summary() for s in path.steps]},
+            "selected_structure": list(self.structures["no delays"].names),
+            "estimates": {label: e.as_dict() for label, e in self.estimates.items()},
+            "time_metrics": {label: m.summary() for label, m in self.time_metrics.items()},
+            "frequency_verification": {label: v.summary()
+                                       for label, v in self.verification.items()},
+            "key_derivatives": self.key_derivatives(),
+            "dropped_delays": list(self.dropped_delays),
+            "truth_equivalent_delays": (None if self.truth_delays is None
+                                        else self.truth_delays.as_dict()),
+            "seconds": dict(self.seconds),
+            "resumed_steps": self.resumed_steps,
+        }

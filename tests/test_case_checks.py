@@ -1,0 +1,75 @@
+"""Case files are checked before any data exist: each bad setting is one line naming the case
+file, the table and key, and the fix; a Study checks every case before running any."""
+
+import pytest
+from rotorid.errors import DataFileError
+from rotorid.study.case import FlightCase
+from rotorid.study.pipeline import Study
+
+FILES = {"source": "files", "identification": "flight/*.csv"}
+
+
+def case_file(tmp_path, text: str):
+    path = tmp_path / "case.toml"
+    path.write_text(f'name = "own"\n[data]\nsource = "files"\nidentification = "f.csv"\n{text}')
+    return path
+
+
+@pytest.mark.parametrize("text, message", [
+    ('[derivatives]\nL_pp = {}\n', r"L_pp"),
+    ('[structure]\nremove = ["X_q"]\npopulate = "none"\n', r"\[structure\] remove"),
+    ('[verification]\npairs = ["q/lng"]\n', r"\[verification\] pairs.*'q/lng'.*OUTPUT/INPUT"),
+    ('[verification]\nenvelopes = ["muda"]\n',
+     r"\[verification\] envelopes 'muda' is not registered in the validation-envelopes "
+     r"family; use .*muad"),
+    ('[reduction]\ncriteria = ["cramer_rao"]\n',
+     r"\[reduction\] criteria 'cramer_rao' is not registered.*use one of cramer-rao"),
+    ('[reduction]\nrule = "best"\n', r"\[reduction\] rule 'best' is unknown"),
+    ('[reduction]\nwarm_start = "yes"\n', r"\[reduction\] warm_start must be true or false"),
+    ('[estimator]\nname = "least-squares"\n', r"\[estimator\] name 'least-squares'"),
+    ('[delays]\nderivatives = ["L_lt"]\n', r"\[delays\] derivatives L_lt are not in the case"),
+    ('[delays]\nupper = -0.1\n', r"\[delays\] upper must be a positive time"),
+    ('[delays]\nupper = 0.2\ninitial = 0.5\n', r"\[delays\] initial must lie in \[0, upper"),
+    ('[delays]\nthreshold = 0\n', r"\[delays\] threshold must be a positive percentage"),
+    ('[delays]\nstarts = "four"\n', r"\[delays\] starts must be an integer"),
+    ('[delays]\nderivatives = "L_p"\n', r"\[delays\] derivatives must be a list"),
+    ('[condition]\nairspeed = 3\n', r"\[condition\].*unknown key"),
+    ('[identification]\nkinds = ["3211"]\n', r"unknown key\(s\) \['identification'\]"),
+])
+def test_a_bad_setting_names_the_file_and_the_key(tmp_path, text, message):
+    path = case_file(tmp_path, text)
+    with pytest.raises(DataFileError, match=message) as caught:
+        FlightCase.load(path)
+    assert str(caught.value).startswith(str(path)) and "\n" not in str(caught.value)
+
+
+@pytest.mark.parametrize("name", ["../../X", "/tmp/abs", "a/b", "..", ".hidden", ""])
+def test_a_case_name_is_never_a_path(tmp_path, name):
+    path = tmp_path / "case.toml"
+    path.write_text(f'name = "{name}"\n[data]\nsource = "files"\nidentification = "f.csv"\n')
+    with pytest.raises(DataFileError, match="cannot name a results directory"):
+        FlightCase.load(path)
+
+
+def test_an_unknown_data_source_is_named_before_anything_runs(tmp_path):
+    path = tmp_path / "case.toml"
+    path.write_text('name = "own"\n[data]\nsource = "renamed-csv"\n')
+    with pytest.raises(DataFileError, match=r"\[data\] source 'renamed-csv' is not "
+                                            r"registered.*use one of files, helisim"):
+        FlightCase.load(path)
+
+
+def test_a_study_checks_every_case_before_running_any(tmp_path):
+    good = FlightCase(name="good", data=FILES)
+    misspelt = FlightCase(name="misspelt", data=FILES, delay_derivatives=("M_lon",))
+    with pytest.raises(DataFileError, match=r"case misspelt: \[delays\] derivatives M_lon"):
+        Study([good, misspelt], tmp_path / "out")
+    with pytest.raises(DataFileError, match="case name.* good used twice"):
+        Study([good, good], tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_builtin_cases_pass_their_checks():
+    for name in ("hover", "forward"):
+        case = FlightCase.load(name)
+        assert case.delay_threshold == 20.0 and case.data_source == "helisim"
