@@ -124,7 +124,7 @@ class SweepPoint:
 
 
 def sweep_points(results: Mapping) -> list[SweepPoint]:
-    """One :class:`SweepPoint` per :class:`~rotorid.study.pipeline.CaseResult`, by airspeed."""
+    """One :class:`SweepPoint` per :class:`~rotorid.study.result.CaseResult`, by airspeed."""
     points = []
     for name, result in results.items():
         estimate = result.estimates["with delays"]
