@@ -8,7 +8,10 @@ Usage::
                      [--hold zoh|foh] [--quiet] [--strict] [--force]
 
 ``MODEL.toml`` is a model file (:mod:`rotorid.model.modelfile`); its initial values are the start
-values (all zero: the estimator chooses its own start, see docs/estimation.md). DATA are
+values (all zero: the estimator chooses its own start, see docs/estimation.md). MODEL may
+instead name a model of one's own by reference, ``package.module:Name`` or
+``path/to/file.py:Name`` (:mod:`rotorid.model.reference`, docs/models.md); its data are read
+in the units the files declare. DATA are
 maneuver files (CSV, NPZ, MAT), directories or glob patterns of the ``files`` data source; they
 are converted to the model's unit system. The report goes to stdout; stderr gets one line per
 accepted iteration (unless ``--quiet``; an observer plugin of the
@@ -16,7 +19,8 @@ accepted iteration (unless ``--quiet``; an observer plugin of the
 it) and one line per warning (an unidentifiable parameter
 combination, for instance). The estimate is written atomically as JSON (the format of
 :meth:`rotorid.estimation.estimate.Estimate.as_dict`, plus ``structure``: the model file's path relative
-to the JSON file, so that ``rotorid verify RESULT.json SWEEPS...`` finds it).
+to the JSON file, so that ``rotorid verify RESULT.json SWEEPS...`` finds it; for a reference,
+``model``: the reference, a file's path made relative the same way).
 """
 
 from __future__ import annotations
@@ -35,7 +39,8 @@ HELP = ("estimate the derivatives and delays of a model file from maneuver files
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("model", metavar="MODEL.toml", help="model file")
+    parser.add_argument("model", metavar="MODEL.toml", help="model file, or a model of one's own "
+                        "by reference: package.module:Name or path/to/file.py:Name")
     parser.add_argument("data", nargs="+", metavar="DATA",
                         help="maneuver files (CSV/NPZ/MAT), directories or glob patterns")
     parser.add_argument("--estimator", default="output-error",
@@ -112,9 +117,19 @@ def _estimator(name: str, options: dict):
                               f"{', '.join(sorted(options))}: {error}") from None
 
 
-def _record(estimate, model_path: Path, out: Path) -> dict:
+def _record(estimate, model: str, out: Path) -> dict:
+    """The estimate's record and where its model came from, paths relative to the JSON file:
+    ``structure`` (a model file) or ``model`` (a reference)."""
+    from rotorid.model.reference import is_model_reference
+
     record = estimate.as_dict()
-    record["structure"] = os.path.relpath(model_path.resolve(), out.resolve().parent)
+    if not is_model_reference(model):
+        record["structure"] = os.path.relpath(Path(model).resolve(), out.resolve().parent)
+        return record
+    where, _, name = model.rpartition(":")
+    if where.endswith(".py"):
+        where = os.path.relpath(Path(where).resolve(), out.resolve().parent)
+    record["model"] = f"{where}:{name}"
     return record
 
 
@@ -124,22 +139,25 @@ def run(args) -> int:
     from rotorid.errors import ExitStatus, MissingFileError, RotoridWarning
     from rotorid.io import atomic_write
     from rotorid.model.modelfile import load_model
+    from rotorid.model.reference import is_model_reference, load_model_reference
     from rotorid.plugin.manager import new_plugin_manager, using
 
-    structure = load_model(args.model)
+    by_reference = is_model_reference(args.model)
+    model = load_model_reference(args.model) if by_reference else load_model(args.model)
     out = refuse_overwrite(args.out, args.force)
     if not out.parent.is_dir():
         raise MissingFileError(f"cannot write {out}: directory {out.parent} does not exist")
     manager = new_plugin_manager([] if args.quiet else [ProgressPrinter()])
     with using(manager):
         estimator = _estimator(args.estimator, _options(args))
-        maneuvers = _load_inputs(args.data, args.hold, structure.units.name)
+        maneuvers = _load_inputs(args.data, args.hold,
+                                 None if by_reference else model.units.name)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", RotoridWarning)
-            estimate = estimator.estimate(structure, maneuvers)
+            estimate = estimator.estimate(model, maneuvers)
     for warning in caught:
         print(f"rotorid identify: warning: {warning.message}", file=sys.stderr)
-    atomic_write(out, json.dumps(_record(estimate, Path(args.model), out), indent=2))
+    atomic_write(out, json.dumps(_record(estimate, args.model, out), indent=2))
     print(estimate.report())
     print(f"estimate written to {out}")
     if estimate.converged:
