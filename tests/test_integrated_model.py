@@ -229,6 +229,10 @@ def test_bad_options_are_refused_when_the_model_is_built(options, message):
 def test_bad_declarations_and_data():
     with pytest.raises(StructureError, match="is not a nonlinear model"):
         IntegratedModel(object())
+    twice = FirstOrder()
+    twice.parameters = (*FirstOrder.parameters, Parameter("b", 1.0))
+    with pytest.raises(StructureError, match="parameter 'b' is declared twice"):
+        IntegratedModel(twice)
     with pytest.raises(StructureError, match=r"parameter 'a': start 2 lies outside its bounds "
                                              r"\[0, 1\]"):
         Parameter("a", 2.0, lower=0.0, upper=1.0)

@@ -35,9 +35,18 @@ import math
 
 import numpy as np
 import rotorid
-from rotorid import ChannelLink, ChannelMap, Maneuver, ManeuverSet, Signal, SignalSet
-from rotorid.estimation.integrated import InitialConditions, IntegratedModel
-from rotorid.model.nonlinear import ModelSignals, Parameter
+from rotorid import (
+    ChannelLink,
+    ChannelMap,
+    InitialConditions,
+    IntegratedModel,
+    Maneuver,
+    ManeuverSet,
+    ModelSignals,
+    Parameter,
+    Signal,
+    SignalSet,
+)
 
 G = 9.80665          # m/s²
 RHO = 1.225          # kg/m³

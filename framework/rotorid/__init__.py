@@ -24,8 +24,10 @@ from rotorid.errors import (
     SimulationDivergedError,
     StructureError,
 )
+from rotorid.estimation.integrated import InitialConditions, IntegratedModel
 from rotorid.estimation.result_file import IdentifiedModel, load_result, to_statespace
 from rotorid.model.derivatives import Delay, Derivative, Sign
+from rotorid.model.nonlinear import ModelSignals, NonlinearModel, Parameter
 from rotorid.model.signals import ChannelLink, ChannelMap, Signal, SignalSet
 from rotorid.model.statespace import NamedStateSpace, state_space
 from rotorid.model.structure import (
@@ -57,6 +59,7 @@ from rotorid.plugin.manager import (
     register_plugin,
     registry,
 )
+from rotorid.simulation.integrators import Integration
 from rotorid.simulation.simulator import Simulator, sensitivities, simulate
 from rotorid.simulation.transfer import frequency_response
 from rotorid.units import FLIGHT_TEST, SI, UnitSystem, unit_system
@@ -72,8 +75,10 @@ __all__ = [
     "CaseData", "ChannelLink", "ChannelMap", "Command", "ConvergenceWarning", "DataError",
     "DataFileError", "DataSource", "Delay", "Derivative", "DerivativeError", "EnvelopeBounds",
     "EnvelopeCheck", "Estimate", "EstimationError", "Estimator", "FlightCondition",
-    "IdentifiabilityWarning", "IdentifiedModel", "InputSignal", "LinearSystem", "Maneuver",
-    "ManeuverSet", "MissingFileError", "ModelStructure", "NamedStateSpace", "ParameterEstimate",
+    "IdentifiabilityWarning", "IdentifiedModel", "InitialConditions", "InputSignal",
+    "IntegratedModel", "Integration", "LinearSystem", "Maneuver", "ManeuverSet",
+    "MissingFileError", "ModelSignals", "ModelStructure", "NamedStateSpace", "NonlinearModel",
+    "Parameter", "ParameterEstimate",
     "PluginDescriptor", "PluginError", "ReductionCriterion", "Removal", "RotoridError",
     "RotoridWarning", "Sign", "Signal", "SignalError", "SignalSet", "SimulationDivergedError",
     "Simulator", "StructureError", "TruthModel", "UnitSystem", "ValidationEnvelope",

@@ -109,6 +109,11 @@ class IntegratedModel:
         if self.method == "model" and not has_own_jacobians(self.model):
             raise StructureError(f"{type(self.model).__name__} has no derivative_jacobians and "
                                  "output_jacobians; use sensitivities='central' or 'forward'")
+        names = [p.name for p in self.model.parameters]
+        repeated = sorted({n for n in names if names.count(n) > 1})
+        if repeated:
+            raise StructureError(f"parameter {repeated[0]!r} is declared twice; give every "
+                                 "parameter its own name")
         if not self.step > 0:
             raise StructureError(f"the finite-difference step must be positive, got {self.step}")
         for name in (*self.initial.fixed, *self.initial.estimated):
