@@ -361,3 +361,22 @@ def test_the_default_model_of_a_study_result_has_the_delays(tiny_study, tmp_path
     assert main(["export", str(path), "--format", "mat", "--model", "no delays",
                  "--out", str(tmp_path / "m.mat")]) == ExitStatus.OK
     assert loadmat(tmp_path / "m.mat")["DelaySeconds"].size == 0
+
+
+def test_a_study_of_the_longitudinal_files_skips_the_pairs_it_cannot_verify(flight, capsys):
+    root, _ = flight
+    case = root / "my-hover.toml"
+    case.write_text('name = "my-hover"\n[data]\nsource = "files"\nidentification = "ident"\n'
+                    'verification = "sweeps"\n[condition]\nairspeed_kt = 0.0\n'
+                    '[identification]\nkinds = ["doublet"]\n[structure]\npopulate = "none"\n'
+                    '[derivatives]\n' + "".join(f"{n} = {{}}\n" for n in TRUTH if "tau" not in n)
+                    + '[delays]\nderivatives = ["M_long"]\n', encoding="utf-8")
+    assert main(["study", str(case), "--out", str(root / "study"), "--no-figures"]) == (
+        ExitStatus.OK)
+    assert "[my-hover] q/lat not verified: no sweep excites 'lat'" in capsys.readouterr().err
+    record = _strict_json(root / "study" / "my-hover" / "result.json")
+    verified = record["frequency_verification"]["with delays"]
+    assert [p["pair"] for p in verified["pairs"]] == ["q/long", "az/coll"]
+    assert sum("not verified" in note for note in verified["notes"]) == 6
+    exported = load_result(root / "study" / "my-hover" / "result.json").state_space()
+    assert exported.states == ("u", "w", "q", "theta")

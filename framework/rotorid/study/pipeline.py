@@ -25,6 +25,8 @@ from concurrent.futures import Executor
 from pathlib import Path
 from typing import Protocol
 
+import attrs
+
 from rotorid.data import ManeuverSet
 from rotorid.errors import DataError, IdentifiabilityWarning, StudyError
 from rotorid.estimation.reduction import ReductionPath, ReductionStep, reduce
@@ -43,6 +45,7 @@ from rotorid.study.result import MODELS, CaseResult
 from rotorid.study.truth import truth_derivatives, truth_equivalent_delays
 from rotorid.verification.compare import verify_model
 from rotorid.verification.metrics import time_domain_metrics
+from rotorid.verification.producible import producible_pairs
 
 Progress = Callable[[str, str], None]
 
@@ -128,15 +131,25 @@ def _delays_line(estimate, dropped: tuple[str, ...]) -> str:
 
 
 def _verify(case: FlightCase, structures, estimates, ident: ManeuverSet,
-            verif: ManeuverSet | None) -> tuple[dict, dict]:
+            verif: ManeuverSet | None, report: Progress) -> tuple[dict, dict]:
     """Time-domain metrics on the identification data and sweep verification (when there
-    are verification data) of both models, by model label."""
+    are verification data) of both models, by model label. Pairs the data or the model cannot
+    produce are skipped, with the reason in a progress line and in the verification's notes."""
     metrics = {label: time_domain_metrics(ident, simulate(structures[label],
                                                           estimates[label].values, ident))
                for label in MODELS}
-    verification = {} if verif is None else {
-        label: verify_model(structures[label], estimates[label].values, verif, case.pairs,
-                            case.envelopes) for label in MODELS}
+    if verif is None:
+        return metrics, {}
+    selection = producible_pairs(structures["with delays"], estimates["with delays"].values,
+                                 verif, case.pairs)
+    skipped = [f"{pair} not verified: {reason}" for pair, reason in selection.skipped.items()]
+    for note in skipped:
+        report(case.name, note)
+    verification = {}
+    for label in MODELS if selection.pairs else ():
+        checked = verify_model(structures[label], estimates[label].values, verif,
+                               selection.pairs, case.envelopes)
+        verification[label] = attrs.evolve(checked, notes=[*checked.notes, *skipped])
     return metrics, verification
 
 
@@ -181,7 +194,7 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     report(case.name, _delays_line(delayed_estimate, dropped))
     structures = {"no delays": selected.structure, "with delays": delayed}
     estimates = {"no delays": selected.estimate, "with delays": delayed_estimate}
-    metrics, verification = _verify(case, structures, estimates, ident, verif)
+    metrics, verification = _verify(case, structures, estimates, ident, verif, report)
     clock["verification"] = time.perf_counter()
     truth = data.truth
     result = CaseResult(
