@@ -368,7 +368,7 @@ def test_a_study_of_the_longitudinal_files_skips_the_pairs_it_cannot_verify(flig
     case = root / "my-hover.toml"
     case.write_text('name = "my-hover"\n[data]\nsource = "files"\nidentification = "ident"\n'
                     'verification = "sweeps"\n[condition]\nairspeed_kt = 0.0\n'
-                    '[identification]\nkinds = ["doublet"]\n[structure]\npopulate = "none"\n'
+                    '[structure]\npopulate = "none"\n'
                     '[derivatives]\n' + "".join(f"{n} = {{}}\n" for n in TRUTH if "tau" not in n)
                     + '[delays]\nderivatives = ["M_long"]\n', encoding="utf-8")
     assert main(["study", str(case), "--out", str(root / "study"), "--no-figures"]) == (
