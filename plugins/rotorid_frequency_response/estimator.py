@@ -15,7 +15,7 @@ unchanged.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 import attrs
 import numpy as np
@@ -23,7 +23,7 @@ from rotorid import blas
 from rotorid.data import ManeuverSet
 from rotorid.errors import EstimationError
 from rotorid.estimation.equation_error import equation_error_start
-from rotorid.estimation.estimate import Estimate, statistics
+from rotorid.estimation.estimate import Estimate
 from rotorid.model.structure import ModelStructure
 from rotorid.plugin.manager import notify
 from rotorid.verification.frequency import FrequencyResponse
@@ -62,7 +62,9 @@ class FrequencyResponseEstimator:
         enforce_signs: use the derivatives' sign priors as bounds.
         start: ``"auto"`` (equation error on the sweeps when every initial derivative is
             zero, else the initial values), ``"initial"`` or ``"equation-error"``.
-        callback: called as ``callback(iteration, J)`` after every accepted iteration.
+
+    Every accepted iteration is reported through the ``rotorid_estimation_iteration`` hook
+    (stage ``""``, cost J, rmse sqrt(J_ave/20)).
     """
 
     name = NAME
@@ -76,7 +78,6 @@ class FrequencyResponseEstimator:
     step_tolerance: float = 1e-10
     enforce_signs: bool = False
     start: str = attrs.field(default="auto", validator=_check_start)
-    callback: Callable | None = None
 
     def fit_data(self, data) -> tuple[PairData | str, ...]:
         """What :meth:`estimate` matches, from a :class:`ManeuverSet` of sweeps (see
@@ -112,10 +113,9 @@ class FrequencyResponseEstimator:
                                   f"pairs out (pairs=...)")
 
         def progress(iteration, cost, lam):
-            notify("rotorid_estimation_iteration", estimator=NAME, iteration=iteration,
-                   cost=cost, rmse=_equivalent_db(cost, len(fitted)), lm_lambda=lam)
-            if self.callback is not None:
-                self.callback(iteration, cost)
+            notify("rotorid_estimation_iteration", estimator=NAME, stage="",
+                   iteration=iteration, cost=cost, rmse=_equivalent_db(cost, len(fitted)),
+                   lm_lambda=lam)
 
         settings = Settings(self.max_iterations, self.cost_tolerance, self.step_tolerance)
         with blas.single_threaded():
@@ -183,32 +183,22 @@ class FrequencyResponseEstimator:
     def _estimate(self, model: ModelStructure, pairs: Sequence[PairData], result: RunResult,
                   start, n_points: int, notes) -> Estimate:
         names = model.parameter_names
-        jacobian = result.mismatch.jacobian
-        information = jacobian.T @ jacobian / HESSIAN_SCALE
-        stats = statistics(information, names)
         lower, upper = self._bounds(model)
-        at_bound = tuple(n for n, v, lo, hi in zip(names, result.values, lower, upper)
-                         if (np.isfinite(lo) and v <= lo) or (np.isfinite(hi) and v >= hi))
-        signs = {d.name: d.sign.value for d in model.free_derivatives}
-        violations = tuple(n for n, v in zip(names, result.values)
-                           if (signs.get(n) == "negative" and v > 0)
-                           or (signs.get(n) == "positive" and v < 0))
         costs = result.mismatch.pair_costs
-        notes = [*notes, "J per pair: " + ", ".join(
-            f"{p.pair} {c:.1f}" for p, c in zip(pairs, costs))]
-        return Estimate(
-            estimator=NAME, parameter_names=names, values=result.values, start=start,
-            cramer_rao=stats.cramer_rao, insensitivity=stats.insensitivity,
-            correlation=stats.correlation, information=information,
-            noise_covariance=np.diag(costs), output_names=tuple(p.pair for p in pairs),
-            cost=result.mismatch.cost, rmse=_equivalent_db(result.mismatch.cost, len(pairs)),
+        jacobian = result.mismatch.jacobian
+        return Estimate.from_fit(
+            model, result.values, jacobian.T @ jacobian / HESSIAN_SCALE, estimator=NAME,
+            start=start, noise_covariance=np.diag(costs),
+            output_names=tuple(p.pair for p in pairs), cost=result.mismatch.cost,
+            rmse=_equivalent_db(result.mismatch.cost, len(pairs)),
             cost_history=result.cost_history,
             rmse_history=tuple(_equivalent_db(c, len(pairs)) for c in result.cost_history),
             iterations=result.iterations, converged=result.converged,
-            stop_reason=result.stop_reason, n_samples=n_points, sign_violations=violations,
-            at_bound=at_bound, unidentifiable=stats.unidentifiable,
-            fixed={d.name: d.initial for d in model.derivatives if d.fixed}, signs=signs,
-            units=model.units.name, notes=tuple(notes))
+            stop_reason=result.stop_reason, n_samples=n_points,
+            at_bound=tuple(n for n, v, lo, hi in zip(names, result.values, lower, upper)
+                           if (np.isfinite(lo) and v <= lo) or (np.isfinite(hi) and v >= hi)),
+            notes=(*notes, "J per pair: " + ", ".join(
+                f"{p.pair} {c:.1f}" for p, c in zip(pairs, costs))))
 
 
 def _equivalent_db(cost: float, n_pairs: int) -> float:

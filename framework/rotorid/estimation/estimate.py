@@ -349,8 +349,8 @@ class Estimate:
                  f"    converged          = {self.converged} ({self.stop_reason})",
                  f"    iterations         = {self.iterations}",
                  f"    samples            = {self.n_samples} × {len(self.output_names)} outputs",
-                 f"    cost det(R)        = {self.cost:.6g}",
-                 f"    RMSE (eq. 18)      = {self.rmse:.6g}",
+                 f"    cost               = {self.cost:.6g}",
+                 f"    RMSE               = {self.rmse:.6g}",
                  "[[Parameters]]",
                  f"    {'name':<12}{'value':>14}{'CR bound':>13}{'CR %':>9}{'insens %':>10}  flags"]
         for i, name in enumerate(self.parameter_names):
