@@ -1,6 +1,7 @@
 """The simulation engine against independent references.
 
 * no delays: the exact zero-order-hold solution built here from one matrix exponential;
+* the interval integrals of the discretisation: the exponential of Van Loan's block matrix;
 * delays: a fine-step trapezoidal integration of the delay differential equation
   (:mod:`delay_reference`), on the rates and attitudes and on the accelerometers, whose
   delayed state and control terms are read from that solution;
@@ -14,6 +15,7 @@ import scipy.linalg
 from delay_reference import fine_states, sampled_outputs
 from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
 from rotorid.errors import DataError, SimulationDivergedError, StructureError
+from rotorid.simulation.discretisation import EQUATION_ROWS, _integrals
 from rotorid.simulation.simulator import Simulator, sensitivities, simulate
 from rotorid.simulation.transfer import frequency_response, pair_response
 
@@ -69,6 +71,23 @@ def test_no_delay_matches_exact_zoh_solution(units):
         x = ex[:8, :8] @ x + ex[:8, 8:] @ u[k]
     expected = np.array(expected)
     assert np.max(np.abs(y - expected)) <= 1e-9 * np.max(np.abs(expected))
+
+
+@pytest.mark.parametrize("length", [0.004, 0.02, 0.5])
+def test_interval_integrals_match_the_exponential_of_a_block_matrix(length):
+    """e^{As}, Γ(s) = ∫₀ˢ e^{Aσ} dσ and K(s) = ∫₀ˢ e^{Aσ}(s − σ) dσ are the blocks of
+    exp([[A, I, 0], [0, 0, I], [0, 0, 0]]·s) (Van Loan); ‖A‖ ≈ 30 needs doubling steps for the
+    longer intervals."""
+    a = np.random.default_rng(4).normal(size=(8, 8)) * 4.0
+    block = np.zeros((24, 24))
+    block[:8, :8], block[:8, 8:16], block[8:16, 16:] = a, np.eye(8), np.eye(8)
+    exact = scipy.linalg.expm(block * length)
+    columns = list(EQUATION_ROWS)
+    phi, gam, kin = _integrals(a[None].astype(complex), np.array([[length]], dtype=complex))
+    for ours, reference in ((phi, exact[:8, :8]), (gam, exact[:8, 8:16][:, columns]),
+                            (kin, exact[:8, 16:][:, columns])):
+        np.testing.assert_allclose(ours[0, 0].real, reference, rtol=1e-10,
+                                   atol=1e-12 * np.abs(reference).max())
 
 
 def relative_rms_errors(delays, dt, hold, seed):
