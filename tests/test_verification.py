@@ -11,7 +11,8 @@ from rotorid.data import Maneuver, ManeuverSet  # noqa: E402
 from rotorid.errors import ExitStatus, VerificationError  # noqa: E402
 from rotorid.plugin.manager import create, new_plugin_manager  # noqa: E402
 from rotorid.report.plots.frequency import plot_bode, plot_error  # noqa: E402
-from rotorid.verification.compare import compare_sweeps, parse_pair  # noqa: E402
+from rotorid.verification.compare import compare_sweeps  # noqa: E402
+from rotorid.verification.pairs import parse_pair  # noqa: E402
 from rotorid.verification.frequency import log_grid  # noqa: E402
 from sweeps import DT, analytic, log_sweep, respond  # noqa: E402
 
@@ -183,7 +184,7 @@ def simulated_sweeps():
 
 
 def test_verify_model_with_and_without_delays(simulated_sweeps, envelopes):
-    from rotorid.verification.compare import verify_model
+    from rotorid.verification.verify import verify_model
 
     truth, no_delay = _pitch_structures()
     pairs = ["q/long", "p/long"]
@@ -200,7 +201,7 @@ def test_verify_model_with_and_without_delays(simulated_sweeps, envelopes):
 
 
 def test_unstable_or_drifting_models_are_flagged(simulated_sweeps, envelopes, case):
-    from rotorid.verification.compare import verify_model
+    from rotorid.verification.verify import verify_model
 
     truth, _ = _pitch_structures()
     unstable = truth.fixing("M_q", 0.05)  # pitch divergence, e-folding in 20 s
@@ -274,7 +275,7 @@ def test_paper_story_on_the_truth_model(envelopes):
     the paper's delays verifies better on the sweeps than the one without (paper figs. 4–5)."""
     from rotorid.model.structure import FlightCondition, ModelStructure
     from rotorid.plugin.manager import create
-    from rotorid.verification.compare import verify_model
+    from rotorid.verification.verify import verify_model
 
     data = create("data-sources", "helisim").generate({"condition": "hover", "quick": True})
     identification = data.select(lambda m: m.metadata.get("kind") != "sweep")

@@ -7,7 +7,8 @@ from rotorid.model.derivatives import Derivative
 from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.simulation.simulator import simulate
 from rotorid.simulation.transfer import frequency_response
-from rotorid.verification.compare import compare_sweeps, verify_model
+from rotorid.verification.compare import compare_sweeps
+from rotorid.verification.verify import verify_model
 from rotorid.verification.frequency import (
     apparent_response,
     log_grid,

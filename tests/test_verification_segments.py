@@ -6,7 +6,8 @@ from hover_reference import closed_loop_maneuvers, true_structure
 from rotorid import ManeuverSet
 from rotorid.errors import VerificationError
 from rotorid.simulation.simulator import simulate
-from rotorid.verification.compare import DRIFT_LIMIT, segmented_simulation, verify_model
+from rotorid.verification.segments import segmented_simulation
+from rotorid.verification.verify import DRIFT_LIMIT, verify_model
 
 
 @pytest.fixture(scope="module")

@@ -24,7 +24,7 @@ import numpy as np
 import rotorid
 from rotorid.errors import IdentifiabilityWarning
 from rotorid.estimation.estimate import Estimate, rmse
-from rotorid.verification.compare import PAPER_PAIRS
+from rotorid.verification.pairs import PAPER_PAIRS
 
 #: The paper's verification pairs and the two cyclic attitude responses.
 PAIRS = (*PAPER_PAIRS, "theta/long", "phi/lat")

@@ -16,6 +16,7 @@ import attrs
 import numpy as np
 
 from rotorid.errors import DataError
+from rotorid.frozen import readonly_array
 from rotorid.model.structure import CONTROLS, OUTPUTS
 from rotorid.notebook import (
     maneuver_html,
@@ -31,12 +32,6 @@ ALL_CHANNELS = ("time",) + INPUT_CHANNELS + OUTPUT_CHANNELS
 HOLDS = ("zoh", "foh")
 #: Relative tolerance on sample-interval uniformity.
 UNIFORM_TOLERANCE = 1e-6
-
-
-def _readonly(array) -> np.ndarray:
-    out = np.array(array, dtype=float, copy=True)
-    out.setflags(write=False)
-    return out
 
 
 def check_time(time: np.ndarray, where: str) -> float:
@@ -84,15 +79,15 @@ class Maneuver:
     """
 
     name: str
-    time: np.ndarray = attrs.field(converter=_readonly)
-    inputs: np.ndarray = attrs.field(converter=_readonly)
-    outputs: np.ndarray = attrs.field(converter=_readonly)
+    time: np.ndarray = attrs.field(converter=readonly_array)
+    inputs: np.ndarray = attrs.field(converter=readonly_array)
+    outputs: np.ndarray = attrs.field(converter=readonly_array)
     metadata: Mapping = attrs.field(factory=dict, converter=lambda m: dict(m))
     units: str = attrs.field(default="flight-test", converter=lambda u: unit_system(u).name)
     initial_state: np.ndarray | None = attrs.field(
-        default=None, converter=lambda x: None if x is None else _readonly(x))
+        default=None, converter=lambda x: None if x is None else readonly_array(x))
     extra_channels: Mapping[str, np.ndarray] = attrs.field(
-        factory=dict, converter=lambda m: {str(k): _readonly(v) for k, v in dict(m).items()})
+        factory=dict, converter=lambda m: {str(k): readonly_array(v) for k, v in dict(m).items()})
 
     def __attrs_post_init__(self):
         where = f"maneuver {self.name!r}"

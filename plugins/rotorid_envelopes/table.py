@@ -14,6 +14,7 @@ from __future__ import annotations
 import attrs
 import numpy as np
 from rotorid.errors import VerificationError
+from rotorid.frozen import readonly_array
 from rotorid.verification.compare import COHERENCE_THRESHOLD
 from rotorid.verification.envelopes import EnvelopeBounds, check_bounds
 
@@ -23,9 +24,8 @@ BOUND_KEYS = ("mag_upper", "mag_lower", "phase_upper", "phase_lower")
 
 
 def _readonly(points: np.ndarray) -> np.ndarray:
-    out = np.array(points, dtype=float, copy=True).reshape(-1, 2)
-    out.setflags(write=False)
-    return out
+    """Breakpoints as a read-only array of shape (K, 2)."""
+    return readonly_array(points).reshape(-1, 2)
 
 
 def _breakpoints(value, key: str, where: str) -> np.ndarray:

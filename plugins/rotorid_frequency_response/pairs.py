@@ -22,7 +22,8 @@ import attrs
 import numpy as np
 from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS, ManeuverSet
 from rotorid.errors import EstimationError
-from rotorid.verification.compare import default_omega, parse_pair, primary_axis
+from rotorid.verification.compare import default_omega
+from rotorid.verification.pairs import parse_pair, primary_axis
 from rotorid.verification.frequency import (
     FrequencyResponse,
     apparent_response,

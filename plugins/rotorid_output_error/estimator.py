@@ -25,6 +25,7 @@ from rotorid.estimation.models import (
     gauss_newton_products,
     measured_outputs,
 )
+from rotorid.model.derivatives import delayed_derivative
 from rotorid.model.structure import ModelStructure
 from rotorid.plugin.manager import notify
 
@@ -196,7 +197,7 @@ class OutputErrorEstimator:
                                           f"{len(names)} parameters")
             return vector, None
         initial = model.initial_values()
-        derivative_part = np.array([not n.startswith("tau_") for n in names], dtype=bool)
+        derivative_part = np.array([delayed_derivative(n) is None for n in names], dtype=bool)
         wants_ee = self.start == "equation-error" or (
             self.start == "auto" and not np.any(initial[derivative_part]))
         if wants_ee and hasattr(model, "start_values"):

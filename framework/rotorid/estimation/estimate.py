@@ -20,6 +20,8 @@ import attrs
 import numpy as np
 
 from rotorid.errors import EstimationError, IdentifiabilityWarning
+from rotorid.frozen import readonly_array
+from rotorid.model.derivatives import delay_parameter, delayed_derivative
 from rotorid.model.structure import ModelStructure
 from rotorid.notebook import estimate_html, estimate_summary
 
@@ -28,19 +30,13 @@ from rotorid.notebook import estimate_html, estimate_summary
 ILL_CONDITIONED = 1e10
 
 
-def _frozen_array(value):
-    array = np.array(value, dtype=float, copy=True)
-    array.setflags(write=False)
-    return array
-
-
 @attrs.frozen
 class ParameterStatistics:
     """Uncertainty measures derived from the information matrix F (P×P)."""
 
-    cramer_rao: np.ndarray = attrs.field(converter=_frozen_array)
-    insensitivity: np.ndarray = attrs.field(converter=_frozen_array)
-    correlation: np.ndarray = attrs.field(converter=_frozen_array)
+    cramer_rao: np.ndarray = attrs.field(converter=readonly_array)
+    insensitivity: np.ndarray = attrs.field(converter=readonly_array)
+    correlation: np.ndarray = attrs.field(converter=readonly_array)
     unidentifiable: tuple[tuple[str, ...], ...] = ()
 
 
@@ -116,8 +112,6 @@ _PER_DERIVATIVE = "per_derivative"
 _KEY = "key"
 #: a (P, P) array (reshaped on reading, so that P = 0 round-trips).
 _SQUARE = "square"
-#: Prefix of the delay parameters' names (``tau_L_p``); delays are in s.
-DELAY_PREFIX = "tau_"
 
 
 @attrs.frozen
@@ -150,16 +144,16 @@ class Estimate:
 
     estimator: str
     parameter_names: tuple[str, ...] = attrs.field(converter=tuple)
-    values: np.ndarray = attrs.field(converter=_frozen_array, metadata={_COLUMN: "value"})
-    start: np.ndarray = attrs.field(converter=_frozen_array)
+    values: np.ndarray = attrs.field(converter=readonly_array, metadata={_COLUMN: "value"})
+    start: np.ndarray = attrs.field(converter=readonly_array)
     cramer_rao: np.ndarray = attrs.field(
-        converter=_frozen_array, metadata={_COLUMN: "cramer_rao", _NORMALISED: "cramer_rao_pct"})
+        converter=readonly_array, metadata={_COLUMN: "cramer_rao", _NORMALISED: "cramer_rao_pct"})
     insensitivity: np.ndarray = attrs.field(
-        converter=_frozen_array,
+        converter=readonly_array,
         metadata={_COLUMN: "insensitivity", _NORMALISED: "insensitivity_pct"})
-    correlation: np.ndarray = attrs.field(converter=_frozen_array, metadata={_SQUARE: True})
-    information: np.ndarray = attrs.field(converter=_frozen_array, metadata={_SQUARE: True})
-    noise_covariance: np.ndarray = attrs.field(converter=_frozen_array)
+    correlation: np.ndarray = attrs.field(converter=readonly_array, metadata={_SQUARE: True})
+    information: np.ndarray = attrs.field(converter=readonly_array, metadata={_SQUARE: True})
+    noise_covariance: np.ndarray = attrs.field(converter=readonly_array)
     output_names: tuple[str, ...] = attrs.field(converter=tuple, metadata={_KEY: "outputs"})
     cost: float
     rmse: float
@@ -280,7 +274,8 @@ class Estimate:
 
     @property
     def is_delay(self) -> np.ndarray:
-        return np.array([n.startswith(DELAY_PREFIX) for n in self.parameter_names], dtype=bool)
+        return np.array([delayed_derivative(n) is not None for n in self.parameter_names],
+                        dtype=bool)
 
     # ----------------------------------------------------------------- export
     def as_dict(self) -> dict:
@@ -300,8 +295,9 @@ class Estimate:
                 if _NORMALISED in field.metadata:
                     normalised = field.metadata[_NORMALISED]
                     entry[normalised] = _number(getattr(self, normalised)[i])
-            if name.startswith(DELAY_PREFIX):
-                delays[name[len(DELAY_PREFIX):]] = entry
+            derivative = delayed_derivative(name)
+            if derivative is not None:
+                delays[derivative] = entry
                 continue
             for field in (f for f in fields if _PER_DERIVATIVE in f.metadata):
                 entry[field.metadata[_PER_DERIVATIVE]] = getattr(self, field.name).get(name,
@@ -318,7 +314,7 @@ class Estimate:
         try:
             names = tuple(record["parameter_names"])
             entries = {**record["parameters"],
-                       **{f"{DELAY_PREFIX}{k}": v for k, v in record["delays"].items()}}
+                       **{delay_parameter(k): v for k, v in record["delays"].items()}}
             fields = {}
             for field in attrs.fields(cls):
                 metadata = field.metadata

@@ -24,6 +24,7 @@ import attrs
 from rotorid.errors import DataFileError, UsageError
 from rotorid.estimation.estimate import Estimate
 from rotorid.io import read_json_object
+from rotorid.model.derivatives import delay_parameter
 from rotorid.model.modelfile import load_model, parse_model
 from rotorid.model.statespace import NamedStateSpace, state_space
 from rotorid.model.structure import FlightCondition, ModelStructure
@@ -173,7 +174,7 @@ def _identified(structure: ModelStructure, entry: Mapping, path: Path):
     structure = structure.with_delays([n for n in delays if structure.derivative(n).delay
                                        is None], missing="error")
     values = dict(parameters)
-    values.update({f"tau_{n}": v for n, v in delays.items()})
+    values.update({delay_parameter(n): v for n, v in delays.items()})
     return structure, structure.as_mapping(values)
 
 

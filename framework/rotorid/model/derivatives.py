@@ -40,6 +40,12 @@ def delayed_derivative(parameter: str) -> str | None:
     return None
 
 
+def parameter_label(parameter: str) -> str:
+    """A parameter's name for tables and figures: ``"τ L_lat"`` for a delay, else the name."""
+    derivative = delayed_derivative(parameter)
+    return parameter if derivative is None else f"τ {derivative}"
+
+
 class Sign(enum.Enum):
     """Sign prior of a derivative: the sign physics expects for it."""
 

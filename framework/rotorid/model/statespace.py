@@ -22,13 +22,13 @@ import attrs
 import numpy as np
 
 from rotorid.errors import StructureError
+from rotorid.frozen import readonly_array
+from rotorid.model.derivatives import delay_parameter
 from rotorid.model.structure import CONTROLS, OUTPUTS, STATES, ModelStructure
 
 
 def _readonly(value) -> np.ndarray:
-    array = np.array(value, dtype=float, copy=True) + 0.0     # + 0.0: no negative zeros
-    array.setflags(write=False)
-    return array
+    return readonly_array(np.asarray(value, dtype=float) + 0.0)   # + 0.0: no negative zeros
 
 
 @attrs.frozen
@@ -187,7 +187,8 @@ def _assemble(structure: ModelStructure, table, pade_order: int):
         fa, fb, fc, fd = pade_realisation(tau, pade_order)
         first = a.shape[0]
         label = "+".join(name for name, *_ in terms)
-        names += [(f"tau_{label}_{k}", sources[src]) for k in range(1, pade_order + 1)]
+        names += [(f"{delay_parameter(label)}_{k}", sources[src])
+                  for k in range(1, pade_order + 1)]
         a = np.pad(a, ((0, pade_order), (0, pade_order)))
         b = np.pad(b, ((0, pade_order), (0, 0)))
         c = np.pad(c, ((0, 0), (0, pade_order)))

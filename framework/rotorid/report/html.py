@@ -36,12 +36,9 @@ from rotorid.report.plots.frequency import plot_bode, plot_error
 from rotorid.study.expectations import check_signs
 from rotorid.study.result import KEY_DERIVATIVES, MODELS
 from rotorid.units import unit_system
-from rotorid.verification.compare import (
-    COHERENCE_THRESHOLD,
-    envelopes_by_name,
-    parse_pair,
-)
+from rotorid.verification.compare import COHERENCE_THRESHOLD, envelopes_by_name
 from rotorid.verification.envelopes import error_db_deg
+from rotorid.verification.pairs import parse_pair
 
 #: The on-axis pairs the paper requires inside the MUAD bounds with delays.
 ON_AXIS_PAIRS = ("q/long", "p/lat", "r/ped", "az/coll")

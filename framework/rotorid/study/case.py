@@ -33,7 +33,8 @@ from rotorid.errors import DataFileError, MissingFileError
 from rotorid.model.structure import PAPER_DELAYED
 from rotorid.plugin.manager import create
 from rotorid.study.checks import check_case, check_registered
-from rotorid.verification.compare import PAPER_ENVELOPES, PAPER_PAIRS
+from rotorid.verification.compare import PAPER_ENVELOPES
+from rotorid.verification.pairs import PAPER_PAIRS
 
 BUILTIN = ("hover", "forward")
 #: Tables of a case file and the keys each may hold (``None``: checked where it is used).

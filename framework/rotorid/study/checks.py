@@ -17,7 +17,7 @@ from rotorid.estimation.reduction import RULES
 from rotorid.model.modelfile import parse_model
 from rotorid.model.structure import FlightCondition
 from rotorid.plugin.manager import registry
-from rotorid.verification.compare import parse_pair
+from rotorid.verification.pairs import parse_pair
 
 #: A case name is a directory of the results: letters, digits and ``_ . + -``, never a path.
 SAFE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+-]*")

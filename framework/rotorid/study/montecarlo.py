@@ -26,8 +26,8 @@ import numpy as np
 
 from rotorid.data import ManeuverSet
 from rotorid.errors import DataError, IdentifiabilityWarning
-from rotorid.estimation.estimate import _frozen_array
 from rotorid.executors import failure_error, run_tasks
+from rotorid.frozen import readonly_array
 from rotorid.io import atomic_write, jsonable
 from rotorid.model.structure import ModelStructure
 from rotorid.plugin.manager import create
@@ -44,7 +44,7 @@ class WhiteNoise:
     ``sigma`` (n_outputs,) per output channel, drawn from ``numpy.random.default_rng(seed)``."""
 
     clean: ManeuverSet
-    sigma: np.ndarray = attrs.field(converter=_frozen_array)
+    sigma: np.ndarray = attrs.field(converter=readonly_array)
 
     def __call__(self, seed: int) -> ManeuverSet:
         rng = np.random.default_rng(seed)
@@ -66,11 +66,11 @@ class MonteCarloResult:
     case: str
     parameter_names: tuple[str, ...] = attrs.field(converter=tuple)
     seeds: tuple[int, ...] = attrs.field(converter=tuple)
-    estimates: np.ndarray = attrs.field(converter=_frozen_array)
-    cramer_rao: np.ndarray = attrs.field(converter=_frozen_array)
+    estimates: np.ndarray = attrs.field(converter=readonly_array)
+    cramer_rao: np.ndarray = attrs.field(converter=readonly_array)
     converged: np.ndarray = attrs.field(converter=lambda v: np.asarray(v, dtype=bool))
-    truth: np.ndarray = attrs.field(converter=_frozen_array)
-    reference: np.ndarray = attrs.field(converter=_frozen_array)
+    truth: np.ndarray = attrs.field(converter=readonly_array)
+    reference: np.ndarray = attrs.field(converter=readonly_array)
     failures: Mapping[int, str] = attrs.field(factory=dict, converter=dict)
     units: str = "flight-test"
 

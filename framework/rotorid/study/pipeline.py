@@ -43,9 +43,9 @@ from rotorid.study.delays import with_delays
 from rotorid.study.persistence import load_steps, prepare_directory, save_result, save_step
 from rotorid.study.result import MODELS, CaseResult
 from rotorid.study.truth import truth_derivatives, truth_equivalent_delays
-from rotorid.verification.compare import verify_model
 from rotorid.verification.metrics import time_domain_metrics
 from rotorid.verification.producible import producible_pairs
+from rotorid.verification.verify import verify_model
 
 Progress = Callable[[str, str], None]
 

@@ -1,4 +1,4 @@
-"""Frequency-domain model verification: the sweep comparison against envelopes.
+"""Frequency-domain comparison of a model's sweeps with the recorded ones, against envelopes.
 
 The verification error of an identified model is the paper's eq. 19,
 ``ε(jω) = H_model(jω) / H_truth(jω)``: the ratio of the model's response to the truth's,
@@ -6,21 +6,23 @@ both estimated from the same sweeps with identical processing (or the model's ev
 analytically). ``ε`` is held against envelopes (MUAD, AEE, the mismatch cost J), which are
 plugins of the ``rotorid_validation_envelopes`` family (contract
 :class:`rotorid.plugin.contracts.ValidationEnvelope`; the values they return are in
-:mod:`rotorid.verification.envelopes`). :func:`verify_model` runs the whole comparison for an
-identified model.
+:mod:`rotorid.verification.envelopes`). :func:`compare_sweeps` compares given model outputs;
+:func:`rotorid.verification.verify.verify_model` simulates an identified model and compares it.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 
 import attrs
 import numpy as np
 
-from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS
+from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS, ManeuverSet
 from rotorid.errors import VerificationError
+from rotorid.frozen import FrozenMapping, readonly_array
 from rotorid.plugin.contracts import ValidationEnvelope
+from rotorid.plugin.manager import create
+from rotorid.verification.envelopes import EnvelopeCheck, _finite_or_none
 from rotorid.verification.frequency import (
     FrequencyResponse,
     apparent_response,
@@ -30,65 +32,27 @@ from rotorid.verification.frequency import (
     moving_inputs,
     response_from_maneuvers,
 )
-from rotorid.verification.envelopes import EnvelopeCheck, _finite_or_none, _readonly
 from rotorid.verification.metrics import TimeDomainMetrics, time_domain_metrics
+from rotorid.verification.pairs import PAPER_PAIRS, parse_pair, primary_axis
 
 #: Default coherence threshold of the checks (the paper's and the project's strict value).
 COHERENCE_THRESHOLD = 0.8
 #: Model-to-truth output RMS ratio above which a simulated sweep counts as drifting.
 DRIFT_RATIO = 10.0
-#: Growth of the unstable mode over the longest sweep above which the model's open-loop
-#: simulation counts as drifting: it is compared through its apparent response instead
-#: (see :func:`verify_model`).
-DRIFT_LIMIT = 100.0
-#: The paper's verification pairs (figs. 4, 5, 12, 14): ``output/input``.
-PAPER_PAIRS = ("q/long", "p/long", "q/lat", "p/lat", "r/coll", "az/coll", "r/ped", "ay/ped")
 #: The paper's envelopes on ``ε``: MUAD, the AEE tables and the mismatch cost J.
 PAPER_ENVELOPES = ("muad", "aee", "mismatch-cost")
-
-
-def parse_pair(pair: str) -> tuple[str, str]:
-    """``"q/long"`` → ``("q", "long")`` (output, input); the error lists the valid names."""
-    parts = str(pair).strip().split("/")
-    if (len(parts) != 2 or parts[0] not in OUTPUT_CHANNELS
-            or parts[1] not in INPUT_CHANNELS):
-        raise VerificationError(
-            f"unknown response pair {pair!r}; write OUTPUT/INPUT with OUTPUT one of "
-            f"{', '.join(OUTPUT_CHANNELS)} and INPUT one of {', '.join(INPUT_CHANNELS)}, "
-            f"e.g. 'q/long'")
-    return parts[0], parts[1]
+#: How the model's single-input response is formed (see :func:`compare_sweeps`).
+MODEL_RESPONSES = ("simulated", "apparent")
 
 
 def envelopes_by_name(names: Sequence[str], manager=None, **options
                       ) -> dict[str, ValidationEnvelope]:
     """Build registered envelopes by name (``rotorid plugins --family validation-envelopes``)
     from ``manager`` (default the current plugin manager)."""
-    from rotorid.plugin.manager import create
-
     return {name: create("validation-envelopes", name, manager, **options) for name in names}
 
 
-# ----------------------------------------------------------------- sweep comparison
-class _FrozenMapping(Mapping):
-    """A read-only mapping that, unlike ``types.MappingProxyType``, pickles (results travel
-    between processes when a study runs on an executor)."""
-
-    def __init__(self, mapping):
-        self._items = dict(mapping)
-
-    def __getitem__(self, key):
-        return self._items[key]
-
-    def __iter__(self):
-        return iter(self._items)
-
-    def __len__(self) -> int:
-        return len(self._items)
-
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}({self._items!r})"
-
-
+# ----------------------------------------------------------------- results
 @attrs.frozen(eq=False)
 class PairVerification:
     """Verification of one ``output/input`` pair on the sweeps of its input axis.
@@ -117,9 +81,9 @@ class PairVerification:
     model: FrequencyResponse
     conditioned: FrequencyResponse | None
     analytic: np.ndarray | None = attrs.field(
-        converter=lambda a: None if a is None else _readonly(a, complex))
-    checks: Mapping[str, EnvelopeCheck] = attrs.field(converter=_FrozenMapping)
-    analytic_checks: Mapping[str, EnvelopeCheck] = attrs.field(converter=_FrozenMapping)
+        converter=lambda a: None if a is None else readonly_array(a, complex))
+    checks: Mapping[str, EnvelopeCheck] = attrs.field(converter=FrozenMapping)
+    analytic_checks: Mapping[str, EnvelopeCheck] = attrs.field(converter=FrozenMapping)
     output_rms_ratio: float = float("nan")
     model_source: str = "simulated"      # or "apparent" (see compare_sweeps)
 
@@ -237,18 +201,6 @@ class VerificationResult:
         return "\n".join(lines)
 
 
-def primary_axis(maneuver) -> str:
-    """The input axis a sweep excites: ``metadata['axis']``, else the input of largest RMS."""
-    axis = maneuver.metadata.get("axis")
-    if axis is not None:
-        if axis not in INPUT_CHANNELS:
-            raise VerificationError(f"maneuver {maneuver.name!r}: metadata axis {axis!r} is "
-                                    f"not an input ({', '.join(INPUT_CHANNELS)})")
-        return axis
-    centred = maneuver.inputs - maneuver.inputs.mean(axis=0)
-    return INPUT_CHANNELS[int(np.argmax(np.sqrt(np.mean(centred ** 2, axis=0))))]
-
-
 def sweep_omega_min(maneuver) -> float | None:
     """The lowest frequency a sweep's signal excites, rad/s, when its metadata records it
     (``omega_min``, or ``signal.omega_min`` as the input-signal plugins write it)."""
@@ -314,68 +266,125 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
     Both comparisons use single-input responses of truth and model: the model is driven by
     every recorded input, so the other inputs affect both sides alike.
     """
-    if model_response not in ("simulated", "apparent"):
-        raise VerificationError(f"model_response must be 'simulated' or 'apparent', got "
-                                f"{model_response!r}")
-    if model_response == "apparent" and analytic is None:
-        raise VerificationError("model_response='apparent' needs the analytic model response "
-                                "(analytic=lambda omega: frequency_response(...))")
-    parsed = [(name, *parse_pair(name)) for name in pairs]
-    if not parsed:
+    _check_model_response(model_response, analytic)
+    names = list(pairs)
+    for name in names:
+        parse_pair(name)                      # every name checked before any work
+    if not names:
         raise VerificationError("no response pairs given; e.g. pairs=['q/long', 'p/long']")
     if envelopes is None:
         envelopes = envelopes_by_name(PAPER_ENVELOPES)
     if len(model_outputs) != len(sweeps):
         raise VerificationError(f"{len(model_outputs)} model output arrays for {len(sweeps)} "
                                 f"sweeps; simulate every sweep")
-    axes = [primary_axis(m) for m in sweeps]
     omega = default_omega(sweeps) if omega is None else np.asarray(omega, dtype=float)
-    full = None if analytic is None else analytic(omega)
-    results = []
-    for name, output, control in parsed:
-        chosen = [i for i, axis in enumerate(axes) if axis == control]
+    comparison = _SweepComparison(
+        sweeps, list(model_outputs), [primary_axis(m) for m in sweeps], omega,
+        None if analytic is None else analytic(omega), envelopes, windows, conditioning,
+        model_response)
+    results = [comparison.pair(name) for name in names]
+    return VerificationResult(results, time_domain_metrics(sweeps, model_outputs),
+                              _drift_notes(results))
+
+
+def _check_model_response(model_response: str, analytic) -> None:
+    if model_response not in MODEL_RESPONSES:
+        raise VerificationError(f"model_response must be 'simulated' or 'apparent', got "
+                                f"{model_response!r}")
+    if model_response == "apparent" and analytic is None:
+        raise VerificationError("model_response='apparent' needs the analytic model response "
+                                "(analytic=lambda omega: frequency_response(...))")
+
+
+@attrs.frozen(eq=False)
+class _SweepComparison:
+    """What every pair of one :func:`compare_sweeps` call shares: the sweeps, the model's
+    outputs on them, each sweep's input axis, the grid ω (M,), the analytic response
+    (M, 8, 4) or None, the envelopes and the processing options."""
+
+    sweeps: ManeuverSet
+    model_outputs: list
+    axes: list[str]
+    omega: np.ndarray
+    analytic: np.ndarray | None
+    envelopes: Mapping[str, ValidationEnvelope]
+    windows: object
+    conditioning: str | Sequence[str]
+    model_response: str
+
+    def pair(self, name: str) -> PairVerification:
+        """The verification of pair ``name`` (``output/input``) on the sweeps of its input."""
+        output, control = parse_pair(name)
+        chosen = self._sweeps_of(name, control)
+        subset = self.sweeps.select(lambda m, names={self.sweeps[i].name for i in chosen}:
+                                    m.name in names)
+        model, truth = self._responses(subset, chosen, output, control)
+        checks = self._checks(model.response, truth)
+        conditioned, analytic, analytic_checks = self._analytic_comparison(
+            subset, output, control, truth)
+        ratio = _rms_ratio([self.model_outputs[i] for i in chosen],
+                           [self.sweeps[i] for i in chosen], OUTPUT_CHANNELS.index(output))
+        return PairVerification(name, subset.names, truth, model, conditioned, analytic,
+                                checks, analytic_checks, ratio, self.model_response)
+
+    def _sweeps_of(self, name: str, control: str) -> list[int]:
+        chosen = [i for i, axis in enumerate(self.axes) if axis == control]
         if not chosen:
             raise VerificationError(f"pair {name}: no sweep excites {control!r}; the sweeps "
-                                    f"excite {', '.join(sorted(set(axes)))}")
-        subset = sweeps.select(lambda m, names={sweeps[i].name for i in chosen}:
-                               m.name in names)
-        if isinstance(conditioning, str) and conditioning == "auto":
-            others = moving_inputs(subset, control)
-        elif isinstance(conditioning, str) and conditioning == "none":
-            others = ()
-        else:
-            others = tuple(c for c in conditioning if c != control)
-        if model_response == "apparent":
-            model, truth = apparent_response(subset, control, output, omega,
-                                             full[:, OUTPUT_CHANNELS.index(output)],
-                                             windows=windows)
-        else:
-            truth = response_from_maneuvers(subset, control, output, omega, windows=windows)
-            model = response_from_maneuvers(subset, control, output, omega, windows=windows,
-                                            outputs=[model_outputs[i] for i in chosen])
+                                    f"excite {', '.join(sorted(set(self.axes)))}")
+        return chosen
+
+    def _responses(self, subset, chosen: list[int], output: str, control: str
+                   ) -> tuple[FrequencyResponse, FrequencyResponse]:
+        """The model's and the truth's single-input responses of the pair."""
+        if self.model_response == "apparent":
+            return apparent_response(subset, control, output, self.omega,
+                                     self.analytic[:, OUTPUT_CHANNELS.index(output)],
+                                     windows=self.windows)
+        truth = response_from_maneuvers(subset, control, output, self.omega,
+                                        windows=self.windows)
+        model = response_from_maneuvers(subset, control, output, self.omega,
+                                        windows=self.windows,
+                                        outputs=[self.model_outputs[i] for i in chosen])
+        return model, truth
+
+    def _checks(self, response: np.ndarray, reference: FrequencyResponse
+                ) -> dict[str, EnvelopeCheck]:
+        """Every envelope's check of ``ε = response / reference``, selected by the
+        reference's coherence."""
         with np.errstate(divide="ignore", invalid="ignore"):
-            error = model.response / truth.response
-            checks = {n: e.check(error, truth.coherence, omega) for n, e in envelopes.items()}
-        conditioned, analytic_pair, analytic_checks = None, None, {}
-        if full is not None:
-            conditioned = truth if not others else response_from_maneuvers(
-                subset, control, output, omega, windows=windows, conditioned_on=others)
-            analytic_pair = full[:, OUTPUT_CHANNELS.index(output), INPUT_CHANNELS.index(control)]
-            with np.errstate(divide="ignore", invalid="ignore"):
-                ratio = analytic_pair / conditioned.response
-                analytic_checks = {n: e.check(ratio, conditioned.coherence, omega)
-                                   for n, e in envelopes.items()}
-        ratio = _rms_ratio([model_outputs[i] for i in chosen], [sweeps[i] for i in chosen],
-                           OUTPUT_CHANNELS.index(output))
-        results.append(PairVerification(name, subset.names, truth, model, conditioned,
-                                        analytic_pair, checks, analytic_checks, ratio,
-                                        model_response))
-    notes = [f"{p.pair}: the model's {p.pair.split('/')[0]} has {p.output_rms_ratio:.3g} times "
-             f"the truth's RMS on these sweeps; its open-loop simulation drifts (unstable "
-             f"model?), so the simulated comparison of this pair is not meaningful"
-             for p in results
-             if model_response == "simulated" and p.output_rms_ratio > DRIFT_RATIO]
-    return VerificationResult(results, time_domain_metrics(sweeps, model_outputs), notes)
+            error = response / reference.response
+            return {n: e.check(error, reference.coherence, self.omega)
+                    for n, e in self.envelopes.items()}
+
+    def _analytic_comparison(self, subset, output: str, control: str,
+                             truth: FrequencyResponse):
+        """The truth's conditioned response, the model's analytic response of the pair and
+        their checks; ``(None, None, {})`` without an analytic response."""
+        if self.analytic is None:
+            return None, None, {}
+        others = self._conditioning_inputs(subset, control)
+        conditioned = truth if not others else response_from_maneuvers(
+            subset, control, output, self.omega, windows=self.windows, conditioned_on=others)
+        analytic = self.analytic[:, OUTPUT_CHANNELS.index(output),
+                                 INPUT_CHANNELS.index(control)]
+        return conditioned, analytic, self._checks(analytic, conditioned)
+
+    def _conditioning_inputs(self, subset, control: str) -> tuple[str, ...]:
+        if isinstance(self.conditioning, str) and self.conditioning == "auto":
+            return moving_inputs(subset, control)
+        if isinstance(self.conditioning, str) and self.conditioning == "none":
+            return ()
+        return tuple(c for c in self.conditioning if c != control)
+
+
+def _drift_notes(results: Sequence[PairVerification]) -> list[str]:
+    """A note for each simulated pair whose model output drifts (RMS ratio > DRIFT_RATIO)."""
+    return [f"{p.pair}: the model's {p.pair.split('/')[0]} has {p.output_rms_ratio:.3g} times "
+            f"the truth's RMS on these sweeps; its open-loop simulation drifts (unstable "
+            f"model?), so the simulated comparison of this pair is not meaningful"
+            for p in results
+            if p.model_source == "simulated" and p.output_rms_ratio > DRIFT_RATIO]
 
 
 def _rms_ratio(model_outputs, maneuvers, column: int) -> float:
@@ -387,103 +396,3 @@ def _rms_ratio(model_outputs, maneuvers, column: int) -> float:
     truth = rms([m.outputs[:, column] for m in maneuvers])
     model = rms([np.asarray(y)[:, column] for y in model_outputs])
     return model / truth if truth > 0 else float("inf")
-
-
-def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
-                 envelopes: Mapping[str, ValidationEnvelope] | Sequence[str] | None = None,
-                 segment: float | None = None, manager=None, **options) -> VerificationResult:
-    """Verify an identified model on sweeps not used for identification.
-
-    Simulates ``structure`` at ``values`` (vector, name→value mapping or None) on the
-    recorded inputs of every sweep (:func:`rotorid.simulation.simulator.simulate`, with the sweeps'
-    input hold), estimates truth and model responses with identical processing and holds
-    ``ε = H_model/H_truth`` against the envelopes; also compares the analytic response with
-    exact delays (:func:`rotorid.simulation.transfer.frequency_response`) with the truth's conditioned
-    response. ``envelopes`` may be envelope objects by name or registered envelope names.
-
-    An unstable model (the hover phugoid is unstable) cannot follow a long sweep open loop
-    when its unstable mode grows more than :data:`DRIFT_LIMIT`-fold over the longest sweep
-    (σ·T > ln 100 for the largest unstable real part σ): its simulation drifts away from the
-    data. For such a model the frequency comparison uses its *apparent* response instead
-    (:func:`rotorid.verification.frequency.apparent_response`: the analytic responses combined through the
-    recorded inputs' cross-spectra, which is what a single-input estimate from its simulation
-    would give if it did not drift), and the time-domain metrics come from a simulation in
-    segments of 2/σ s (at least 5 s) restarted from the data (:func:`segmented_simulation`).
-    A slower instability is simulated in one piece. ``segment`` given explicitly simulates in
-    segments of that length and uses the simulated comparison. The result's notes say which
-    was done. Envelope names are built from ``manager`` (default the current plugin
-    manager). Other keyword options go to :func:`compare_sweeps`.
-    """
-    from rotorid.simulation.simulator import simulate
-    from rotorid.simulation.transfer import frequency_response
-
-    if envelopes is not None and not isinstance(envelopes, Mapping):
-        envelopes = envelopes_by_name(tuple(envelopes), manager)
-    eigenvalues = np.linalg.eigvals(structure.matrices(values)[0])
-    growth = float(np.max(eigenvalues.real))
-    longest = max(m.duration for m in sweeps)
-    notes = _stability_notes(eigenvalues, growth * longest)
-    drifts = growth * longest > math.log(DRIFT_LIMIT)
-    comparison = "apparent" if drifts and segment is None else "simulated"
-    if segment is None and drifts:
-        segment = max(5.0, 2.0 / growth)
-        notes.append(f"the model's unstable mode grows e^{growth * longest:.0f}-fold over the "
-                     f"longest sweep: frequency responses compared through its apparent "
-                     f"response (analytic responses and the recorded inputs' cross-spectra); "
-                     f"time-domain metrics from segments of {segment:.1f} s restarted from "
-                     f"the measured and reconstructed state")
-    elif segment is not None:
-        notes.append(f"the model was simulated in segments of {segment:.1f} s, each restarted "
-                     f"from the measured and reconstructed state")
-    outputs = (simulate(structure, values, sweeps) if segment is None
-               else segmented_simulation(structure, values, sweeps, segment))
-    result = compare_sweeps(
-        sweeps, outputs, pairs, envelopes,
-        analytic=lambda omega: frequency_response(structure, values, omega),
-        model_response=comparison, **options)
-    return attrs.evolve(result, notes=[*notes, *result.notes])
-
-
-def segmented_simulation(structure, values, maneuvers, segment: float) -> list[np.ndarray]:
-    """Outputs simulated in segments restarted from the data's state.
-
-    Each maneuver is cut into segments of ``segment`` s (a remainder shorter than two samples
-    joins the segment before it). A segment is simulated from the state at its start:
-    measured q θ p φ r and u v w integrated from the measured specific forces
-    (:func:`rotorid.estimation.equation_error.reconstructed_states`), and the segments are joined.
-    Delayed terms see trim before each restart, and the reconstructed velocities carry
-    integration error, so the restarts are approximate: on noise-free data of the model
-    itself they reproduce its plain simulation to a few per cent (tested).
-    Returns one (N_i, 8) array per maneuver.
-    """
-    from rotorid.data import Maneuver, ManeuverSet
-    from rotorid.estimation.equation_error import reconstructed_states
-    from rotorid.simulation.simulator import simulate
-
-    if not segment > 0:
-        raise VerificationError(f"segment must be a positive duration in s, got {segment!r}")
-    pieces, counts = [], []              # counts: the number of pieces of each maneuver
-    for m in maneuvers:
-        states = reconstructed_states(structure, m)
-        step = max(2, int(round(segment / m.dt)))
-        starts = list(range(0, m.n_samples, step))
-        if len(starts) > 1 and m.n_samples - starts[-1] < 2:
-            starts.pop()
-        for first, stop in zip(starts, starts[1:] + [m.n_samples]):
-            pieces.append(Maneuver(f"{m.name}#{first}", m.time[first:stop],
-                                   m.inputs[first:stop], m.outputs[first:stop],
-                                   units=m.units, initial_state=states[first]))
-        counts.append(len(starts))
-    simulated = iter(simulate(structure, values, ManeuverSet(pieces, hold=maneuvers.hold)))
-    return [np.concatenate([next(simulated) for _ in range(count)]) for count in counts]
-
-
-def _stability_notes(eigenvalues: np.ndarray, growth_over_sweep: float) -> list[str]:
-    """A note listing the unstable eigenvalues of A (delays set to zero), if any, and how
-    much their mode grows over the longest sweep (``growth_over_sweep`` = σ·T)."""
-    unstable = eigenvalues[eigenvalues.real > 1e-9]
-    if not unstable.size:
-        return []
-    shown = ", ".join(f"{v.real:.3g}{v.imag:+.3g}j" for v in unstable if v.imag >= 0)
-    return [f"the model is unstable (eigenvalues {shown} 1/s, delays ignored): its open-loop "
-            f"response grows e^{growth_over_sweep:.1f}-fold over the longest sweep"]

@@ -12,12 +12,7 @@ import attrs
 import numpy as np
 
 from rotorid.errors import VerificationError
-
-
-def _readonly(array, dtype=float) -> np.ndarray:
-    out = np.array(array, dtype=dtype, copy=True)
-    out.setflags(write=False)
-    return out
+from rotorid.frozen import readonly_array
 
 
 def wrap180(angle_deg):
@@ -53,12 +48,12 @@ class EnvelopeBounds:
     """
 
     name: str
-    omega: np.ndarray = attrs.field(converter=_readonly)
-    mag_lower_db: np.ndarray = attrs.field(converter=_readonly)
-    mag_upper_db: np.ndarray = attrs.field(converter=_readonly)
-    phase_lower_deg: np.ndarray = attrs.field(converter=_readonly)
-    phase_upper_deg: np.ndarray = attrs.field(converter=_readonly)
-    extrapolated: np.ndarray = attrs.field(converter=lambda m: _readonly(m, bool))
+    omega: np.ndarray = attrs.field(converter=readonly_array)
+    mag_lower_db: np.ndarray = attrs.field(converter=readonly_array)
+    mag_upper_db: np.ndarray = attrs.field(converter=readonly_array)
+    phase_lower_deg: np.ndarray = attrs.field(converter=readonly_array)
+    phase_upper_deg: np.ndarray = attrs.field(converter=readonly_array)
+    extrapolated: np.ndarray = attrs.field(converter=lambda m: readonly_array(m, bool))
     available: bool = True
 
 
@@ -87,15 +82,15 @@ class EnvelopeCheck:
     envelope: str
     provenance: str
     verified: bool
-    omega: np.ndarray = attrs.field(converter=_readonly)
-    magnitude_db: np.ndarray = attrs.field(converter=_readonly)
-    phase_deg: np.ndarray = attrs.field(converter=_readonly)
-    coherence: np.ndarray = attrs.field(converter=_readonly)
-    used: np.ndarray = attrs.field(converter=lambda m: _readonly(m, bool))
-    inside: np.ndarray = attrs.field(converter=lambda m: _readonly(m, bool))
-    extrapolated: np.ndarray = attrs.field(converter=lambda m: _readonly(m, bool))
-    margin_db: np.ndarray = attrs.field(converter=_readonly)
-    margin_deg: np.ndarray = attrs.field(converter=_readonly)
+    omega: np.ndarray = attrs.field(converter=readonly_array)
+    magnitude_db: np.ndarray = attrs.field(converter=readonly_array)
+    phase_deg: np.ndarray = attrs.field(converter=readonly_array)
+    coherence: np.ndarray = attrs.field(converter=readonly_array)
+    used: np.ndarray = attrs.field(converter=lambda m: readonly_array(m, bool))
+    inside: np.ndarray = attrs.field(converter=lambda m: readonly_array(m, bool))
+    extrapolated: np.ndarray = attrs.field(converter=lambda m: readonly_array(m, bool))
+    margin_db: np.ndarray = attrs.field(converter=readonly_array)
+    margin_deg: np.ndarray = attrs.field(converter=readonly_array)
     threshold: float
     passed: bool | None
     status: str

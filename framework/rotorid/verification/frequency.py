@@ -37,6 +37,7 @@ import numpy as np
 from rotorid.blas import single_threaded
 from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS, ManeuverSet
 from rotorid.errors import VerificationError
+from rotorid.frozen import readonly_array
 
 #: Default overlap of consecutive windows (fraction of the window length).
 DEFAULT_OVERLAP = 0.8
@@ -48,12 +49,6 @@ DEFAULT_WINDOW_SPAN = 4.5
 PERIODS_PER_WINDOW = 2.0
 #: Smallest random error used as a weight, so that noise-free data keep finite weights.
 _ERROR_FLOOR = 1e-9
-
-
-def _readonly(array, dtype=float) -> np.ndarray:
-    out = np.array(array, dtype=dtype, copy=True)
-    out.setflags(write=False)
-    return out
 
 
 def log_grid(omega_min: float, omega_max: float, n: int = 200) -> np.ndarray:
@@ -101,8 +96,8 @@ class Spectra:
         n_effective: number of statistically independent averages (Welch's formula).
     """
 
-    omega: np.ndarray = attrs.field(converter=_readonly)
-    matrix: np.ndarray = attrs.field(converter=lambda m: _readonly(m, complex))
+    omega: np.ndarray = attrs.field(converter=readonly_array)
+    matrix: np.ndarray = attrs.field(converter=lambda m: readonly_array(m, complex))
     window: float
     n_segments: int
     n_effective: float
@@ -338,15 +333,15 @@ class FrequencyResponse:
 
     input: str
     output: str
-    omega: np.ndarray = attrs.field(converter=_readonly)
-    response: np.ndarray = attrs.field(converter=lambda r: _readonly(r, complex))
-    coherence: np.ndarray = attrs.field(converter=_readonly)
-    random_error: np.ndarray = attrs.field(converter=_readonly)
+    omega: np.ndarray = attrs.field(converter=readonly_array)
+    response: np.ndarray = attrs.field(converter=lambda r: readonly_array(r, complex))
+    coherence: np.ndarray = attrs.field(converter=readonly_array)
+    random_error: np.ndarray = attrs.field(converter=readonly_array)
     conditioned_on: tuple[str, ...] = attrs.field(default=(), converter=tuple)
     windows: tuple[float, ...] = attrs.field(default=(), converter=tuple)
     n_effective: tuple[float, ...] = attrs.field(default=(), converter=tuple)
     input_coherence: np.ndarray | None = attrs.field(
-        default=None, converter=lambda c: None if c is None else _readonly(c))
+        default=None, converter=lambda c: None if c is None else readonly_array(c))
 
     @property
     def pair(self) -> str:

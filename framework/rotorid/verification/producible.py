@@ -16,7 +16,7 @@ import numpy as np
 
 from rotorid.data import OUTPUT_CHANNELS
 from rotorid.model.statespace import responding_outputs
-from rotorid.verification.compare import parse_pair, primary_axis
+from rotorid.verification.pairs import parse_pair, primary_axis
 
 
 @attrs.frozen

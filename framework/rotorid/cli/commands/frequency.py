@@ -88,7 +88,8 @@ def run(args) -> int:
     from rotorid.cli.commands.verify import chosen_pairs, load_sweeps
     from rotorid.errors import UsageError
     from rotorid.io import atomic_write
-    from rotorid.verification.compare import default_omega, parse_pair, primary_axis
+    from rotorid.verification.compare import default_omega
+    from rotorid.verification.pairs import parse_pair, primary_axis
     from rotorid.verification.frequency import moving_inputs, response_from_maneuvers
 
     out = Path(args.out)

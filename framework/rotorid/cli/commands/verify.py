@@ -79,7 +79,7 @@ def load_sweeps(locations):
 
 def chosen_pairs(option: str | None, sweeps) -> list[str]:
     """The ``--pairs`` option's pairs, or the paper's pairs whose input the sweeps excite."""
-    from rotorid.verification.compare import PAPER_PAIRS, primary_axis
+    from rotorid.verification.pairs import PAPER_PAIRS, primary_axis
 
     if option:
         return [p.strip() for p in option.split(",") if p.strip()]
@@ -131,7 +131,8 @@ def run(args) -> int:
     from rotorid.model.modelfile import load_model
     from rotorid.report.plots.case import save_figure
     from rotorid.report.plots.frequency import plot_bode, plot_error
-    from rotorid.verification.compare import envelopes_by_name, verify_model
+    from rotorid.verification.compare import envelopes_by_name
+    from rotorid.verification.verify import verify_model
     from rotorid.verification.producible import producible_pairs
 
     model, result_path, locations = _split(args.files)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from rotorid.model.derivatives import parameter_label
 from rotorid.study.montecarlo import NOMINAL_COVERAGE, MonteCarloResult
 
 
@@ -44,8 +45,7 @@ def plot_monte_carlo(result: MonteCarloResult, title: str | None = None):
     bottom.set_ylabel("coverage of ±2 CR")
     bottom.set_ylim(-0.02, 1.02)
     bottom.legend(loc="lower left", fontsize="small")
-    bottom.set_xticks(x, [n.replace("tau_", "τ ") for n in names], rotation=90,
-                      fontsize="small")
+    bottom.set_xticks(x, [parameter_label(n) for n in names], rotation=90, fontsize="small")
     for axis in (top, bottom):
         axis.grid(True, axis="y", alpha=0.3)
     figure.suptitle(title or f"Monte Carlo check of the Cramér-Rao bounds: case "

@@ -14,6 +14,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from rotorid.model.derivatives import delay_parameter, delayed_derivative, parameter_label
 from rotorid.study.sweep import SweepPoint
 
 #: Derivatives drawn by default: the main damping, control and coupling terms.
@@ -38,7 +39,7 @@ def plot_speed_sweep(points: Sequence[SweepPoint],
     """
     from matplotlib.figure import Figure
 
-    names = [*derivatives, *(f"tau_{d}" for d in delays)]
+    names = [*derivatives, *(delay_parameter(d) for d in delays)]
     rows = max(1, math.ceil(len(names) / _COLUMNS))
     figure = Figure(figsize=(3.0 * _COLUMNS, 2.3 * rows + 0.7), layout="constrained")
     axes = figure.subplots(rows, _COLUMNS, sharex=True, squeeze=False).ravel()
@@ -75,6 +76,6 @@ def _panel(axis, name: str, points, speed: np.ndarray, bound: float) -> None:
         axis.plot(speed[~shown], np.zeros(int((~shown).sum())), "x", color="0.6",
                   label="removed / dropped")
     axis.axhline(0.0, color="0.85", linewidth=0.8, zorder=0)
-    label = f"τ {name[4:]} (s)" if name.startswith("tau_") else name
-    axis.set_title(label, fontsize="medium")
+    label = parameter_label(name)
+    axis.set_title(f"{label} (s)" if delayed_derivative(name) else label, fontsize="medium")
     axis.grid(True, alpha=0.3)

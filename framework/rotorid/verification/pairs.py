@@ -1,0 +1,36 @@
+"""Response pairs: ``output/input`` names such as ``q/long``, the paper's pairs, and the input
+axis a sweep excites (the sweeps a pair is verified on)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS
+from rotorid.errors import VerificationError
+
+#: The paper's verification pairs (figs. 4, 5, 12, 14): ``output/input``.
+PAPER_PAIRS = ("q/long", "p/long", "q/lat", "p/lat", "r/coll", "az/coll", "r/ped", "ay/ped")
+
+
+def parse_pair(pair: str) -> tuple[str, str]:
+    """``"q/long"`` → ``("q", "long")`` (output, input); the error lists the valid names."""
+    parts = str(pair).strip().split("/")
+    if (len(parts) != 2 or parts[0] not in OUTPUT_CHANNELS
+            or parts[1] not in INPUT_CHANNELS):
+        raise VerificationError(
+            f"unknown response pair {pair!r}; write OUTPUT/INPUT with OUTPUT one of "
+            f"{', '.join(OUTPUT_CHANNELS)} and INPUT one of {', '.join(INPUT_CHANNELS)}, "
+            f"e.g. 'q/long'")
+    return parts[0], parts[1]
+
+
+def primary_axis(maneuver) -> str:
+    """The input axis a sweep excites: ``metadata['axis']``, else the input of largest RMS."""
+    axis = maneuver.metadata.get("axis")
+    if axis is not None:
+        if axis not in INPUT_CHANNELS:
+            raise VerificationError(f"maneuver {maneuver.name!r}: metadata axis {axis!r} is "
+                                    f"not an input ({', '.join(INPUT_CHANNELS)})")
+        return axis
+    centred = maneuver.inputs - maneuver.inputs.mean(axis=0)
+    return INPUT_CHANNELS[int(np.argmax(np.sqrt(np.mean(centred ** 2, axis=0))))]
