@@ -34,6 +34,8 @@ def case_file(tmp_path, text: str):
     ('[delays]\nstarts = "four"\n', r"\[delays\] starts must be an integer"),
     ('[delays]\nderivatives = "L_p"\n', r"\[delays\] derivatives must be a list"),
     ('[condition]\nairspeed = 3\n', r"\[condition\].*unknown key"),
+    ('[structure]\npopulate = "none"\n[derivatives]\nM_q = { fixed = -1.0 }\n'
+     '[delays]\nderivatives = []\n', r"no free derivative to estimate"),
     ('[identification]\nkinds = ["3211"]\n', r"unknown key\(s\) \['identification'\]"),
 ])
 def test_a_bad_setting_names_the_file_and_the_key(tmp_path, text, message):
@@ -64,6 +66,8 @@ def test_a_study_checks_every_case_before_running_any(tmp_path):
     misspelt = FlightCase(name="misspelt", data=FILES, delay_derivatives=("M_lon",))
     with pytest.raises(DataFileError, match=r"case misspelt: \[delays\] derivatives M_lon"):
         Study([good, misspelt], tmp_path / "out")
+    with pytest.raises(DataFileError, match=r"case sourceless: \[data\] needs a source"):
+        Study([FlightCase(name="sourceless")], tmp_path / "out")
     with pytest.raises(DataFileError, match="case name.* good used twice"):
         Study([good, good], tmp_path / "out")
     assert not (tmp_path / "out").exists()

@@ -120,9 +120,8 @@ class FlightCase:
         if "name" not in mapping:
             raise DataFileError(f"{source}: a case needs a name, e.g. name = \"my-hover\"")
         data = tables["data"]
-        if "source" not in data:
-            raise DataFileError(f"{source}: [data] needs a source, e.g. source = \"files\"")
-        check_registered("data-sources", data["source"], source, "[data] source")
+        if "source" in data:              # the files it names are read from the case's folder
+            check_registered("data-sources", data["source"], source, "[data] source")
         estimator = dict(tables["estimator"])
         case = cls(name=str(mapping["name"]), description=str(mapping.get("description", "")),
                    data=_resolved(data, folder), condition=tables["condition"],
@@ -233,7 +232,7 @@ def _resolved(data: Mapping, folder: Path | None) -> dict:
     """``data`` with the relative file settings its source declares (``path_settings``)
     resolved against ``folder``, the case file's, so that a case runs the same from any
     working directory."""
-    if folder is None:
+    if folder is None or "source" not in data:
         return dict(data)
     source = create("data-sources", data["source"])
 

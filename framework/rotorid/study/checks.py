@@ -39,6 +39,8 @@ def check_case(case, where: str) -> None:
     """Raise :class:`~rotorid.errors.DataFileError` naming ``where`` (the case file) and the
     key of the first setting of ``case`` that cannot work."""
     _check_name(case.name, where)
+    if "source" not in case.data:
+        raise DataFileError(f"{where}: [data] needs a source, e.g. source = \"files\"")
     check_registered("data-sources", case.data_source, where, "[data] source")
     names = _structure_names(case, where)
     _check_delays(case, names, where)
@@ -87,7 +89,11 @@ def _structure_names(case, where: str) -> tuple[str, ...]:
         _wrapped(lambda: FlightCondition.from_mapping(case.condition), where)
     mapping = {"condition": {"airspeed_kt": 0.0}, "structure": dict(case.structure),
                "derivatives": dict(case.derivatives)}
-    return parse_model(mapping, where).names
+    structure = parse_model(mapping, where)
+    if not structure.parameter_names:
+        raise DataFileError(f"{where}: [structure]/[derivatives] leave no free derivative to "
+                            f"estimate; declare at least one without 'fixed'")
+    return structure.names
 
 
 def _check_delays(case, names: tuple[str, ...], where: str) -> None:
