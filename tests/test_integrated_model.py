@@ -291,3 +291,24 @@ def test_extra_maneuver_channels_are_read_through_the_map():
     np.testing.assert_allclose(measured[:, 2], np.pi / 2)        # 90 deg/s² in rad/s²
     (simulated,) = model.simulate([2.0, 0.5, -1.5], ManeuverSet([recorded]))
     assert simulated[0, 2] == pytest.approx(0.5)                  # q̇(0) = b·1 from rest
+
+
+def test_a_simulation_anticipates_the_sensitivities_at_its_values():
+    maneuvers = step_maneuvers()
+    fixed = InitialConditions(fixed={"q": 0.0})
+    model = FirstOrder()
+    anticipating = IntegratedModel(model, initial=fixed)
+    plain = IntegratedModel(FirstOrder(), initial=fixed, anticipate=False)
+    values = np.array([2.0, 0.5, -1.5])
+    outputs = anticipating.simulate(values, maneuvers)
+    assert model.calls == 4 * (300 + 100)          # one batched integration per sample time
+    again, sens = anticipating.sensitivities(values.copy(), maneuvers)
+    assert model.calls == 4 * (300 + 100)          # ready: nothing integrated again
+    _, expected_sens = plain.sensitivities(values, maneuvers)
+    for y, y2, s, s2, z in zip(outputs, again, sens, expected_sens,
+                               plain.simulate(values, maneuvers)):
+        assert y is y2 and not y.flags.writeable and not s.flags.writeable
+        np.testing.assert_array_equal(s, s2)
+        np.testing.assert_array_equal(y, z)
+    anticipating.sensitivities(values + [0.1, 0.0, 0.0], maneuvers)
+    assert model.calls == 2 * 4 * (300 + 100)      # other values: integrated afresh
