@@ -35,7 +35,7 @@ import numpy as np
 from rotorid import blas
 from rotorid.data import ManeuverSet
 from rotorid.errors import EstimationError, SimulationDivergedError
-from rotorid.estimation.estimate import Estimate, statistics
+from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.models import LinearModel
 from rotorid.model.structure import OUTPUTS, STATES, ModelStructure
 from rotorid.plugin.manager import notify
@@ -87,6 +87,7 @@ class FilterErrorProblem:
         self.n_samples = self.records.n_samples
         self.noise_rows = [STATES.index(s) for s in process_noise]
         self.n_structure = structure.n_parameters
+        self.output_names = OUTPUTS
         self.parameter_names = (tuple(structure.parameter_names)
                                 + tuple(f"F_{s}" for s in process_noise)
                                 + tuple(f"R_{o}" for o in OUTPUTS))
@@ -171,8 +172,8 @@ class FilterErrorEstimator:
             sample for the velocities, from the accelerometers): a large start lets the filter
             follow the data and end in a poor local minimum.
         enforce_signs: use the sign priors as bounds.
-        start: ``"auto"`` (equation error when every initial value is zero, else the initial
-            values), ``"initial"`` or ``"equation-error"`` for the derivatives and delays.
+        start: ``"auto"`` (equation error when every derivative's initial value is zero, else
+            the initial values), ``"initial"`` or ``"equation-error"`` for the derivatives and delays.
         callback: called with ``(stage, progress record)`` after every accepted iteration.
     """
 
@@ -204,7 +205,7 @@ class FilterErrorEstimator:
             bounds = self._bounds(problem, values)
 
             def progress(record):
-                notify("rotorid_estimation_iteration", estimator=NAME,
+                notify("rotorid_estimation_iteration", estimator=NAME, stage="",
                        iteration=record.iteration, cost=record.cost, rmse=record.rmse,
                        lm_lambda=record.lm_lambda)
                 if self.callback is not None:
@@ -215,15 +216,16 @@ class FilterErrorEstimator:
             except SimulationDivergedError:
                 raise EstimationError("the Kalman filter does not exist at the start values; "
                                       "give other start values (derivatives, F or R)") from None
-        return self._estimate(problem, structure, result, values, bounds, note)
+        return self._estimate(problem, result, values, bounds, note)
 
     def _start_values(self, problem, maneuvers, start):
         structure = problem.structure
         names = problem.parameter_names
         initial = structure.initial_values()
         note = None
+        derivatives = ~structure.is_delay()
         wants_ee = self.start == "equation-error" or (self.start == "auto"
-                                                      and not np.any(initial))
+                                                      and not np.any(initial[derivatives]))
         if wants_ee and structure.n_parameters:
             initial = LinearModel(structure).start_values(maneuvers)
             note = "start values from equation error"
@@ -267,29 +269,18 @@ class FilterErrorEstimator:
         return (np.concatenate([lower, np.zeros(f.size), _VARIANCE_FLOOR * r]),
                 np.concatenate([upper, np.full(f.size + r.size, np.inf)]))
 
-    def _estimate(self, problem, structure, result, start, bounds, note) -> Estimate:
-        names = problem.parameter_names
-        stats = statistics(result.information, names)
+    def _estimate(self, problem, result, start, bounds, note) -> Estimate:
         lower, upper = bounds
-        at_bound = tuple(n for n, v, lo, hi in zip(names, result.values, lower, upper)
+        at_bound = tuple(n for n, v, lo, hi in zip(problem.parameter_names, result.values,
+                                                   lower, upper)
                          if (np.isfinite(lo) and v <= lo) or (np.isfinite(hi) and v >= hi))
-        model = LinearModel(structure, enforce_signs=self.enforce_signs)
-        signs = model.signs
-        violations = tuple(n for n, v in zip(names, result.values)
-                           if (signs.get(n) == "negative" and v > 0)
-                           or (signs.get(n) == "positive" and v < 0))
-        _, _, r = problem.split(result.values)
         notes = ([note] if note else []) + [
             "cost exp(2L/N) = det B·exp(mean νᵀB⁻¹ν); RMSE of the innovations; "
             "noise_covariance is the measurement noise R"]
-        return Estimate(
-            estimator=NAME, parameter_names=names, values=result.values, start=start,
-            cramer_rao=stats.cramer_rao, insensitivity=stats.insensitivity,
-            correlation=stats.correlation, information=result.information,
-            noise_covariance=np.diag(r), output_names=OUTPUTS, cost=result.cost,
-            rmse=result.rmse, cost_history=result.cost_history,
+        return Estimate.from_fit(
+            problem, result.values, result.information, estimator=NAME, start=start,
+            noise_covariance=np.diag(problem.split(result.values)[-1]), cost=result.cost,
+            rmse=result.rmse, n_samples=problem.n_samples, cost_history=result.cost_history,
             rmse_history=result.rmse_history, iterations=result.iterations,
-            converged=result.converged, stop_reason=result.stop_reason,
-            n_samples=problem.n_samples, sign_violations=violations, at_bound=at_bound,
-            unidentifiable=stats.unidentifiable, fixed=model.fixed, signs=signs,
-            units=structure.units.name, notes=tuple(notes))
+            converged=result.converged, stop_reason=result.stop_reason, at_bound=at_bound,
+            notes=tuple(notes))
