@@ -42,9 +42,18 @@ import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 import rotorid  # noqa: E402
-from rotorid import ChannelLink, ChannelMap, Maneuver, ManeuverSet, Signal, SignalSet  # noqa: E402
-from rotorid.estimation.integrated import InitialConditions, IntegratedModel  # noqa: E402
-from rotorid.model.nonlinear import ModelSignals, Parameter  # noqa: E402
+from rotorid import (  # noqa: E402
+    ChannelLink,
+    ChannelMap,
+    InitialConditions,
+    IntegratedModel,
+    Maneuver,
+    ManeuverSet,
+    ModelSignals,
+    Parameter,
+    Signal,
+    SignalSet,
+)
 
 G, RHO, MASS, AREA, CHORD, INERTIA = 9.80665, 1.225, 1100.0, 16.2, 1.49, 1350.0
 TRUTH = {"C_L0": 0.25, "C_La": 4.9, "C_Lq": 7.5, "C_Lde": 0.4, "C_D0": 0.032, "C_Da": 0.05,

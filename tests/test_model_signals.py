@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from rotorid.errors import RotoridError, SignalError
-from rotorid.model.signals import ChannelLink, ChannelMap, Signal, SignalSet
+from rotorid.model.signals import ChannelLink, ChannelMap, ModelSignals, Signal, SignalSet
 from rotorid.units import canonical_unit, conversion_factor
 
 LONGITUDINAL = SignalSet([
@@ -163,3 +163,17 @@ def test_the_conventions_channel_table_example_reads():
     values = channels.read({"Q_degps": np.array([180.0]), "DELV": np.array([90.0]),
                             "NZ": np.array([0.0])}, signals, ["q", "elevator", "az"], "a file")
     np.testing.assert_allclose(values, [[math.pi, -math.pi / 2, 9.80665]])
+
+
+def test_model_signals_share_a_name_only_with_one_unit_and_never_with_an_input():
+    rate = Signal("q", "rad/s", "rate")
+    declared = ModelSignals(SignalSet([rate, Signal("theta", "rad", "angle")]),
+                            SignalSet([Signal("elevator", "rad", "control")]),
+                            SignalSet([Signal("az", "m/s²", "acceleration"), rate]))
+    assert declared.all.names == ("q", "theta", "elevator", "az")
+    with pytest.raises(SignalError, match=r"^signal 'q' is a state in rad/s \(rate\) and an "
+                                          r"output in deg/s \(rate\); declare one unit"):
+        ModelSignals(SignalSet([rate]), SignalSet([]),
+                     SignalSet([Signal("q", "deg/s", "rate")]))
+    with pytest.raises(SignalError, match="signal 'q' is both a state and an input"):
+        ModelSignals(SignalSet([rate]), SignalSet([rate]), SignalSet([]))

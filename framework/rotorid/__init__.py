@@ -27,8 +27,8 @@ from rotorid.errors import (
 from rotorid.estimation.integrated import InitialConditions, IntegratedModel
 from rotorid.estimation.result_file import IdentifiedModel, load_result, to_statespace
 from rotorid.model.derivatives import Delay, Derivative, Sign
-from rotorid.model.nonlinear import ModelSignals, NonlinearModel, Parameter
-from rotorid.model.signals import ChannelLink, ChannelMap, Signal, SignalSet
+from rotorid.model.nonlinear import NonlinearModel, Parameter
+from rotorid.model.signals import ChannelLink, ChannelMap, ModelSignals, Signal, SignalSet
 from rotorid.model.statespace import NamedStateSpace, state_space
 from rotorid.model.structure import (
     CONTROLS,

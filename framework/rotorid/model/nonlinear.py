@@ -8,7 +8,7 @@ of B rows (each row one parameter vector, or one maneuver, or one sample):
 
 with ``t`` (B,) in s, ``x`` (B, n), ``u`` (B, m), ``theta`` (B, p) in the units of the declared
 signals; rows are independent, so the framework may stack any rows it likes into one call.
-The model declares ``signals`` (:class:`ModelSignals`) and ``parameters`` (a tuple of
+The model declares ``signals`` (:class:`~rotorid.model.signals.ModelSignals`) and ``parameters`` (a tuple of
 :class:`Parameter`, in the order of ``theta``'s columns). It may also provide its own
 derivatives, ``derivative_jacobians(t, x, u, theta) -> (∂f/∂x (B, n, n), ∂f/∂θ (B, n, p))``
 and ``output_jacobians(t, x, u, theta) -> (∂h/∂x (B, ny, n), ∂h/∂θ (B, ny, p))``; with both,
@@ -24,7 +24,7 @@ import attrs
 import numpy as np
 
 from rotorid.errors import StructureError
-from rotorid.model.signals import SignalSet
+from rotorid.model.signals import ModelSignals
 
 
 @attrs.frozen
@@ -49,42 +49,6 @@ class Parameter:
             raise StructureError(f"parameter {self.name!r}: start {self.start:g} lies outside "
                                  f"its bounds [{self.lower:g}, {self.upper:g}]; move the start "
                                  "or widen the bounds")
-
-
-@attrs.frozen
-class ModelSignals:
-    """The states (n), inputs (m) and outputs (ny) of a model, in the order of its arrays.
-
-    A name used in several roles (a state that is also measured, such as ``q``) must carry the
-    same unit and kind in each; :attr:`all` is then the set of distinct signals.
-    """
-
-    states: SignalSet
-    inputs: SignalSet
-    outputs: SignalSet
-
-    def __attrs_post_init__(self):
-        seen = {}
-        for role, signals in (("state", self.states), ("input", self.inputs),
-                              ("output", self.outputs)):
-            for signal in signals:
-                first_role, first = seen.setdefault(signal.name, (role, signal))
-                if (first.unit, first.kind) != (signal.unit, signal.kind):
-                    raise StructureError(
-                        f"signal {signal.name!r} is a {first_role} in {first.unit} "
-                        f"({first.kind}) and an {role} in {signal.unit} ({signal.kind}); "
-                        "declare one unit and kind for it or give the two different names")
-                if "input" in (first_role, role) and first_role != role:
-                    raise StructureError(f"signal {signal.name!r} is both a {first_role} and "
-                                         f"an {role}; an input cannot be a state or an output")
-
-    @property
-    def all(self) -> SignalSet:
-        """Every distinct signal: states, then inputs, then outputs not named before."""
-        distinct = {}
-        for signal in (*self.states, *self.inputs, *self.outputs):
-            distinct.setdefault(signal.name, signal)
-        return SignalSet(distinct.values())
 
 
 @runtime_checkable

@@ -1,7 +1,8 @@
 """Named signals with units, ordered sets of them, and maps from data columns to signals.
 
 A model declares its states, inputs and outputs as :class:`Signal` values collected in
-:class:`SignalSet` s; arrays follow the set's order and are picked by name. A
+:class:`SignalSet` s (together a :class:`ModelSignals`); arrays follow the set's order and are
+picked by name. A
 :class:`ChannelMap` says which data column holds which signal, how it is scaled and in which
 unit, so data with the test range's column names (``Q_degps``, ``DELV``) and units are read
 without renaming. Units and their factors live in :mod:`rotorid.units`; values are converted
@@ -105,6 +106,42 @@ class SignalSet:
     def indices(self, names: Iterable[str]) -> list[int]:
         """Positions of several signals, in the order given."""
         return [self.index(n) for n in names]
+
+
+@attrs.frozen
+class ModelSignals:
+    """The states (n), inputs (m) and outputs (ny) of a model, in the order of its arrays.
+
+    A name used in several roles (a state that is also measured, such as ``q``) must carry the
+    same unit and kind in each; :attr:`all` is then the set of distinct signals.
+    """
+
+    states: SignalSet
+    inputs: SignalSet
+    outputs: SignalSet
+
+    def __attrs_post_init__(self):
+        seen = {}
+        for role, signals in (("state", self.states), ("input", self.inputs),
+                              ("output", self.outputs)):
+            for signal in signals:
+                first_role, first = seen.setdefault(signal.name, (role, signal))
+                if (first.unit, first.kind) != (signal.unit, signal.kind):
+                    raise SignalError(
+                        f"signal {signal.name!r} is a {first_role} in {first.unit} "
+                        f"({first.kind}) and an {role} in {signal.unit} ({signal.kind}); "
+                        "declare one unit and kind for it or give the two different names")
+                if "input" in (first_role, role) and first_role != role:
+                    raise SignalError(f"signal {signal.name!r} is both a {first_role} and "
+                                         f"an {role}; an input cannot be a state or an output")
+
+    @property
+    def all(self) -> SignalSet:
+        """Every distinct signal: states, then inputs, then outputs not named before."""
+        distinct = {}
+        for signal in (*self.states, *self.inputs, *self.outputs):
+            distinct.setdefault(signal.name, signal)
+        return SignalSet(distinct.values())
 
 
 @attrs.frozen
