@@ -2,10 +2,9 @@
 
 A model declares its states, inputs and outputs as :class:`Signal` values collected in
 :class:`SignalSet` s (together a :class:`ModelSignals`); arrays follow the set's order and are
-picked by name. A
-:class:`ChannelMap` says which data column holds which signal, how it is scaled and in which
-unit, so data with the test range's column names (``Q_degps``, ``DELV``) and units are read
-without renaming. Units and their factors live in :mod:`rotorid.units`; values are converted
+picked by name. A :class:`ChannelMap` says which data column holds which signal, how it is
+scaled and in which unit, so data with the test range's column names (``Q_degps``, ``DELV``)
+and units are read without renaming. Units and their factors live in :mod:`rotorid.units`; values are converted
 once, when a column is read.
 """
 
