@@ -4,7 +4,7 @@ file, the table and key, and the fix; a Study checks every case before running a
 import pytest
 from rotorid.errors import DataFileError
 from rotorid.study.case import FlightCase
-from rotorid.study.pipeline import Study
+from rotorid.study.pipeline import Study, run_case
 
 FILES = {"source": "files", "identification": "flight/*.csv"}
 
@@ -77,3 +77,10 @@ def test_the_builtin_cases_pass_their_checks():
     for name in ("hover", "forward"):
         case = FlightCase.load(name)
         assert case.delay_threshold == 20.0 and case.data_source == "helisim"
+
+
+def test_run_case_refuses_a_name_that_leaves_the_results_directory(tmp_path):
+    escaping = FlightCase(name="../../escaped", data=FILES)
+    with pytest.raises(DataFileError, match="cannot name a results directory"):
+        run_case(escaping, tmp_path / "a" / "b" / "out")
+    assert not any(tmp_path.rglob("escaped*")) and not (tmp_path / "a").exists()

@@ -38,7 +38,7 @@ from rotorid.plugin.contracts import CaseData
 from rotorid.plugin.manager import create, notify, using
 from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase
-from rotorid.study.checks import check_cases
+from rotorid.study.checks import check_case, check_cases
 from rotorid.study.delays import with_delays
 from rotorid.study.persistence import load_steps, prepare_directory, save_result, save_step
 from rotorid.study.result import MODELS, CaseResult
@@ -164,8 +164,11 @@ def run_case(case: FlightCase, out_dir: str | Path, resume: bool = True,
              report_writer: ReportWriter | None = None, manager=None) -> CaseResult:
     """Run one flight case end to end and write its results under ``out_dir/<case>``; with a
     ``report_writer``, also its figures and report. Plugins come from ``manager`` (a
-    :func:`~rotorid.plugin.manager.new_plugin_manager`; default: the current one)."""
+    :func:`~rotorid.plugin.manager.new_plugin_manager`; default: the current one). The case
+    is checked first (:func:`~rotorid.study.checks.check_case`): nothing is written for a case
+    that cannot run, nor outside ``out_dir``."""
     with using(manager):
+        check_case(case, f"case {case.name}")
         return _run_case(case, Path(out_dir) / case.name, resume, progress or _silent,
                          report_writer)
 
