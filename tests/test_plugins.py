@@ -9,17 +9,27 @@ import types
 from importlib.metadata import entry_points
 from pathlib import Path
 
+import attrs
+import numpy as np
 import pytest
+import rotorid
 from rotorid.errors import PluginError
+from rotorid.estimation.reduction import reduce
 from rotorid.plugin import hookspecs
 from rotorid.plugin.hookspecs import PluginDescriptor, hookimpl
 from rotorid.plugin.manager import (
     FAMILIES,
     create,
+    current_manager,
+    get_plugin_manager,
     new_plugin_manager,
     notify,
+    register_plugin,
     registry,
+    using,
 )
+from rotorid.verification.compare import envelopes_by_name
+from rotorid.verification.envelopes import EnvelopeBounds, check_bounds
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "hooks.md"
 ENTRY_POINTS = sorted(entry_points(group=hookspecs.PROJECT), key=lambda e: e.name)
@@ -187,3 +197,114 @@ def test_reading_files_does_load_scipy_only_for_mat(tmp_path):
     result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
                             check=True)
     assert result.stdout.split() == ["False", "True"]
+
+
+# ----------------------------------------------------------------- explicit managers
+class StepObserver:
+    """An observer plugin collecting the reduction steps it is told about."""
+
+    def __init__(self):
+        self.steps = []
+
+    @hookimpl
+    def rotorid_reduction_step(self, case, step):
+        self.steps.append((case, step.index))
+
+
+def test_register_plugin_validates_and_leaves_a_bad_plugin_out():
+    manager = new_plugin_manager(load_entry_points=False)
+    observer = StepObserver()
+    assert register_plugin(observer, manager, name="observer") == "observer"
+    assert manager.get_plugin("observer") is observer
+
+    def rotorid_case_started(case, extra):
+        return None
+
+    bad = plugin("bad_arguments", rotorid_case_started=rotorid_case_started)
+    with pytest.raises(PluginError, match=r"plugin 'bad_arguments' is invalid(.|\n)*extra"):
+        register_plugin(bad, manager)
+    assert manager.get_plugin("bad_arguments") is None
+
+    def rotorid_estimatorz():
+        return []
+
+    typo = plugin("typo_plugin", rotorid_estimatorz=rotorid_estimatorz)
+    with pytest.raises(PluginError, match=r"typo_plugin.*is invalid.*rotorid_estimatorz"):
+        register_plugin(typo, manager)
+    assert manager.get_plugin("typo_plugin") is None
+    with pytest.raises(PluginError, match="cannot be registered.*register each plugin once"):
+        register_plugin(observer, manager, name="again")
+
+
+def test_notify_reaches_the_manager_given_or_made_current():
+    given, current = StepObserver(), StepObserver()
+    first = new_plugin_manager([given], load_entry_points=False)
+    second = new_plugin_manager([current], load_entry_points=False)
+    notify("rotorid_reduction_step", first, case="a", step=types.SimpleNamespace(index=1))
+    with using(second):
+        assert current_manager() is second
+        notify("rotorid_reduction_step", case="b", step=types.SimpleNamespace(index=2))
+    assert current_manager() is get_plugin_manager()
+    assert given.steps == [("a", 1)] and current.steps == [("b", 2)]
+
+
+def test_reduce_notifies_its_manager_and_estimates_inside_it():
+    """A stub estimator (its estimate from the Estimate builder) and the built-in Cramér-Rao
+    criterion: M_u's bound is 100 % of its value, so it goes; the hooks reach ``manager``."""
+    structure = rotorid.ModelStructure(rotorid.FlightCondition.from_airspeed(0.0),
+                                       [rotorid.Derivative("M_q"), rotorid.Derivative("M_u")])
+    residuals = [np.ones((4, 8))]
+    managers = []
+
+    class StubEstimator:
+        def estimate(self, structure, maneuvers, *, start=None):
+            managers.append(current_manager())
+            values = {"M_q": -2.0, "M_u": 0.1}
+            names = structure.parameter_names
+            information = 100.0 * np.eye(len(names))         # bounds 0.1: M_u's is 100 %
+            return rotorid.Estimate.from_fit(structure, [values[n] for n in names],
+                                             information, residuals, estimator="stub")
+
+    observer = StepObserver()
+    manager = new_plugin_manager([observer])
+    criterion = create("reduction-criteria", "cramer-rao", manager)
+    path = reduce(structure, None, StubEstimator(), [criterion], case="stub", manager=manager)
+    assert [s.removal.parameter for s in path.steps[1:]] == ["M_u"]
+    assert observer.steps == [("stub", 0), ("stub", 1)]
+    assert managers == [manager, manager]
+
+
+@attrs.frozen
+class FlatEnvelope:
+    """±3 dB, ±30° everywhere (a bounds-kind envelope)."""
+
+    name: str = "flat"
+    kind: str = "bounds"
+    provenance: str = "a test"
+    verified: bool = False
+    threshold: float = 0.8
+
+    def bounds(self, omega):
+        ones = np.ones_like(omega)
+        return EnvelopeBounds(self.name, omega, -3 * ones, 3 * ones, -30 * ones, 30 * ones,
+                              np.zeros(omega.shape, bool))
+
+    def check(self, error, coherence, omega):
+        return check_bounds(self, error, coherence, omega)
+
+
+def test_envelopes_by_name_come_from_the_manager_given():
+    registers = lambda: [PluginDescriptor("flat", FlatEnvelope, "test")]  # noqa: E731
+    manager = new_plugin_manager([plugin("flat_plugin", rotorid_validation_envelopes=registers)],
+                                 load_entry_points=False)
+    assert envelopes_by_name(["flat"], manager) == {"flat": FlatEnvelope()}
+    with pytest.raises(PluginError, match="no validation-envelope named 'muad'"):
+        envelopes_by_name(["muad"], manager)
+
+
+def test_study_resume_default_is_the_command_lines():
+    from rotorid.cli.main import build_parser
+    from rotorid.study.pipeline import Study
+
+    study = build_parser().parse_args(["study", "hover", "--out", "results"])
+    assert inspect.signature(Study).parameters["resume"].default is study.resume is False

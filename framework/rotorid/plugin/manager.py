@@ -83,8 +83,9 @@ def register_plugin(plugin: object, manager: pluggy.PluginManager | None = None,
     try:
         registered = _checked(lambda: manager.register(plugin, name=name))
     except ValueError as error:
-        raise PluginError(f"plugin {name or plugin!r} cannot be registered: {error}; register "
-                          f"each plugin once, under a name of its own") from error
+        reason = str(error).splitlines()[0]
+        raise PluginError(f"plugin {name or plugin!r} cannot be registered ({reason}); "
+                          f"register each plugin once, under a name of its own") from error
     if registered is None:
         raise PluginError(f"plugin {name or plugin!r} is blocked in this plugin manager")
     try:
@@ -100,7 +101,8 @@ def _checked(check):
     try:
         return check()
     except pluggy.PluginValidationError as error:
-        raise PluginError(f"plugin {error.plugin!r} is invalid: {error}; fix or uninstall it"
+        name = getattr(error.plugin, "__name__", None) or type(error.plugin).__name__
+        raise PluginError(f"plugin {name!r} is invalid: {error}; fix or uninstall it"
                           ) from error
 
 
