@@ -166,3 +166,21 @@ def test_sweeps_with_a_correlated_second_input_are_fitted_through_the_apparent_r
         warnings.simplefilter("ignore", IdentifiabilityWarning)
         direct = estimator.estimate(structure, single, start=estimate.values)
     assert direct.cost > 10.0 * estimate.cost
+
+
+def test_errors_name_the_problem_and_the_fix():
+    structure = _structure()
+    omega = np.geomspace(0.5, 12.0, 39)
+    responses = _analytic_responses(structure, TRUTH, omega)
+    coupled = _structure(("L_p", "L_lat", "M_q", "M_long", "N_lat"))
+    yaw = _analytic_responses(coupled, {**TRUTH, "N_lat": 0.3}, omega, ["r/lat"])
+    with pytest.raises(rotorid.EstimationError, match="no response on r/lat"):
+        FrequencyResponseEstimator().estimate(structure, [*responses, *yaw], start=TRUTH)
+    with pytest.raises(rotorid.EstimationError, match="equation-error start values need"):
+        FrequencyResponseEstimator().estimate(structure, responses)
+    with pytest.raises(rotorid.EstimationError, match="no response given for pair"):
+        FrequencyResponseEstimator(pairs=["q/lat"]).estimate(structure, responses,
+                                                             start=TRUTH)
+    sweeps = _sweeps(structure, TRUTH, noise=0.0, seed=0).select(axis="lat")
+    with pytest.raises(rotorid.EstimationError, match="no sweep excites 'long'"):
+        FrequencyResponseEstimator(pairs=["q/long"]).estimate(structure, sweeps)

@@ -22,6 +22,7 @@ from collections.abc import Sequence
 import attrs
 import numpy as np
 from rotorid.data import OUTPUT_CHANNELS
+from rotorid.frozen import readonly_array
 from rotorid.model.structure import ModelStructure
 from rotorid.simulation.transfer import frequency_response, response_sensitivities
 from rotorid.verification.envelopes import wrap180
@@ -37,9 +38,10 @@ class Mismatch:
     """Residuals of one parameter vector: ``residuals`` (2n,), ``jacobian`` (2n, P) or None,
     ``pair_costs`` J_l per pair, in the pairs' order."""
 
-    residuals: np.ndarray
-    jacobian: np.ndarray | None
-    pair_costs: tuple[float, ...]
+    residuals: np.ndarray = attrs.field(converter=readonly_array)
+    jacobian: np.ndarray | None = attrs.field(
+        converter=lambda j: None if j is None else readonly_array(j))
+    pair_costs: tuple[float, ...] = attrs.field(converter=tuple)
 
     @property
     def cost(self) -> float:

@@ -22,6 +22,7 @@ import attrs
 import numpy as np
 from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS, ManeuverSet
 from rotorid.errors import EstimationError
+from rotorid.frozen import readonly_array
 from rotorid.verification.compare import default_omega
 from rotorid.verification.pairs import parse_pair, primary_axis
 from rotorid.verification.frequency import (
@@ -30,12 +31,6 @@ from rotorid.verification.frequency import (
     response_from_maneuvers,
 )
 from rotorid_envelopes.cost import COST_THRESHOLD, MismatchCost, coherence_weight
-
-
-def _frozen(value, dtype=float) -> np.ndarray:
-    array = np.array(value, dtype=dtype, copy=True)
-    array.setflags(write=False)
-    return array
 
 
 @attrs.frozen(eq=False)
@@ -54,11 +49,11 @@ class PairData:
 
     output: str
     control: str
-    omega: np.ndarray = attrs.field(converter=_frozen)
-    magnitude_db: np.ndarray = attrs.field(converter=_frozen)
-    phase_deg: np.ndarray = attrs.field(converter=_frozen)
-    weight: np.ndarray = attrs.field(converter=_frozen)
-    mixing: np.ndarray = attrs.field(converter=lambda v: _frozen(v, complex))
+    omega: np.ndarray = attrs.field(converter=readonly_array)
+    magnitude_db: np.ndarray = attrs.field(converter=readonly_array)
+    phase_deg: np.ndarray = attrs.field(converter=readonly_array)
+    weight: np.ndarray = attrs.field(converter=readonly_array)
+    mixing: np.ndarray = attrs.field(converter=lambda v: readonly_array(v, complex))
 
     @property
     def pair(self) -> str:
