@@ -16,6 +16,7 @@ import rotorid
 from rotorid.errors import PluginError
 from rotorid.estimation.reduction import reduce
 from rotorid.plugin import hookspecs
+from rotorid.plugin.contracts import CONTRACTS, members, violations
 from rotorid.plugin.hookspecs import PluginDescriptor, hookimpl
 from rotorid.plugin.manager import (
     FAMILIES,
@@ -32,6 +33,7 @@ from rotorid.verification.compare import envelopes_by_name
 from rotorid.verification.envelopes import EnvelopeBounds, check_bounds
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "hooks.md"
+PLUGINS_DOC = DOCS.with_name("plugins.md")
 ENTRY_POINTS = sorted(entry_points(group=hookspecs.PROJECT), key=lambda e: e.name)
 
 
@@ -142,10 +144,22 @@ def test_malformed_descriptors_name_the_plugin(returned, fragment):
         registry("estimators", manager)
 
 
+@attrs.frozen
+class RecordingEstimator:
+    """An estimator that only records the options it was built with."""
+
+    tolerance: float = 0.0
+
+    def estimate(self, structure, maneuvers, *, start=None):
+        raise NotImplementedError
+
+
 def test_create_builds_with_options_and_lists_alternatives():
-    manager = new_plugin_manager([plugin("p", rotorid_estimators=descriptors("output-error"))],
+    registers = lambda: [PluginDescriptor("output-error", RecordingEstimator, "rec")]  # noqa: E731
+    manager = new_plugin_manager([plugin("p", rotorid_estimators=registers)],
                                  load_entry_points=False)
-    assert create("estimators", "output-error", manager, tolerance=1e-6) == {"tolerance": 1e-6}
+    built = create("estimators", "output-error", manager, tolerance=1e-6)
+    assert built == RecordingEstimator(1e-6)
     with pytest.raises(PluginError, match=r"no estimator named 'ls'; available: output-error"):
         create("estimators", "ls", manager)
     with pytest.raises(PluginError, match="unknown plugin family 'estimator'"):
@@ -308,3 +322,96 @@ def test_study_resume_default_is_the_command_lines():
 
     study = build_parser().parse_args(["study", "hover", "--out", "results"])
     assert inspect.signature(Study).parameters["resume"].default is study.resume is False
+
+
+# ----------------------------------------------------------------- contracts
+#: Options that build one component of each registered input signal.
+SIGNAL_OPTIONS = {"sweep": dict(amplitude=1.0, omega_min=0.5, omega_max=10.0, sweep_time=20.0)}
+
+
+@pytest.mark.parametrize("family", sorted(FAMILIES))
+def test_every_installed_component_satisfies_its_contract(family):
+    for name in registry(family):
+        options = (SIGNAL_OPTIONS.get(name, dict(amplitude=1.0, step_width=0.5))
+                   if family == "input-signals" else {})
+        component = create(family, name, **options)
+        assert violations(family, component) == (), (family, name)
+        assert isinstance(component, CONTRACTS[family])
+
+
+def test_create_names_the_plugin_the_component_and_what_is_missing():
+    @attrs.frozen
+    class HalfEnvelope:
+        name: str = "half"
+        provenance: str = ""
+        verified: bool = False
+        threshold: float = 0.8
+        check: str = "not callable"
+
+    registers = lambda: [PluginDescriptor("half", HalfEnvelope, "test")]  # noqa: E731
+    manager = new_plugin_manager([plugin("half_plugin", rotorid_validation_envelopes=registers)],
+                                 load_entry_points=False)
+    with pytest.raises(PluginError, match=r"plugin 'half_plugin': validation-envelopes component "
+                                          r"'half' does not satisfy the ValidationEnvelope "
+                                          r"contract: missing kind; missing bounds; check is not "
+                                          r"callable; see docs/plugins.md"):
+        create("validation-envelopes", "half", manager)
+
+
+def test_an_envelope_kind_must_be_bounds_or_cost():
+    assert violations("validation-envelopes", FlatEnvelope()) == ()
+    odd = types.SimpleNamespace(**attrs.asdict(FlatEnvelope()), bounds=len, check=len)
+    odd.kind = "score"
+    assert violations("validation-envelopes", odd) == (
+        "kind 'score' is not one of bounds, cost",)
+
+
+def test_a_command_module_is_a_command():
+    from rotorid.cli.commands import identify
+
+    assert violations("commands", identify) == ()
+    assert violations("commands", types.ModuleType("empty")) == ("missing add_arguments",
+                                                                 "missing run")
+
+
+def test_every_contract_member_is_documented_in_the_plugins_table():
+    documented = documented_contracts()
+    assert set(documented) == set(CONTRACTS)
+    for family, protocol in CONTRACTS.items():
+        expected = {name: contract_arguments(protocol, name) for name in members(protocol)}
+        assert documented[family] == expected, (
+            f"docs/plugins.md documents {family} as {documented[family]}; "
+            f"rotorid/plugin/contracts.py declares {expected}")
+
+
+def contract_arguments(protocol: type, name: str) -> list[str] | None:
+    """The argument names of a contract method (without self), None for an attribute."""
+    member = vars(protocol).get(name)
+    if not callable(member):
+        return None
+    return [p for p in inspect.signature(member).parameters if p != "self"]
+
+
+def documented_contracts() -> dict[str, dict[str, list[str] | None]]:
+    """Family → member → argument names (None for attributes) from docs/plugins.md's table.
+
+    A row reads ``| `family` (`hook`) | `Protocol`: `method(a, b) -> R`, `attribute: type` |``.
+    """
+    table = re.search(r"<!-- contracts -->\n(.*?)<!-- /contracts -->", PLUGINS_DOC.read_text(),
+                      re.S)
+    assert table, "docs/plugins.md: no <!-- contracts --> table"
+    found = {}
+    for row in table[1].splitlines()[2:]:
+        cells = [c.strip() for c in re.split(r"(?<!\\)\|", row.strip().strip("|"))]
+        family = re.match(r"`([^`]+)`", cells[0])[1]
+        entries = {}
+        for span in re.findall(r"`([^`]+)`", cells[1])[1:]:
+            call = re.match(r"([\w]+)\((.*?)\)", span)
+            if call:
+                entries[call[1]] = [a.split("=")[0].split(":")[0].strip()
+                                    for a in call[2].split(",")
+                                    if a.strip() and a.strip() != "*"]
+            else:
+                entries[span.split(":")[0].strip()] = None
+        found[family] = entries
+    return found

@@ -58,13 +58,12 @@ def test_reduction_removes_the_spurious_derivatives_and_keeps_the_true_ones(data
         def rotorid_reduction_step(self, case, step):
             seen.append((case, step.index))
 
-    observer = Observer()
-    get_plugin_manager().register(observer)
+    name = rotorid.register_plugin(Observer())
     try:
         path = reduce(full_structure(), data, rotorid.create("estimators", "output-error"),
                       criteria(), continue_to_zero=True, case="test")
     finally:
-        get_plugin_manager().unregister(observer)
+        get_plugin_manager().unregister(name=name)
     assert seen == [("test", i) for i in range(len(path.steps))]
     assert len(path.steps) == len(TRUE) + len(SPURIOUS) + 1
     assert path.steps[-1].n_parameters == 0

@@ -17,7 +17,7 @@ interval: the rate's change over dt against the interval's mean states and the c
 over it. That is exact for zero-order-hold controls, where a central difference of the rates
 would smear every control step over two samples. Per equation k with regressor matrix
 X_k and residual variance σ_k², the estimate is θ_k = (X_kᵀX_k)⁻¹X_kᵀy_k and the information
-matrix is F_k = X_kᵀX_k/σ_k²; :func:`rotorid.estimation.estimate.statistics` turns the block-diagonal F
+matrix is F_k = X_kᵀX_k/σ_k²; :meth:`rotorid.Estimate.from_fit` turns the block-diagonal F
 into Cramér-Rao bounds, insensitivities and correlations, exactly as for the built-in
 output-error estimator. The cost is det R of the equation residuals, the RMSE their root mean
 square (ft/s² and deg/s² in flight-test units).
@@ -35,7 +35,7 @@ The plugin. A registration hook returns descriptors::
         def rotorid_estimators(self):
             return [rotorid.PluginDescriptor("ls-equation-error", EquationErrorEstimator, "...")]
 
-Register it at run time with ``rotorid.get_plugin_manager().register(EquationErrorPlugin())``
+Register it at run time with ``rotorid.register_plugin(EquationErrorPlugin())``
 (done by :func:`registered_plugin` below), or, in a package of your own, declare the module
 holding the hook as an entry point and it is found on installation (docs/plugins.md)::
 
@@ -64,7 +64,7 @@ import numpy as np
 import rotorid
 from rotorid.errors import EstimationError
 from rotorid.estimation.equation_error import reconstructed_states
-from rotorid.estimation.estimate import Estimate, statistics
+from rotorid.estimation.estimate import Estimate
 from rotorid.model.structure import CONTROLS, STATES, ModelStructure
 from rotorid.study.case import FlightCase
 from rotorid.study.pipeline import Study
@@ -133,24 +133,12 @@ class EquationErrorEstimator:
                 information[index, [i for i, _ in columns]] = info[local]
             residuals.append(residual)
         residuals = np.column_stack(residuals)         # (intervals of all maneuvers, 6)
-        noise = residuals.T @ residuals / len(residuals)
-        stats = statistics(information, names)
-        cost, rmse = float(np.linalg.det(noise)), float(np.sqrt(np.mean(residuals**2)))
-        signs = {d.name: d.sign.value for d in structure.free_derivatives}
-        return Estimate(
-            estimator=NAME, parameter_names=names, values=values,
+        # The builder derives the bounds, R, det R, the RMSE and the sign checks.
+        return Estimate.from_fit(
+            structure, values, information, [residuals], estimator=NAME,
             start=structure.initial_values() if start is None else structure.as_vector(start),
-            cramer_rao=stats.cramer_rao, insensitivity=stats.insensitivity,
-            correlation=stats.correlation, information=information, noise_covariance=noise,
-            output_names=EQUATION_NAMES, cost=cost, rmse=rmse, cost_history=(cost,),
-            rmse_history=(rmse,), iterations=1, converged=True,
+            output_names=EQUATION_NAMES, iterations=1,
             stop_reason="linear least squares: closed-form solution",
-            n_samples=len(residuals),
-            sign_violations=tuple(d.name for d in structure.free_derivatives
-                                  if not d.sign.admits(values[names.index(d.name)])),
-            unidentifiable=stats.unidentifiable,
-            fixed={d.name: d.initial for d in structure.derivatives if d.fixed},
-            signs=signs, units=structure.units.name,
             notes=("equation error: values are biased by noise on the regressors",))
 
     @staticmethod
@@ -212,14 +200,14 @@ class EquationErrorPlugin:
 
 @contextlib.contextmanager
 def registered_plugin():
-    """Register the plugin with rotorid's plugin manager for the duration of the block."""
-    manager = rotorid.get_plugin_manager()
+    """Register the plugin with rotorid's plugin manager for the duration of the block
+    (checked like an installed plugin)."""
     plugin = EquationErrorPlugin()
-    manager.register(plugin, name="docs-example-equation-error")
+    name = rotorid.register_plugin(plugin, name="docs-example-equation-error")
     try:
         yield plugin
     finally:
-        manager.unregister(plugin)
+        rotorid.get_plugin_manager().unregister(name=name)
 
 
 # ----------------------------------------------------------------- using it

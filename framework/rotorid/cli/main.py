@@ -19,7 +19,7 @@ import sys
 from rotorid import __version__
 from rotorid.cli import commands
 from rotorid.errors import ExitStatus, PluginError, RotoridError, UsageError
-from rotorid.plugin.manager import registry
+from rotorid.plugin.manager import create, registry
 
 
 def _command_modules():
@@ -35,7 +35,7 @@ def _subcommands():
         if name in found:
             raise PluginError(f"plugin {registered.provider!r} registers the command {name!r}, "
                               f"which rotorid itself provides; rename the plugin's command")
-        found[name] = (registered.summary, registered.descriptor.factory())
+        found[name] = (registered.summary, create("commands", name))
     return [(name, *found[name]) for name in sorted(found)]
 
 

@@ -241,7 +241,7 @@ def violations(family: str, component: object) -> tuple[str, ...]:
              for name in members(protocol)
              if not hasattr(component, name)
              or (name in methods and not callable(getattr(component, name)))]
-    kind = getattr(component, "kind", None)
-    if protocol is ValidationEnvelope and hasattr(component, "kind") and kind not in ENVELOPE_KINDS:
+    kind = getattr(component, "kind", ENVELOPE_KINDS[0])
+    if protocol is ValidationEnvelope and kind not in ENVELOPE_KINDS:
         found.append(f"kind {kind!r} is not one of {', '.join(ENVELOPE_KINDS)}")
     return tuple(found)

@@ -3,7 +3,8 @@
 Two kinds of hooks:
 
 * **Registration hooks** (plural nouns) return an iterable of :class:`PluginDescriptor`:
-  small records naming a component, the factory that builds it and a one-line summary.
+  small records naming a component, the factory that builds it and a one-line summary. What
+  a factory must build is specified in :mod:`rotorid.plugin.contracts`.
   The host collects them, sorts them by name and rejects a name registered twice.
 * **Lifecycle hooks** notify observers (loggers, exporters, live plots) of progress; their
   return values are ignored. They must not change the objects they receive (they are frozen).
@@ -64,8 +65,8 @@ class PluginDescriptor:
 def rotorid_estimators():
     """Register parameter estimators.
 
-    Return an iterable of :class:`PluginDescriptor` whose factory builds an object with
-    ``estimate(structure, maneuvers, *, start=None) -> Estimate``.
+    Return an iterable of :class:`PluginDescriptor` whose factory builds a
+    :class:`~rotorid.plugin.contracts.Estimator` (the contract is specified there only).
     """
 
 
@@ -73,9 +74,8 @@ def rotorid_estimators():
 def rotorid_reduction_criteria():
     """Register model-reduction criteria.
 
-    Return an iterable of :class:`PluginDescriptor` whose factory builds an object with
-    ``propose(estimate) -> Removal | None``: the parameter to remove next and why, or
-    ``None`` when the criterion is satisfied.
+    Return an iterable of :class:`PluginDescriptor` whose factory builds a
+    :class:`~rotorid.plugin.contracts.ReductionCriterion` (the contract is specified there only).
     """
 
 
@@ -83,8 +83,8 @@ def rotorid_reduction_criteria():
 def rotorid_validation_envelopes():
     """Register frequency-domain validation envelopes.
 
-    Return an iterable of :class:`PluginDescriptor` whose factory builds an object with
-    ``bounds(omega) -> EnvelopeBounds`` and ``check(error, coherence, omega) -> EnvelopeCheck``.
+    Return an iterable of :class:`PluginDescriptor` whose factory builds a
+    :class:`~rotorid.plugin.contracts.ValidationEnvelope` (the contract is specified there only).
     """
 
 
@@ -93,8 +93,7 @@ def rotorid_data_sources():
     """Register data sources.
 
     Return an iterable of :class:`PluginDescriptor` whose factory builds a
-    :class:`~rotorid.plugin.contracts.DataSource`: ``case_data(settings, directory) ->
-    CaseData`` (a flight case's maneuvers, trim and truth model).
+    :class:`~rotorid.plugin.contracts.DataSource` (the contract is specified there only).
     """
 
 
@@ -102,18 +101,17 @@ def rotorid_data_sources():
 def rotorid_input_signals():
     """Register input signals (multisteps, sweeps …).
 
-    Return an iterable of :class:`PluginDescriptor` whose factory builds a callable
-    ``signal(time) -> ndarray`` with a ``duration`` attribute in s.
+    Return an iterable of :class:`PluginDescriptor` whose factory builds a
+    :class:`~rotorid.plugin.contracts.InputSignal` (the contract is specified there only).
     """
 
 
 @hookspec
 def rotorid_commands():
-    """Register subcommands of the ``rotorid`` command line.
+    """Register subcommands of the ``rotorid`` command line (the descriptor's name).
 
-    Return an iterable of :class:`PluginDescriptor` whose name is the subcommand and whose
-    factory builds an object (a module will do) with ``add_arguments(parser)`` (an
-    :class:`argparse.ArgumentParser`) and ``run(args) -> int`` (the exit status).
+    Return an iterable of :class:`PluginDescriptor` whose factory builds a
+    :class:`~rotorid.plugin.contracts.Command` (the contract is specified there only).
     """
 
 

@@ -4,7 +4,8 @@ Built-in plugins are registered exactly like third-party ones, through the ``rot
 entry-point group in ``pyproject.toml``. :func:`get_plugin_manager` builds the manager once
 per process; :func:`new_plugin_manager` builds a separate one and :func:`register_plugin` adds
 an in-process plugin to either, checked. :func:`registry` gives one family's components by
-name; :func:`create` builds one; :func:`notify` calls a lifecycle hook.
+name; :func:`create` builds one and checks it against its family's contract
+(:mod:`rotorid.plugin.contracts`); :func:`notify` calls a lifecycle hook.
 
 Which manager: every function here takes ``manager=None``, meaning the manager of the
 innermost :func:`using` block (``Study(manager=...)`` and the ``rotorid`` commands run inside
@@ -24,6 +25,7 @@ import pluggy
 
 from rotorid.errors import PluginError
 from rotorid.plugin import hookspecs
+from rotorid.plugin.contracts import CONTRACTS, violations
 from rotorid.plugin.hookspecs import PluginDescriptor
 
 #: Plugin families and the registration hook of each.
@@ -171,15 +173,27 @@ def registry(family: str, manager: pluggy.PluginManager | None = None) -> dict[s
 
 
 def create(family: str, name: str, manager: pluggy.PluginManager | None = None, **options):
-    """Build the component ``name`` of ``family`` with keyword ``options``."""
+    """Build the component ``name`` of ``family`` with keyword ``options``.
+
+    Raises :class:`PluginError` for an unknown name, or when the built component breaks its
+    family's contract (naming the plugin, the component and what is missing).
+    """
     components = registry(family, manager)
     if name not in components:
         known = ", ".join(components) or "none"
         raise PluginError(f"no {family[:-1] if family.endswith('s') else family} named "
                           f"{name!r}; available: {known} (see `rotorid plugins`)")
-    return components[name].descriptor.factory(**options)
+    component = components[name].descriptor.factory(**options)
+    problems = violations(family, component)
+    if problems:
+        raise PluginError(
+            f"plugin {components[name].provider!r}: {family} component {name!r} does not "
+            f"satisfy the {CONTRACTS[family].__name__} contract: {'; '.join(problems)}; "
+            f"see docs/plugins.md")
+    return component
 
 
 def notify(hook_name: str, manager: pluggy.PluginManager | None = None, **kwargs) -> None:
-    """Call a lifecycle hook on every observer plugin of the manager (see :func:`current_manager`)."""
+    """Call a lifecycle hook on every observer plugin of ``manager`` (default: the current
+    one, see :func:`current_manager`)."""
     getattr(current_manager(manager).hook, hook_name)(**kwargs)
