@@ -3,11 +3,13 @@ an information matrix, the criteria's default thresholds and order, the continue
 ranking, the selection rule, and the Levenberg-Marquardt acceptance and bound rules."""
 
 import math
+import warnings
 
 import numpy as np
 import pytest
 import rotorid
 from rotorid import Derivative, FlightCondition, Maneuver, ManeuverSet, ModelStructure
+from rotorid.errors import IdentifiabilityWarning
 from rotorid.estimation.estimate import Estimate, statistics
 from rotorid.estimation.reduction import ReductionPath, ReductionStep, reduce
 from rotorid.estimation.steps import bounded_step
@@ -51,6 +53,26 @@ def test_a_parameter_estimated_at_zero_has_infinite_normalised_measures():
     assert estimate.cramer_rao_pct[1] == pytest.approx(100.0)
 
 
+@pytest.mark.parametrize("gap, flagged", [(1e-9, False), (1e-11, True)])
+def test_nearly_dependent_parameters_are_named_and_get_infinite_bounds(gap, flagged):
+    # F = [[1, 1 − gap, 0], [1 − gap, 1, 0], [0, 0, 1]]: eigenvalues 2 − gap, gap and 1, so a
+    # condition number of about 2/gap against the limit 10¹⁰.
+    f = np.array([[1.0, 1.0 - gap, 0.0], [1.0 - gap, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        stats = statistics(f, ("M_q", "M_u", "L_p"))
+    named = [w for w in caught if issubclass(w.category, IdentifiabilityWarning)]
+    assert stats.cramer_rao[2] == pytest.approx(1.0)
+    if flagged:
+        assert stats.unidentifiable == (("M_q", "M_u"),) and len(named) == 1
+        assert "M_q + M_u" in str(named[0].message)
+        assert np.all(np.isinf(stats.cramer_rao[:2]))
+    else:
+        assert stats.unidentifiable == () and not named
+        # (F⁻¹)₁₁ = 1/(1 − (1 − gap)²) ≈ 1/(2 gap)
+        assert stats.cramer_rao[0] == pytest.approx(1 / math.sqrt(2 * gap), rel=1e-6)
+
+
 # ----------------------------------------------------------------- criteria
 def test_default_thresholds_are_the_papers():
     assert rotorid.create("reduction-criteria", "insensitivity").threshold == 10.0
@@ -82,11 +104,15 @@ NAMES = ("M_q", "M_u", "L_p")
 
 class ConstructedEstimator:
     """Returns the statistics of :data:`INFORMATION` restricted to the structure's
-    parameters; the RMSE grows by 0.1 per removed parameter."""
+    parameters; the RMSE grows by 0.1 per removed parameter. Records the starts it is given."""
 
     name = "constructed"
 
+    def __init__(self):
+        self.starts = []
+
     def estimate(self, structure, maneuvers, *, start=None):
+        self.starts.append(start)
         names = structure.parameter_names
         f = np.array([[INFORMATION.get((a, b), INFORMATION.get((b, a), 0.0)) for b in names]
                       for a in names])
@@ -94,12 +120,13 @@ class ConstructedEstimator:
                            rmse=1.0 + 0.1 * (len(NAMES) - len(names)))
 
 
-def _reduction(criteria, continue_to_zero):
+def _reduction(criteria, continue_to_zero, estimator=None, **options):
+    """The parameters removed, in order."""
     structure = ModelStructure(HOVER, [Derivative(n) for n in NAMES])
     t = np.arange(10) * 0.02
     maneuvers = ManeuverSet([Maneuver("still", t, np.zeros((10, 4)), np.zeros((10, 8)))])
-    path = reduce(structure, maneuvers, ConstructedEstimator(), criteria,
-                  continue_to_zero=continue_to_zero)
+    path = reduce(structure, maneuvers, estimator or ConstructedEstimator(), criteria,
+                  continue_to_zero=continue_to_zero, **options)
     return [step.removal.parameter for step in path.steps[1:]]
 
 
@@ -117,6 +144,17 @@ def test_continue_to_zero_removes_by_the_last_criteria_ranking():
     assert _reduction(lenient, False) == []
     # Cramér-Rao ranks M_q first; without it the order would start with L_p.
     assert _reduction(lenient, True) == ["M_q", "L_p", "M_u"]
+
+
+def test_each_reduced_structure_restarts_from_the_initial_values():
+    lenient = [rotorid.create("reduction-criteria", "cramer-rao", threshold=1e6)]
+    cold = ConstructedEstimator()
+    _reduction(lenient, True, cold)
+    # The full structure and the two reduced ones with parameters left are estimated.
+    assert cold.starts == [None, None, None]
+    warm = ConstructedEstimator()
+    _reduction(lenient, True, warm, warm_start=True)
+    assert warm.starts == [None, {"M_u": 1.0, "L_p": 1.0}, {"M_u": 1.0}]
 
 
 def test_lowest_rmse_rule_selects_the_most_reduced_structure_within_tolerance():

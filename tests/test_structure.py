@@ -240,6 +240,8 @@ def test_condition_from_airspeed_is_level_flight():
     assert condition.w0 == pytest.approx(speed * math.sin(math.radians(4.0)))
     assert condition.v0 == 0.0 and condition.phi0 == pytest.approx(math.radians(-2.0))
     assert condition.airspeed_kt == pytest.approx(70.0)
+    # 70 kt = 70 · 1852 m / 3600 s = 36.0111 m/s
+    assert FlightCondition.from_airspeed(70.0).u0 == pytest.approx(36.0111, abs=1e-4)
 
 
 def test_condition_from_mapping():

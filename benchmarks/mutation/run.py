@@ -150,7 +150,7 @@ def main(argv=None) -> int:
                 status = "survived" if outcome == "passed" else (
                     "killed" if outcome == "failed" else "killed (timeout)")
                 results.append((mutant, status))
-                print(f"{mutant['id']:<32} {status:<17} {seconds:6.1f} s  {failed}", flush=True)
+                print(f"{mutant['id']:<36} {status:<17} {seconds:6.1f} s  {failed}", flush=True)
     except ListError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
