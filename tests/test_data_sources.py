@@ -8,7 +8,7 @@ from rotorid import CONTROLS, STATES, Derivative, ModelStructure
 from rotorid.errors import DataError
 from rotorid.plugin.contracts import CaseData
 from rotorid.plugin.hookspecs import PluginDescriptor, hookimpl
-from rotorid.plugin.manager import get_plugin_manager
+from rotorid.plugin.manager import get_plugin_manager, register_plugin
 from rotorid.study.case import FlightCase
 from rotorid.study.montecarlo import case_monte_carlo
 from rotorid.study.pipeline import Study
@@ -46,10 +46,9 @@ def renamed_source(data):
             return [PluginDescriptor("renamed-csv", lambda: RenamedSource(data),
                                      "maneuvers from memory (test)")]
 
-    plugin = Plugin()
-    get_plugin_manager().register(plugin)
+    name = register_plugin(Plugin())
     yield
-    get_plugin_manager().unregister(plugin)
+    get_plugin_manager().unregister(name=name)
 
 
 def test_a_third_party_source_runs_a_case_with_its_trim_and_truth(tmp_path, renamed_source):

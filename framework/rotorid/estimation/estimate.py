@@ -2,8 +2,9 @@
 
 An :class:`Estimate` is the immutable result of a parameter estimation: values, Cramér-Rao
 bounds, insensitivities, correlations, the noise covariance, the cost and RMSE history and how
-the iteration stopped. Estimator plugins build it with :func:`statistics` from the information
-matrix, so every estimator reports the same quantities the same way:
+the iteration stopped. Estimator plugins build it with :meth:`Estimate.from_fit`, which takes
+the statistics from the information matrix (:func:`statistics`) and the noise covariance, cost
+and RMSE from the residuals, so every estimator reports the same quantities the same way:
 
     CR_i = sqrt((F⁻¹)_ii)          normalised: |CR_i / Θ_i|·100 %   (paper eqs. 13-14)
     I_i  = 1 / sqrt(F_ii)          normalised: |I_i / Θ_i|·100 %    (paper eqs. 15-16)
