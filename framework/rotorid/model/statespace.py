@@ -16,7 +16,7 @@ delay set to zero.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 
 import attrs
 import numpy as np
@@ -114,8 +114,8 @@ def pade_realisation(seconds: float, order: int):
     return a / seconds, b / seconds, c, d
 
 
-def state_space(structure: ModelStructure, values=None, *, pade_order: int = 0,
-                inputs: Iterable[str] | None = None) -> NamedStateSpace:
+def state_space(structure: ModelStructure, values=None, *, pade_order: int = 0
+                ) -> NamedStateSpace:
     """The model at ``values`` as a :class:`NamedStateSpace` of the signals it can produce.
 
     Args:
@@ -123,9 +123,8 @@ def state_space(structure: ModelStructure, values=None, *, pade_order: int = 0,
             (delays as ``tau_<derivative>``) or None for the initial values.
         pade_order: 0 keeps the delays as data only; n ≥ 1 adds an n-th order Padé
             realisation per delayed signal (states ``tau_<derivative>_1 … _n``).
-        inputs: controls to keep (default: every control that drives something).
     Raises:
-        StructureError: no kept control drives a state or an output.
+        StructureError: no control drives a state or an output.
     """
     if pade_order < 0:
         raise StructureError(f"pade_order must be 0 (delays as data) or a positive order, got "
@@ -134,16 +133,10 @@ def state_space(structure: ModelStructure, values=None, *, pade_order: int = 0,
     delays = tuple(DelayedTerm(d.name, d.equation, d.variable, float(tau))
                    for d, tau in zip(structure.derivatives, table.delay) if tau > 0)
     a, b, c, d, names = _assemble(structure, table, pade_order)
-    wanted = CONTROLS if inputs is None else tuple(inputs)
-    unknown = [name for name in wanted if name not in CONTROLS]
-    if unknown:
-        raise StructureError(f"unknown control(s) {', '.join(unknown)}; controls: "
-                             f"{', '.join(CONTROLS)}")
-    columns = [CONTROLS.index(n) for n in wanted
-               if np.any(b[:, CONTROLS.index(n)]) or np.any(d[:, CONTROLS.index(n)])]
+    columns = [j for j in range(len(CONTROLS)) if np.any(b[:, j]) or np.any(d[:, j])]
     if not columns:
-        raise StructureError(f"no control among {', '.join(wanted)} drives a state or an "
-                             f"output of this model; check its control derivatives")
+        raise StructureError("no control drives a state or an output of this model; give it "
+                             "control derivatives (X_long, M_long …)")
     rows, kept = _produced(a, b, c, d, columns)
     units = {name: structure.units.label(name) for name in STATES + CONTROLS + OUTPUTS}
     units.update({name: units[source] for name, source in names[len(STATES):]})
