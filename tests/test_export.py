@@ -380,3 +380,9 @@ def test_a_study_of_the_longitudinal_files_skips_the_pairs_it_cannot_verify(flig
     assert sum("not verified" in note for note in verified["notes"]) == 6
     exported = load_result(root / "study" / "my-hover" / "result.json").state_space()
     assert exported.states == ("u", "w", "q", "theta")
+    assert main(["verify", str(root / "study" / "my-hover" / "result.json"), str(root / "sweeps"),
+                 "--model", "no delays", "--out", str(root / "study-verification"),
+                 "--no-figures"]) == ExitStatus.OK
+    summary = _strict_json(root / "study-verification" / "verification.json")
+    assert summary["pairs"][0]["checks"] == record["frequency_verification"]["no delays"][
+        "pairs"][0]["checks"]

@@ -5,13 +5,13 @@ Usage::
     rotorid verify [MODEL.toml] RESULT.json SWEEPS... [--pairs q/long,p/long] [--out DIR]
 
 ``RESULT.json`` is an estimate written by ``rotorid identify`` or a study's ``result.json``
-(its model with delays), read by :func:`rotorid.estimation.result_file.load_result`:
-``parameters`` and ``delays`` (``{"L_lat": {"value": 0.05}}``), ``fixed`` values and
-``structure`` (the model file's path, relative to the result file, or an embedded model-file
-mapping). ``MODEL.toml`` overrides the structure (the estimate JSON of ``Estimate.as_dict``
-names none, so give it). Free derivatives of the structure that the result does not list were
-removed by the reduction and are dropped; output biases and initial states of the
-identification records are ignored. SWEEPS are maneuver files, directories or glob patterns;
+(its model with delays, or the one ``--model`` names), read by
+:func:`rotorid.estimation.result_file.load_result`: ``parameters`` and ``delays``
+(``{"L_lat": {"value": 0.05}}``), ``fixed`` values and ``structure`` (the model file's path,
+relative to the result file, or an embedded model-file mapping). ``MODEL.toml`` overrides
+the structure (the estimate JSON of ``Estimate.as_dict`` names none, so give it). Free
+derivatives of the structure that the result does not list were removed by the reduction and
+are dropped; output biases and initial states of the identification records are ignored. SWEEPS are maneuver files, directories or glob patterns;
 when the maneuvers carry ``kind`` metadata only the ``sweep`` ones are used.
 
 A pair the model or the sweeps cannot produce (no sweep excites its input, the model's output
@@ -35,6 +35,8 @@ DEFAULT_ENVELOPES = "muad,aee,mismatch-cost"
 
 
 def add_arguments(parser) -> None:
+    from rotorid.estimation.result_file import STUDY_MODELS
+
     parser.add_argument("files", nargs="+", metavar="FILE",
                         help="[MODEL.toml] RESULT.json SWEEPS...: optional model file, the "
                              "estimate JSON, then sweep files, directories or glob patterns")
@@ -42,6 +44,8 @@ def add_arguments(parser) -> None:
                         help="comma-separated OUTPUT/INPUT pairs (default: the paper's "
                              "q/long,p/long,q/lat,p/lat,r/coll,az/coll,r/ped,ay/ped, limited "
                              "to the axes the sweeps excite)")
+    parser.add_argument("--model", choices=STUDY_MODELS, default=None,
+                        help="which model of a study's result.json (default: with delays)")
     parser.add_argument("--envelopes", default=DEFAULT_ENVELOPES,
                         help=f"comma-separated envelope names ({DEFAULT_ENVELOPES})")
     parser.add_argument("--out", default="verification", metavar="DIR",
@@ -136,7 +140,8 @@ def run(args) -> int:
     from rotorid.verification.producible import producible_pairs
 
     model, result_path, locations = _split(args.files)
-    identified = load_result(result_path, structure=None if model is None else load_model(model))
+    identified = load_result(result_path, args.model,
+                             None if model is None else load_model(model))
     structure, values = identified.structure, identified.values
     sweeps = load_sweeps(locations)
     _check_units(structure, sweeps)
