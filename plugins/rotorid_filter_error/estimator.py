@@ -19,9 +19,10 @@ at the optimum) steps with the Fisher information
 
     M_ij = Σ_n ∂ν_nᵀ/∂θ_i B⁻¹ ∂ν_n/∂θ_j + ½ N tr(B⁻¹ ∂B/∂θ_i B⁻¹ ∂B/∂θ_j)
 
-and the exact gradient of L. The sensitivities ∂ν/∂θ and ∂B/∂θ are exact: one batched filter
-pass over complex parameter directions (the complex step through the discretisation, the
-doubling algorithm of the Riccati equation and the filter). M is also the information matrix
+and the exact gradient of L. The sensitivities ∂ν/∂θ and ∂B/∂θ are exact: the complex step
+through the discretisation and the doubling algorithm of the Riccati equation gives the
+derivatives of Φ, H, K and B, and one batched pass runs the predicted states' sensitivities
+through the filter's own recursion (:mod:`.kalman`). M is also the information matrix
 of the Cramér-Rao bounds. Because the filter is stable whatever the model's stability, an
 unstable model is identified directly, on the full records.
 """
@@ -29,6 +30,7 @@ unstable model is identified directly, on the full records.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from concurrent.futures import ThreadPoolExecutor
 
 import attrs
 import numpy as np
@@ -119,7 +121,7 @@ class FilterErrorProblem:
     def innovations(self, values) -> tuple[np.ndarray, np.ndarray]:
         """Time-major innovations (N, M, 8) and their covariance B (8, 8) at ``values``."""
         system, steady = self.filter(values)
-        blocks = [block[:, 0] for _, block in innovation_blocks(system, steady, self.records)]
+        blocks = [block for _, block, _ in innovation_blocks(system, steady, self.records)]
         return np.concatenate(blocks), steady.innovation[0]
 
     def evaluate(self, values):
@@ -146,12 +148,17 @@ class FilterErrorProblem:
         p = len(self.parameter_names)
         b_inv = np.linalg.inv(b)
         whiten = np.linalg.cholesky(b_inv)                           # B⁻¹ = W Wᵀ
-        information, gradient = np.zeros((p, p)), np.zeros(p)
-        for _, block in innovation_blocks(system, steady, self.records):
-            sens = (block.imag / COMPLEX_STEP) @ whiten                # (L, P, M, 8)
-            flat = np.moveaxis(sens, 1, 0).reshape(p, -1)
-            information += flat @ flat.T
-            gradient += flat @ (block[:, 0].real @ whiten).reshape(-1)
+
+        def products(block, d_block):
+            flat = np.moveaxis(d_block @ whiten, 2, 0).reshape(p, -1)   # (P, L·M·8)
+            return flat @ flat.T, flat @ (block @ whiten).reshape(-1)
+
+        # the products of one block run on a second thread while the filter steps the next
+        with ThreadPoolExecutor(max_workers=1) as pool:
+            parts = [pool.submit(products, block, d_block)
+                     for _, block, d_block in innovation_blocks(system, steady, self.records)]
+            information = sum(part.result()[0] for part in parts)
+            gradient = sum(part.result()[1] for part in parts)
         db = b_inv @ (steady.innovation.imag / COMPLEX_STEP)          # B⁻¹ ∂B/∂θ_i
         scatter = sum(e.T @ e for e in residuals)
         n = self.n_samples

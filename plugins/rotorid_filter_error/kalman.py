@@ -1,4 +1,4 @@
-"""The steady-state Kalman filter run over a batch of maneuvers and parameter directions.
+"""The steady-state Kalman filter run over a batch of maneuvers, with parameter sensitivities.
 
 Predictor form, with x̃_n the state predicted from the samples before n::
 
@@ -6,8 +6,9 @@ Predictor form, with x̃_n the state predicted from the samples before n::
     x̃_n+1 = Φ (x̃_n + K ν_n) + Σ_j Pu[j] u_n−j
 
 Maneuvers run side by side (time-major, padded to the longest; padded innovations are zero),
-each from its initial state; the directions (leading axis D) are complex-step parameter
-directions or a single nominal system.
+each from its initial state. A system built for complex-step parameter directions (leading
+axis D) gives the derivatives of its matrices, and the pass returns the innovations'
+derivatives too.
 """
 
 from __future__ import annotations
@@ -18,6 +19,8 @@ import attrs
 import numpy as np
 from rotorid.data import ManeuverSet
 from rotorid.errors import DataError
+
+from rotorid.simulation.discretisation import COMPLEX_STEP
 
 from .riccati import SteadyStateFilter
 from .system import CompanionSystem, lagged_inputs
@@ -68,23 +71,80 @@ class Records:
         return [innovations[:n, b] for b, n in enumerate(self.lengths)]
 
 
+def _nominal_and_derivative(stack: np.ndarray):
+    """A real stack (1, …) → (its array, None); complex directions (D, …) → (the nominal
+    array, the derivatives Im/h (D, …))."""
+    if np.iscomplexobj(stack):
+        return stack[0].real, stack.imag / COMPLEX_STEP
+    return stack[0], None
+
+
+def _run(start: np.ndarray, transition_t: np.ndarray, forcing: np.ndarray) -> np.ndarray:
+    """States z_0 … z_L−1 (L, R, S) of z_n+1 = z_n @ transition_t + forcing[n] from z_0 =
+    ``start`` (R, S); the state after the block is left in ``start``."""
+    states = np.empty(forcing.shape)
+    states[0] = start
+    for j in range(forcing.shape[0] - 1):
+        np.matmul(states[j], transition_t, out=states[j + 1])
+        states[j + 1] += forcing[j]
+    start[...] = states[-1] @ transition_t + forcing[-1]
+    return states
+
+
 def innovation_blocks(system: CompanionSystem, steady: SteadyStateFilter,
-                      records: Records) -> Iterator[tuple[int, np.ndarray]]:
-    """Yield ``(first, ν)`` with ν (L, D, M, 8) the innovations of samples first … first+L−1."""
+                      records: Records) -> Iterator[tuple[int, np.ndarray, np.ndarray | None]]:
+    """Yield ``(first, ν, ∂ν)`` for samples first … first+L−1: innovations ν (L, M, 8) and,
+    when ``system`` and ``steady`` hold complex-step directions, their derivatives ∂ν
+    (L, M, D, 8) (else None).
+
+    The step runs in closed-loop form x̃_n+1 = A x̃_n + e_n with A = Φ(I − KH) and
+    e_n = Σ Pu u + ΦK (z_n − Σ Du u). The sensitivities ∂x̃ obey the same A, forced by ∂A x̃_n
+    + ∂e_n, in real arithmetic: per block the predicted states are run first, then every
+    forcing term and every output product is one large product over the block, and only the
+    step ∂x̃ @ Aᵀ of all maneuvers and directions stays inside the time loop.
+    """
     lagged = lagged_inputs(records.inputs, system.taps)
     n, count = records.mask.shape
-    state = np.zeros((system.transition.shape[0], count, system.size),
-                     dtype=system.transition.dtype)
-    state[:, :, :8] = records.x0
-    to_output = np.swapaxes(system.output, -1, -2)
-    to_next = np.swapaxes(system.transition, -1, -2)
-    correction = np.swapaxes(system.transition @ steady.gain, -1, -2)      # (ΦK)ᵀ
+    correction = system.transition @ steady.gain                                   # ΦK
+    a, d_a = _nominal_and_derivative(system.transition - correction @ system.output)
+    h, d_h = _nominal_and_derivative(system.output)
+    k, d_k = _nominal_and_derivative(correction)
+    pu, d_pu = _nominal_and_derivative(system.state_forcing)
+    du, d_du = _nominal_and_derivative(system.output_forcing)
+    size = a.shape[0]
+    a_t = np.ascontiguousarray(a.T)
+    state = np.zeros((count, size))
+    state[:, :8] = records.x0
+    if d_a is not None:
+        n_dir = d_a.shape[0]
+        # (x̃ @ coupling)[m, d] = ((∂H x̃)ᵀ, (∂A x̃)ᵀ) of maneuver m and direction d
+        coupling = np.concatenate([d_h, d_a], axis=1).transpose(2, 0, 1).reshape(size, -1)
+        sens = np.zeros((count * n_dir, size))                     # rows (maneuver, direction)
+        # inputs (…, T) @ these give the directions' forcing side by side, (…, D·S) / (…, D·8)
+        d_state_forcing = d_pu.transpose(1, 0, 2).reshape(d_pu.shape[1], -1)
+        d_output_forcing = d_du.transpose(1, 0, 2).reshape(d_du.shape[1], -1)
+        d_gain = d_k.transpose(2, 0, 1).reshape(8, -1)             # ∂(ΦK) applied to z − Du u
     for first in range(0, n, BLOCK):
         stop = min(first + BLOCK, n)
-        block = np.empty((stop - first,) + state.shape[:2] + (8,), dtype=state.dtype)
-        for k in range(first, stop):
-            innovation = (records.outputs[k] - state @ to_output
-                          - lagged[k] @ system.output_forcing) * records.mask[k][:, None]
-            block[k - first] = innovation
-            state = state @ to_next + lagged[k] @ system.state_forcing + innovation @ correction
-        yield first, block
+        length = stop - first
+        inputs = lagged[first:stop]                                                # (L, M, T)
+        mask = records.mask[first:stop, :, None]
+        corrected = records.outputs[first:stop] - inputs @ du                      # (L, M, 8)
+        states = _run(state, a_t, inputs @ pu + corrected @ k.T)                   # (L, M, S)
+        innovations = (corrected - states @ h.T) * mask
+        if d_a is None:
+            yield first, innovations, None
+            continue
+        rows = length * count
+        products = (states.reshape(rows, size) @ coupling).reshape(length, count, n_dir, -1)
+        flat_inputs = inputs.reshape(rows, -1)
+        d_corrected = -(flat_inputs @ d_output_forcing).reshape(length, count, n_dir, 8)
+        d_drive = ((flat_inputs @ d_state_forcing + corrected.reshape(rows, 8) @ d_gain)
+                   .reshape(length, count, n_dir, size)
+                   + (d_corrected.reshape(-1, 8) @ k.T).reshape(length, count, n_dir, size)
+                   + products[..., 8:])
+        d_states = _run(sens, a_t, d_drive.reshape(length, count * n_dir, size))
+        d_innovations = (d_corrected - products[..., :8]
+                         - (d_states.reshape(-1, size) @ h.T).reshape(length, count, n_dir, 8)
+                         ) * mask[..., None]
+        yield first, innovations, d_innovations
