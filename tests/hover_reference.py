@@ -2,7 +2,7 @@
 
 The A and B matrices are Padfield's Helisim Bo-105 hover model (Padfield, *Helicopter Flight
 Dynamics*, 2nd ed., 2007, pp. 287-291; SI units, per rad of blade angle; states
-u w q θ v p φ r; controls θ0 θ1s θ1c θ0T). The trim attitudes Θ0 = 2.245°, Φ0 = −2.6° are the
+u w q θ v p φ r; controls θ0 θ1s θ1c θ0T), held once in ``rotorid_helisim.linear_plant``. The trim attitudes Θ0 = 2.245°, Φ0 = −2.6° are the
 ones its gravity and kinematic terms imply. Stick mixing for the tests: 1 % of travel = 0.1° of
 blade angle, long → −θ1s (stick forward, nose down), lat → −θ1c (stick right, roll right),
 coll → θ0, ped → −θ0T (right pedal, nose right).
@@ -17,27 +17,9 @@ from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
 from rotorid.simulation.discretisation import discrete_maps
 from rotorid.simulation.simulator import simulate
 from rotorid.units import FLIGHT_TEST, convert_state_space
+from rotorid_helisim.linear_plant import HOVER_A as A_SI
+from rotorid_helisim.linear_plant import HOVER_B as B_SI_BLADE
 
-A_SI = np.array([
-    [-0.0211, 0.0113, 0.7086, -9.803, -0.017, 0.0183, 0.0, 0.0],
-    [0.0091, -0.322, -0.0311, -0.3838, -0.0008, -0.0006, 0.4445, 0.0],
-    [0.1045, -0.0151, -3.747, 0.0, 0.09, -0.0972, 0.0, 0.0],
-    [0.0, 0.0, 0.999, 0.0, 0.0, 0.0, 0.0, 0.0453],
-    [0.017, -0.001, 0.0182, 0.0168, -0.0405, -0.7365, 9.793, 0.1017],
-    [0.3402, 0.0155, 0.3688, 0.0, -0.4114, -14.19, 0.0, 0.1277],
-    [0.0, 0.0, -0.0017, 0.0, 0.0, 1.0, 0.0, 0.0392],
-    [0.0607, 0.0088, 0.0656, 0.0, -0.0173, -2.43, 0.0, -0.3185],
-])
-B_SI_BLADE = np.array([
-    [3.653, -8.477, 3.308, 0.0],
-    [-92.96, -0.002, -0.0004, 0.0],
-    [-5.681, 45.0, -17.56, 0.0],
-    [0.0, 0.0, 0.0, 0.0],
-    [-0.5527, -3.308, -8.477, 5.043],
-    [4.993, -66.37, -170.1, 6.197],
-    [0.0, 0.0, 0.0, 0.0],
-    [19.73, -11.8, -30.24, -15.46],
-])
 #: blade angle (rad) per % stick, columns long lat coll ped
 MIXING = math.radians(0.1) * np.array([[0, 0, 1, 0], [-1, 0, 0, 0], [0, -1, 0, 0], [0, 0, 0, -1]],
                                       dtype=float)

@@ -1,12 +1,14 @@
 """The study scripts of docs/examples run, in their quick modes, and give sensible models.
 
-study_hover.py and study_forward.py run the built-in cases' quick variants (about 20 s each),
-own_flight_data.py identifies from CSV files it writes itself, custom_estimator.py registers
+study_hover.py and study_forward.py run the built-in cases' quick variants: by default on
+from the reduction steps of the session's shared quick study (``quick_study`` in conftest.py),
+from scratch in the slow suite (about 20 s each); own_flight_data.py identifies from CSV files it writes itself, custom_estimator.py registers
 an equation-error estimator plugin and runs a case with it.
 """
 
 import importlib.util
 import json
+import shutil
 import sys
 from pathlib import Path
 
@@ -77,27 +79,43 @@ def _check_study_result(result, out_dir, out):
         name: row["truth_linearisation"] for name, row in result.key_derivatives().items()}
 
 
-def test_hover_study_example(tmp_path, capsys):
-    result = _load("study_hover").main([str(tmp_path), "--quick"])
+def _run_example(name, out_dir, argv, resume_from=None):
+    """Run a study example into ``out_dir``; with ``resume_from`` (a case directory of the
+    shared quick study), on from a copy of its finished reduction steps and delays."""
+    if resume_from is not None:
+        shutil.copytree(resume_from, out_dir / resume_from.name)
+        argv = [*argv, "--resume"]
+    return _load(name).main([str(out_dir), *argv])
+
+
+def _check_hover_example(result, out_dir, out):
     assert result.case.is_quick and result.name == "hover"
-    out = capsys.readouterr().out
-    identified, truth = _check_study_result(result, tmp_path, out)
+    identified, truth = _check_study_result(result, out_dir, out)
     # The figures and the report (the default; the other tests skip them).
-    assert f"Report: {tmp_path / 'report.html'}" in out
-    assert (tmp_path / "report.html").stat().st_size > 1000
-    assert (tmp_path / "hover" / "figures" / "rmse.png").stat().st_size > 10_000
+    assert f"Report: {out_dir / 'report.html'}" in out
+    assert (out_dir / "report.html").stat().st_size > 1000
+    assert (out_dir / "hover" / "figures" / "rmse.png").stat().st_size > 10_000
     for name in ("M_w", "M_u", "Z_w", "L_v"):      # hover signs (truth-model.md)
         assert np.sign(identified[name]) == np.sign(truth[name]), name
     assert identified["Z_w"] == pytest.approx(truth["Z_w"], rel=0.15)
     assert identified["M_w"] == pytest.approx(truth["M_w"], rel=0.3)
 
 
-def test_forward_study_example_follows_the_quick_environment_variable(tmp_path, capsys,
-                                                                      monkeypatch):
-    monkeypatch.setenv("ROTORID_QUICK", "1")
-    result = _load("study_forward").main([str(tmp_path), "--no-figures"])
+def test_hover_study_example_resumed_from_the_shared_quick_study(quick_study, tmp_path, capsys):
+    result = _run_example("study_hover", tmp_path, ["--quick"], quick_study.out / "hover")
+    assert result.resumed_steps == len(result.path.steps)
+    _check_hover_example(result, tmp_path, capsys.readouterr().out)
+
+
+@pytest.mark.slow
+def test_hover_study_example(tmp_path, capsys):
+    _check_hover_example(_run_example("study_hover", tmp_path, ["--quick"]), tmp_path,
+                         capsys.readouterr().out)
+
+
+def _check_forward_example(result, out_dir, out):
     assert result.case.is_quick and result.condition.airspeed_kt == pytest.approx(70.0)
-    identified, truth = _check_study_result(result, tmp_path, capsys.readouterr().out)
+    identified, truth = _check_study_result(result, out_dir, out)
     for name in ("N_v", "M_u", "Z_w", "L_v", "Y_v"):   # 70 kt: N_v > 0 (fin)
         assert np.sign(identified[name]) == np.sign(truth[name]), name
     assert identified["N_v"] > 0 and identified["Z_w"] == pytest.approx(truth["Z_w"], rel=0.2)
@@ -105,6 +123,23 @@ def test_forward_study_example_follows_the_quick_environment_variable(tmp_path, 
     checks = {m: result.verification[m]["q/lat"].checks["muad"] for m in ("no delays",
                                                                          "with delays")}
     assert checks["with delays"].n_inside > checks["no delays"].n_inside
+
+
+def test_forward_study_example_resumed_from_the_shared_quick_study(quick_study, tmp_path,
+                                                                   capsys, monkeypatch):
+    monkeypatch.setenv("ROTORID_QUICK", "1")
+    result = _run_example("study_forward", tmp_path, ["--no-figures"],
+                          quick_study.out / "forward")
+    assert result.resumed_steps == len(result.path.steps)
+    _check_forward_example(result, tmp_path, capsys.readouterr().out)
+
+
+@pytest.mark.slow
+def test_forward_study_example_follows_the_quick_environment_variable(tmp_path, capsys,
+                                                                      monkeypatch):
+    monkeypatch.setenv("ROTORID_QUICK", "1")
+    _check_forward_example(_run_example("study_forward", tmp_path, ["--no-figures"]),
+                           tmp_path, capsys.readouterr().out)
 
 
 def test_own_flight_data_example_writes_csv_files_and_identifies_from_them(tmp_path, capsys):

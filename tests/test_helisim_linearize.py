@@ -1,7 +1,8 @@
 """Linearisation of the truth model against Padfield's Helisim Bo-105 (truth-model.md §6, §8, §9).
 
-The reference hover A and B below are Padfield (2007) pp. 287–291 as tabulated in
-truth-model.md §6 (states u w q θ v p φ r, SI, ṗ and ṙ rows primed, B per rad of blade angle).
+The reference hover A and B are Padfield (2007) pp. 287–291 as tabulated in truth-model.md §6
+and held once in ``rotorid_helisim.linear_plant`` (states u w q θ v p φ r, SI, ṗ and ṙ rows
+primed, B per rad of blade angle).
 """
 
 import json
@@ -9,32 +10,14 @@ import json
 import numpy as np
 import pytest
 from rotorid.units import FOOT
+from rotorid_helisim.linear_plant import HOVER_A as REFERENCE_A
+from rotorid_helisim.linear_plant import HOVER_B as REFERENCE_B
 from rotorid_helisim.linearize import PADFIELD_STATES, jacobians, linearize
 from rotorid_helisim.model import Bo105Model
 from rotorid_helisim.parameters import Bo105Config
 from rotorid_helisim.trim import trim
 from scipy.linalg import expm
 
-REFERENCE_A = np.array([
-    [-0.0211, 0.0113, 0.7086, -9.803, -0.017, 0.0183, 0, 0],
-    [0.0091, -0.322, -0.0311, -0.3838, -0.0008, -0.0006, 0.4445, 0],
-    [0.1045, -0.0151, -3.747, 0, 0.09, -0.0972, 0, 0],
-    [0, 0, 0.999, 0, 0, 0, 0, 0.0453],
-    [0.017, -0.001, 0.0182, 0.0168, -0.0405, -0.7365, 9.793, 0.1017],
-    [0.3402, 0.0155, 0.3688, 0, -0.4114, -14.19, 0, 0.1277],
-    [0, 0, -0.0017, 0, 0, 1, 0, 0.0392],
-    [0.0607, 0.0088, 0.0656, 0, -0.0173, -2.43, 0, -0.3185],
-])
-REFERENCE_B = np.array([
-    [3.653, -8.477, 3.308, 0],
-    [-92.96, -0.002, -0.0004, 0],
-    [-5.681, 45, -17.56, 0],
-    [0, 0, 0, 0],
-    [-0.5527, -3.308, -8.477, 5.043],
-    [4.993, -66.37, -170.1, 6.197],
-    [0, 0, 0, 0],
-    [19.73, -11.8, -30.24, -15.46],
-])
 STATE = {name: i for i, name in enumerate(PADFIELD_STATES)}
 CONTROL = {"theta0": 0, "theta1s": 1, "theta1c": 2, "theta0T": 3}
 ROW = {"X": "u", "Z": "w", "M": "q", "Y": "v", "L": "p", "N": "r"}
@@ -54,25 +37,10 @@ def _entry(matrix_a, matrix_b, name):
     return matrix_a[row, STATE[column]]
 
 
-@pytest.fixture(scope="module")
-def model():
-    return Bo105Model()
-
-
-@pytest.fixture(scope="module")
-def hover_trim(model):
-    return trim(model, 0.0)
-
-
-@pytest.fixture(scope="module")
-def hover(model, hover_trim):
-    return linearize(model, hover_trim)
-
-
 # ---------------------------------------------------------------- hover against Helisim (§6)
 @pytest.mark.parametrize("name", DOMINANT + MAIN_CONTROLS)
-def test_hover_dominant_derivatives_within_30_percent(hover, name):
-    ours = _entry(hover.A, hover.B, name)
+def test_hover_dominant_derivatives_within_30_percent(hover_linear, name):
+    ours = _entry(hover_linear.A, hover_linear.B, name)
     reference = _entry(REFERENCE_A, REFERENCE_B, name)
     assert np.sign(ours) == np.sign(reference)
     assert ours == pytest.approx(reference, rel=0.30)
@@ -83,22 +51,24 @@ def test_hover_dominant_derivatives_within_30_percent(hover, name):
     "larger N'_r): primed N'_r is −0.43 against Helisim's −0.32 because of the I_xz coupling "
     "with L_r, whose sign differs (shaft-tilt projection of the yaw rate on the hub roll "
     "rate); the unprimed yaw damping agrees within 10 %, see the next test"))
-def test_hover_yaw_damping_within_30_percent(hover):
-    assert _entry(hover.A, hover.B, "N_r") == pytest.approx(REFERENCE_A[7, 7], rel=0.30)
+def test_hover_yaw_damping_within_30_percent(hover_linear):
+    assert _entry(hover_linear.A, hover_linear.B, "N_r") == pytest.approx(REFERENCE_A[7, 7],
+                                                                          rel=0.30)
 
 
-def test_hover_documented_differences(hover):
+def test_hover_documented_differences(hover_linear):
     """Differences stated in docs/truth-model.md with their expected size (reference §2.0)."""
-    ratio = lambda name: _entry(hover.A, hover.B, name) / _entry(REFERENCE_A, REFERENCE_B, name)  # noqa: E731
+    ratio = lambda name: (_entry(hover_linear.A, hover_linear.B, name)  # noqa: E731
+                          / _entry(REFERENCE_A, REFERENCE_B, name))
     # N'_r about 35 % larger (same sign); unprimed N_r/I_zz = N'_r − (I_xz/I_zz)·L'_r agrees
     assert 1.2 < ratio("N_r") < 1.6
     k = 660.0 / 4099.0
     unprimed = lambda a: a[STATE["r"], STATE["r"]] - k * a[STATE["p"], STATE["r"]]  # noqa: E731
-    assert unprimed(hover.A) == pytest.approx(unprimed(REFERENCE_A), rel=0.10)
+    assert unprimed(hover_linear.A) == pytest.approx(unprimed(REFERENCE_A), rel=0.10)
     # unprimed L_r/I_xx: same magnitude as Helisim, opposite sign (shaft-tilt rate projection)
     kx = 660.0 / 1433.0
     roll_yaw = lambda a: a[STATE["p"], STATE["r"]] - kx * a[STATE["r"], STATE["r"]]  # noqa: E731
-    assert -roll_yaw(hover.A) == pytest.approx(roll_yaw(REFERENCE_A), rel=0.30)
+    assert -roll_yaw(hover_linear.A) == pytest.approx(roll_yaw(REFERENCE_A), rel=0.30)
     # blade-element in-plane force: X_q and Y_p about half of Helisim
     assert 0.35 < ratio("X_q") < 0.75
     assert 0.35 < ratio("Y_p") < 0.75
@@ -106,10 +76,10 @@ def test_hover_documented_differences(hover):
     assert ratio("N_p") == pytest.approx(1.0, abs=0.3)
 
 
-def test_hover_kinematic_and_gravity_rows(hover, hover_trim):
+def test_hover_kinematic_and_gravity_rows(hover_linear, hover_trim):
     """Rows θ̇, φ̇ and the gravity terms follow the trim attitude exactly."""
     theta, phi = np.radians(hover_trim.theta_deg), np.radians(hover_trim.phi_deg)
-    a = hover.A
+    a = hover_linear.A
     assert a[STATE["theta"], STATE["q"]] == pytest.approx(np.cos(phi), abs=1e-6)
     assert a[STATE["theta"], STATE["r"]] == pytest.approx(-np.sin(phi), abs=1e-6)
     assert a[STATE["phi"], STATE["p"]] == pytest.approx(1.0, abs=1e-6)
@@ -118,8 +88,8 @@ def test_hover_kinematic_and_gravity_rows(hover, hover_trim):
         9.80665 * np.cos(theta) * np.cos(phi), rel=1e-4)
 
 
-def test_hover_eigenvalues_in_the_reference_places(hover):
-    eig = hover.eigenvalues
+def test_hover_eigenvalues_in_the_reference_places(hover_linear):
+    eig = hover_linear.eigenvalues
     real = eig[np.abs(eig.imag) < 1e-9].real
     # roll subsidence −14.21, pitch subsidence −3.836
     assert np.min(real) == pytest.approx(-14.21, rel=0.30)
@@ -137,11 +107,11 @@ def test_hover_eigenvalues_in_the_reference_places(hover):
 
 
 # ---------------------------------------------------------------- numerical correctness
-def test_linear_full_model_predicts_the_nonlinear_response(model, hover_trim):
+def test_linear_full_model_predicts_the_nonlinear_response(truth_model, hover_trim):
     """A small perturbation of the nonlinear model (RK4) against exp(A t) of the full
     linearisation: an independent check of the central-difference Jacobian."""
-    names, a, _ = jacobians(model, hover_trim)
-    columns = [model.index[n] for n in names]
+    names, a, _ = jacobians(truth_model, hover_trim)
+    columns = [truth_model.index[n] for n in names]
     dx0 = np.zeros(len(names))
     dx0[names.index("u")] = 0.05
     dx0[names.index("p")] = 0.005
@@ -151,10 +121,10 @@ def test_linear_full_model_predicts_the_nonlinear_response(model, hover_trim):
     stick = hover_trim.stick[None]
     dt, steps = 0.002, 250
     for _ in range(steps):
-        k1 = model.derivatives(x, stick)
-        k2 = model.derivatives(x + 0.5 * dt * k1, stick)
-        k3 = model.derivatives(x + 0.5 * dt * k2, stick)
-        k4 = model.derivatives(x + dt * k3, stick)
+        k1 = truth_model.derivatives(x, stick)
+        k2 = truth_model.derivatives(x + 0.5 * dt * k1, stick)
+        k3 = truth_model.derivatives(x + 0.5 * dt * k2, stick)
+        k4 = truth_model.derivatives(x + dt * k3, stick)
         x = x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
     nonlinear = x[0, columns] - hover_trim.state[columns]
     linear = expm(a * dt * steps) @ dx0
@@ -163,43 +133,44 @@ def test_linear_full_model_predicts_the_nonlinear_response(model, hover_trim):
         assert nonlinear[i] == pytest.approx(linear[i], rel=0.02, abs=1e-5), name
 
 
-def test_central_differences_are_converged(model, hover_trim, monkeypatch):
+def test_central_differences_are_converged(truth_model, hover_trim, monkeypatch):
     """Halving every perturbation step changes the residualised derivatives by < 0.1 %."""
     import rotorid_helisim.linearize as lin
 
-    base = linearize(model, hover_trim)
+    base = linearize(truth_model, hover_trim)
     monkeypatch.setattr(lin, "_STEPS", {k: v / 2 for k, v in lin._STEPS.items()})
     monkeypatch.setattr(lin, "_INFLOW_STEP", lin._INFLOW_STEP / 2)
     monkeypatch.setattr(lin, "_BLADE_STEP", lin._BLADE_STEP / 2)
-    half = linearize(model, hover_trim)
+    half = linearize(truth_model, hover_trim)
     for name in DOMINANT + MAIN_CONTROLS + ["N_r"]:
         assert _entry(half.A, half.B, name) == pytest.approx(_entry(base.A, base.B, name),
                                                              rel=1e-3), name
 
 
-def test_flight_test_units_per_percent_stick(model, hover_trim, hover):
-    ft = linearize(model, hover_trim, units="flight-test")
+def test_flight_test_units_per_percent_stick(truth_model, hover_trim, hover_linear):
+    ft = linearize(truth_model, hover_trim, units="flight-test")
     assert ft.controls == ("long", "lat", "coll", "ped")
-    gain = model.config.mixing.gain
+    gain = truth_model.config.mixing.gain
     deg = 180 / np.pi
     # M_long [deg/s² per %] = M_θ1s [1/s² per rad] · (rad per %) · deg/rad
     assert ft.derivative("q", "long") == pytest.approx(
-        hover.derivative("q", "theta1s") * gain[1] * deg, rel=1e-12)
+        hover_linear.derivative("q", "theta1s") * gain[1] * deg, rel=1e-12)
     # Z_coll [ft/s² per %]
     assert ft.derivative("w", "coll") == pytest.approx(
-        hover.derivative("w", "theta0") * gain[0] / FOOT, rel=1e-12)
+        hover_linear.derivative("w", "theta0") * gain[0] / FOOT, rel=1e-12)
     # M_u [deg/s² per ft/s]
     assert ft.derivative("q", "u") == pytest.approx(
-        hover.derivative("q", "u") * deg * FOOT, rel=1e-12)
-    np.testing.assert_allclose(np.sort_complex(ft.eigenvalues), np.sort_complex(hover.eigenvalues),
+        hover_linear.derivative("q", "u") * deg * FOOT, rel=1e-12)
+    np.testing.assert_allclose(np.sort_complex(ft.eigenvalues),
+                               np.sort_complex(hover_linear.eigenvalues),
                                rtol=1e-9, atol=1e-12)
 
 
-def test_bad_options_are_named(model, hover_trim):
+def test_bad_options_are_named(truth_model, hover_trim):
     from rotorid.errors import StructureError
 
     with pytest.raises(StructureError, match="unknown unit system"):
-        linearize(model, hover_trim, units="imperial")
+        linearize(truth_model, hover_trim, units="imperial")
     other = Bo105Model(Bo105Config(inflow="pitt-peters"))
     with pytest.raises(StructureError, match="other states"):
         linearize(other, hover_trim)
@@ -207,8 +178,8 @@ def test_bad_options_are_named(model, hover_trim):
         hover_trim.state[0] = 1.0  # results are read-only values
 
 
-def test_as_dict_and_cli_json(capsys, hover):
-    data = json.loads(json.dumps(hover.as_dict()))
+def test_as_dict_and_cli_json(capsys, hover_linear):
+    data = json.loads(json.dumps(hover_linear.as_dict()))
     assert data["states"] == list(PADFIELD_STATES)
     assert np.array(data["A"]).shape == (8, 8) and np.array(data["B"]).shape == (8, 4)
     from rotorid.cli.main import main
@@ -231,16 +202,16 @@ FORWARD = {
 
 
 @pytest.fixture(scope="module")
-def sweep(model):
+def sweep(truth_model):
     """Residualised linearisations every 10 kt from hover to 140 kt."""
     speeds = np.arange(0.0, 141.0, 10.0)
-    return speeds, [linearize(model, trim(model, v)) for v in speeds]
+    return speeds, [linearize(truth_model, trim(truth_model, v)) for v in speeds]
 
 
 @pytest.mark.parametrize("index, airspeed", [(0, 60.0), (1, 80.0)])
 @pytest.mark.parametrize("name", sorted(FORWARD))
-def test_forward_flight_signs_and_magnitudes(model, name, index, airspeed):
-    linear = linearize(model, trim(model, airspeed))
+def test_forward_flight_signs_and_magnitudes(truth_model, name, index, airspeed):
+    linear = linearize(truth_model, trim(truth_model, airspeed))
     ours = _entry(linear.A, linear.B, name)
     reference = FORWARD[name][index]
     assert np.sign(ours) == np.sign(reference)
@@ -248,16 +219,16 @@ def test_forward_flight_signs_and_magnitudes(model, name, index, airspeed):
 
 
 @pytest.mark.parametrize("airspeed", [60.0, 70.0, 80.0])
-def test_forward_flight_pitch_stiffness_is_small_and_positive(model, airspeed):
+def test_forward_flight_pitch_stiffness_is_small_and_positive(truth_model, airspeed):
     """Reference §8: the Bo-105 has a small M_w > 0 in forward flight (|M_w| ≲ 0.03)."""
-    m_w = linearize(model, trim(model, airspeed)).derivative("q", "w")
+    m_w = linearize(truth_model, trim(truth_model, airspeed)).derivative("q", "w")
     assert 0.0 < m_w < 0.03
 
 
-def test_forward_flight_modes(model):
+def test_forward_flight_modes(linear_70kt):
     """Reference §8: lightly damped Dutch roll, roll and pitch subsidences near hover values,
     near-neutral long-period mode."""
-    eig = linearize(model, trim(model, 70.0)).eigenvalues
+    eig = linear_70kt.eigenvalues
     oscillations = eig[eig.imag > 0.05]
     dutch = oscillations[np.argmax(oscillations.imag)]
     assert -1.0 < dutch.real < 0.0 and 1.5 < dutch.imag < 4.0
@@ -281,8 +252,8 @@ def test_derivatives_vary_smoothly_with_airspeed(sweep):
 
 
 # ---------------------------------------------------------------- rotor modes (§9)
-def test_full_hover_model_rotor_modes(model, hover_trim):
-    full = linearize(model, hover_trim, full=True)
+def test_full_hover_model_rotor_modes(truth_model, hover_trim):
+    full = linearize(truth_model, hover_trim, full=True)
     eig = full.eigenvalues
     upper = eig[eig.imag > 0]
 

@@ -12,19 +12,8 @@ from rotorid.errors import DataError, StructureError
 from rotorid_helisim import inflow, rotor
 from rotorid_helisim.model import Bo105Model
 from rotorid_helisim.parameters import Bo105Config, StickMixing
-from rotorid_helisim.trim import trim
 
 CONFIG = Bo105Config()
-
-
-@pytest.fixture(scope="module")
-def model():
-    return Bo105Model()
-
-
-@pytest.fixture(scope="module")
-def hover(model):
-    return trim(model, 0.0)
 
 
 def _loads(mu=(0.0, 0.0, 0.0), rates=(0.0, 0.0, 0.0), flap=(0.0, 0.0, 0.0),
@@ -38,39 +27,39 @@ def _loads(mu=(0.0, 0.0, 0.0), rates=(0.0, 0.0, 0.0), flap=(0.0, 0.0, 0.0),
 
 
 # ---------------------------------------------------------------- interface contract
-def test_state_layout_rigid_body_first(model):
-    assert model.state_names[:9] == ("u", "v", "w", "p", "q", "r", "phi", "theta", "psi")
-    assert model.n_states == len(model.state_names) == 21
-    assert model.state_names[-4:] == ("theta0", "theta1s", "theta1c", "theta0T")
+def test_state_layout_rigid_body_first(truth_model):
+    assert truth_model.state_names[:9] == ("u", "v", "w", "p", "q", "r", "phi", "theta", "psi")
+    assert truth_model.n_states == len(truth_model.state_names) == 21
+    assert truth_model.state_names[-4:] == ("theta0", "theta1s", "theta1c", "theta0T")
     pitt = Bo105Model(Bo105Config(inflow="pitt-peters"))
     assert pitt.n_states == 23 and "lambda1c" in pitt.state_names
 
 
-def test_batch_equals_row_by_row(model, hover):
+def test_batch_equals_row_by_row(truth_model, hover_trim):
     rng = np.random.default_rng(1)
-    x = hover.state + 0.01 * rng.standard_normal((5, model.n_states))
-    stick = hover.stick + 5.0 * rng.standard_normal((5, 4))
-    batch = model.derivatives(x, stick)
-    assert batch.shape == (5, model.n_states)
-    rows = np.vstack([model.derivatives(x[i:i + 1], stick[i:i + 1]) for i in range(5)])
+    x = hover_trim.state + 0.01 * rng.standard_normal((5, truth_model.n_states))
+    stick = hover_trim.stick + 5.0 * rng.standard_normal((5, 4))
+    batch = truth_model.derivatives(x, stick)
+    assert batch.shape == (5, truth_model.n_states)
+    rows = np.vstack([truth_model.derivatives(x[i:i + 1], stick[i:i + 1]) for i in range(5)])
     np.testing.assert_allclose(batch, rows, rtol=1e-12, atol=1e-12)
-    assert model.measurements(x, stick).shape == (5, 8)
+    assert truth_model.measurements(x, stick).shape == (5, 8)
 
 
-def test_bad_shapes_raise_clear_errors(model):
+def test_bad_shapes_raise_clear_errors(truth_model):
     with pytest.raises(DataError, match="states must have shape"):
-        model.derivatives(np.zeros(model.n_states), np.zeros(4))
+        truth_model.derivatives(np.zeros(truth_model.n_states), np.zeros(4))
     with pytest.raises(DataError, match="stick must have shape"):
-        model.derivatives(np.zeros((2, model.n_states)), np.zeros((2, 3)))
+        truth_model.derivatives(np.zeros((2, truth_model.n_states)), np.zeros((2, 3)))
     with pytest.raises(StructureError, match="inflow"):
         Bo105Config(inflow="vortex")
 
 
-def test_hover_measurements_are_specific_forces(model, hover):
-    y = model.measurements(hover.state[None], hover.stick[None])[0]
+def test_hover_measurements_are_specific_forces(truth_model, hover_trim):
+    y = truth_model.measurements(hover_trim.state[None], hover_trim.stick[None])[0]
     ax, az, q, theta, ay, p, phi, r = y
     # in trim the specific force balances gravity: (ax, ay, az) = −g·(−sinθ, cosθ sinφ, cosθ cosφ)
-    th, ph = math.radians(hover.theta_deg), math.radians(hover.phi_deg)
+    th, ph = math.radians(hover_trim.theta_deg), math.radians(hover_trim.phi_deg)
     g = CONFIG.gravity
     np.testing.assert_allclose([ax, ay, az], [g * math.sin(th), -g * math.cos(th) * math.sin(ph),
                                               -g * math.cos(th) * math.cos(ph)], atol=1e-8)
@@ -245,37 +234,37 @@ def test_stick_mixing_round_trip_and_signs():
         StickMixing(gain=(0.0, 1.0, 1.0, 1.0))
 
 
-def _rk4(model, x, stick, dt, steps):
+def _rk4(truth_model, x, stick, dt, steps):
     for _ in range(steps):
-        k1 = model.derivatives(x, stick)
-        k2 = model.derivatives(x + 0.5 * dt * k1, stick)
-        k3 = model.derivatives(x + 0.5 * dt * k2, stick)
-        k4 = model.derivatives(x + dt * k3, stick)
+        k1 = truth_model.derivatives(x, stick)
+        k2 = truth_model.derivatives(x + 0.5 * dt * k1, stick)
+        k3 = truth_model.derivatives(x + 0.5 * dt * k2, stick)
+        k4 = truth_model.derivatives(x + dt * k3, stick)
         x = x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
     return x
 
 
-def test_stick_steps_have_the_pilot_signs(model, hover):
+def test_stick_steps_have_the_pilot_signs(truth_model, hover_trim):
     """Nonlinear response 0.3 s after 10 % stick steps from hover trim: long forward → nose
     down (q < 0), lat right → roll right (p > 0), coll up → climb (w < 0), right pedal → nose
     right (r > 0)."""
-    stick = np.repeat(hover.stick[None], 4, axis=0) + 10.0 * np.eye(4)
-    x0 = np.repeat(hover.state[None], 4, axis=0)
-    x = _rk4(model, x0, stick, 0.002, 150)
-    i = model.index
+    stick = np.repeat(hover_trim.stick[None], 4, axis=0) + 10.0 * np.eye(4)
+    x0 = np.repeat(hover_trim.state[None], 4, axis=0)
+    x = _rk4(truth_model, x0, stick, 0.002, 150)
+    i = truth_model.index
     assert x[0, i["q"]] < -0.05
     assert x[1, i["p"]] > 0.1
     assert x[2, i["w"]] < -0.1
     assert x[3, i["r"]] > 0.05
     # and the trim itself stays put
-    still = _rk4(model, x0[:1], hover.stick[None], 0.002, 150)
+    still = _rk4(truth_model, x0[:1], hover_trim.stick[None], 0.002, 150)
     np.testing.assert_allclose(still, x0[:1], atol=1e-9)
 
 
-def test_actuators_are_first_order_lags(model, hover):
-    stick = hover.stick.copy()
+def test_actuators_are_first_order_lags(truth_model, hover_trim):
+    stick = hover_trim.stick.copy()
     stick[2] += 10.0
-    dx = model.derivatives(hover.state[None], stick[None])[0]
-    expected = 10.0 * model.config.mixing.gain[0] / model.config.actuator_time_constant
-    assert dx[model.index["theta0"]] == pytest.approx(expected, rel=1e-12)
-    assert model.config.actuator_time_constant == pytest.approx(0.03)
+    dx = truth_model.derivatives(hover_trim.state[None], stick[None])[0]
+    expected = 10.0 * truth_model.config.mixing.gain[0] / truth_model.config.actuator_time_constant
+    assert dx[truth_model.index["theta0"]] == pytest.approx(expected, rel=1e-12)
+    assert truth_model.config.actuator_time_constant == pytest.approx(0.03)

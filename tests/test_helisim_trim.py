@@ -13,28 +13,18 @@ from rotorid_helisim.trim import body_velocity, resolve_airspeed, trim
 
 
 @pytest.fixture(scope="module")
-def model():
-    return Bo105Model()
-
-
-@pytest.fixture(scope="module")
-def hover(model):
-    return trim(model, 0.0)
-
-
-@pytest.fixture(scope="module")
-def cruise80(model):
-    return trim(model, 80.0)
+def cruise80(truth_model):
+    return trim(truth_model, 80.0)
 
 
 # ---------------------------------------------------------------- flight-test comparison (§5)
-def test_hover_matches_flight_test(hover):
+def test_hover_matches_flight_test(hover_trim):
     """Padfield flight test: θ ≈ 2.7°, θ0 ≈ 14.3°; CR-3144 case 29: φ = −2.97°, θ0T = 10.17°."""
-    assert hover.theta_deg == pytest.approx(2.7, abs=2.0)
-    assert hover.blade_angles_deg[0] == pytest.approx(14.3, abs=2.0)
-    assert hover.phi_deg == pytest.approx(-2.97, abs=2.0)
-    assert hover.blade_angles_deg[3] == pytest.approx(10.17, abs=2.0)
-    assert hover.power_kw == pytest.approx(393.0, rel=0.15)
+    assert hover_trim.theta_deg == pytest.approx(2.7, abs=2.0)
+    assert hover_trim.blade_angles_deg[0] == pytest.approx(14.3, abs=2.0)
+    assert hover_trim.phi_deg == pytest.approx(-2.97, abs=2.0)
+    assert hover_trim.blade_angles_deg[3] == pytest.approx(10.17, abs=2.0)
+    assert hover_trim.power_kw == pytest.approx(393.0, rel=0.15)
 
 
 @pytest.mark.xfail(strict=True, reason=(
@@ -42,8 +32,8 @@ def test_hover_matches_flight_test(hover):
     "(uniform momentum inflow, no tip loss) gives a main-rotor torque ≈ 15 % below the "
     "flight-test value, so the tail-rotor collective is 8.4° against Padfield's 10.6° "
     "(reference §2.4: 9–10° needs 350–393 kW of torque)"))
-def test_hover_tail_rotor_collective_matches_padfield_flight_test(hover):
-    assert hover.blade_angles_deg[3] == pytest.approx(10.6, abs=2.0)
+def test_hover_tail_rotor_collective_matches_padfield_flight_test(hover_trim):
+    assert hover_trim.blade_angles_deg[3] == pytest.approx(10.6, abs=2.0)
 
 
 def test_80kt_matches_flight_test(cruise80):
@@ -62,9 +52,9 @@ def test_80kt_power_matches_flight_test(cruise80):
 
 @pytest.mark.parametrize("airspeed, theta, phi", [(0.0, 2.2, -2.6), (60.0, 0.2, -1.5),
                                                   (80.0, -1.2, -1.6)])
-def test_attitudes_match_helisim(model, airspeed, theta, phi):
+def test_attitudes_match_helisim(truth_model, airspeed, theta, phi):
     """Helisim-implied trim attitudes (reference §2.0) within 1°."""
-    result = trim(model, airspeed)
+    result = trim(truth_model, airspeed)
     assert result.theta_deg == pytest.approx(theta, abs=1.0)
     assert result.phi_deg == pytest.approx(phi, abs=1.0)
 
@@ -94,36 +84,37 @@ def test_level_flight_kinematics():
     np.testing.assert_allclose(u**2 + w**2, (70 * KNOT) ** 2, rtol=1e-12)
 
 
-def test_climb_and_sideslip_conditions(model):
-    climb = trim(model, 70.0, climb_rate_mps=3.0)
-    level = trim(model, 70.0)
+def test_climb_and_sideslip_conditions(truth_model, trim_70kt):
+    climb = trim(truth_model, 70.0, climb_rate_mps=3.0)
+    level = trim_70kt
     th, ph = math.radians(climb.theta_deg), math.radians(climb.phi_deg)
-    i = model.index
+    i = truth_model.index
     u, v, w = (climb.state[i[n]] for n in ("u", "v", "w"))
     vertical_down = -u * math.sin(th) + v * math.sin(ph) * math.cos(th) + w * math.cos(ph) * math.cos(th)
     assert vertical_down == pytest.approx(-3.0, abs=1e-9)
     # energy: the extra power is about the rate of change of potential energy over η
     # (the induced power falls a little in the climb)
     d_power = (climb.power_kw - level.power_kw) * 1e3
-    potential = model.config.mass * model.config.gravity * 3.0 / model.config.drive_efficiency
+    config = truth_model.config
+    potential = config.mass * config.gravity * 3.0 / config.drive_efficiency
     assert 0.8 < d_power / potential < 1.05
-    slip = trim(model, 70.0, sideslip_deg=5.0)
+    slip = trim(truth_model, 70.0, sideslip_deg=5.0)
     speed = math.sqrt(sum(slip.state[i[n]] ** 2 for n in ("u", "v", "w")))
     assert slip.state[i["v"]] / speed == pytest.approx(math.sin(math.radians(5.0)), rel=1e-9)
     assert slip.blade_angles_deg[3] != pytest.approx(level.blade_angles_deg[3], abs=0.1)
 
 
-def test_power_curve_has_a_bucket(model):
-    powers = [trim(model, v).power_kw for v in (0.0, 70.0, 140.0)]
+def test_power_curve_has_a_bucket(truth_model):
+    powers = [trim(truth_model, v).power_kw for v in (0.0, 70.0, 140.0)]
     assert powers[1] < powers[0] and powers[1] < powers[2]
 
 
 # ---------------------------------------------------------------- errors and output
-def test_no_trim_beyond_the_envelope(model):
+def test_no_trim_beyond_the_envelope(truth_model):
     with pytest.raises(TrimError, match="no trim"):
-        trim(model, 250.0)
+        trim(truth_model, 250.0)
     with pytest.raises(TrimError, match="power limit"):
-        trim(model, 0.0, climb_rate_mps=20.0)
+        trim(truth_model, 0.0, climb_rate_mps=20.0)
 
 
 @pytest.mark.parametrize("kwargs, message", [
@@ -131,9 +122,9 @@ def test_no_trim_beyond_the_envelope(model):
     ({"airspeed_kt": float("nan")}, "must be finite"),
     ({"airspeed_kt": 70.0, "sideslip_deg": 95.0}, "sideslip"),
 ])
-def test_bad_conditions_are_named(model, kwargs, message):
+def test_bad_conditions_are_named(truth_model, kwargs, message):
     with pytest.raises(TrimError, match=message):
-        trim(model, **kwargs)
+        trim(truth_model, **kwargs)
 
 
 def test_named_conditions():
@@ -146,11 +137,11 @@ def test_named_conditions():
         resolve_airspeed(None, None)
 
 
-def test_as_dict_is_json(hover):
-    data = json.loads(json.dumps(hover.as_dict()))
-    assert data["blade_angles_deg"]["theta0"] == pytest.approx(hover.blade_angles_deg[0])
+def test_as_dict_is_json(hover_trim):
+    data = json.loads(json.dumps(hover_trim.as_dict()))
+    assert data["blade_angles_deg"]["theta0"] == pytest.approx(hover_trim.blade_angles_deg[0])
     assert set(data["stick_percent"]) == {"long", "lat", "coll", "ped"}
-    assert "power" in hover.report()
+    assert "power" in hover_trim.report()
 
 
 def test_cli_trim_json(capsys):

@@ -9,7 +9,6 @@ import xml.etree.ElementTree as ElementTree
 
 import numpy as np
 import pytest
-from rotorid.cli.main import main
 from rotorid.report.html import mean_phase_error
 from rotorid.study.expectations import (
     check_signs,
@@ -68,13 +67,16 @@ def _read_csv(path):
         return list(csv.reader(handle))
 
 
-def test_the_quick_hover_study_writes_a_complete_linked_report(tmp_path, capsys):
-    """The README's main command, end to end: data, reduction, delays, verification, report."""
-    out = tmp_path / "results"
-    assert main(["study", "hover", "--quick", "--out", str(out), "--executor", "serial"]) == 0
-    printed = capsys.readouterr().out
+def test_the_quick_hover_study_writes_a_complete_linked_report(quick_study):
+    """The README's main command (run for both built-in cases), end to end: data, reduction,
+    delays, verification, report."""
+    out = quick_study.out
+    assert quick_study.status == 0
+    printed = quick_study.printed
     assert f"report: {out}/report.html" in printed
-    claims = [line for line in printed.splitlines() if "paper's claims:" in line]
+    lines = printed.splitlines()
+    assert sum("paper's claims:" in line for line in lines) == 2     # hover and forward
+    claims = [lines[i + 1] for i, line in enumerate(lines[:-1]) if line.startswith("hover: ")]
     assert len(claims) == 1
     held, decided = map(int, re.search(r"paper's claims: (\d+)/(\d+) hold", claims[0]).groups())
     # Two RMSE claims, two off-axis phase claims and four on-axis MUAD claims are decided on
