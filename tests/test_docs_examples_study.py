@@ -2,8 +2,9 @@
 
 study_hover.py and study_forward.py run the built-in cases' quick variants: by default on
 from the reduction steps of the session's shared quick study (``quick_study`` in conftest.py),
-from scratch in the slow suite (about 20 s each); own_flight_data.py identifies from CSV files it writes itself, custom_estimator.py registers
-an equation-error estimator plugin and runs a case with it.
+from scratch in the slow suite (about 20 s each); own_flight_data.py identifies from CSV files
+it writes itself, custom_estimator.py registers an equation-error estimator plugin and runs a
+case with it.
 """
 
 import importlib.util
