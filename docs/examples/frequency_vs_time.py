@@ -24,6 +24,7 @@ import numpy as np
 import rotorid
 from rotorid.errors import IdentifiabilityWarning
 from rotorid.estimation.estimate import Estimate, rmse
+from rotorid.model.structure import PAPER_DELAYED
 from rotorid.verification.pairs import PAPER_PAIRS
 
 #: The paper's verification pairs and the two cyclic attitude responses.
@@ -31,12 +32,16 @@ PAIRS = (*PAPER_PAIRS, "theta/long", "phi/lat")
 ON_AXIS = ("q/long", "theta/long", "p/lat", "phi/lat", "az/coll", "r/ped")
 
 
-def selected_structure(result: dict, estimate: Estimate) -> rotorid.ModelStructure:
-    """The study's selected structure with the delays of ``estimate``."""
+def selected_structure(result: dict, estimate: Estimate,
+                       paper_delays: bool = False) -> rotorid.ModelStructure:
+    """The study's selected structure with the delays of ``estimate`` (with all the paper's
+    delays on the derivatives it kept when ``paper_delays`` and ``estimate`` has delays)."""
     full = rotorid.ModelStructure.six_dof(rotorid.FlightCondition(**result["condition"]))
     kept = set(result["selected_structure"])
     structure = full.without(*[n for n in full.names if n not in kept])
     delays = [n[4:] for n in estimate.parameter_names if n.startswith("tau_")]
+    if paper_delays and delays:
+        delays = PAPER_DELAYED
     return structure.with_delays(delays, upper=0.3)
 
 
@@ -54,6 +59,9 @@ def main() -> None:
     parser.add_argument("--pairs", default=",".join(PAIRS), help="OUTPUT/INPUT pairs")
     parser.add_argument("--band-max", type=float, default=np.inf,
                         help="highest J frequency in rad/s (default: the coherent range)")
+    parser.add_argument("--paper-delays", action="store_true",
+                        help="fit all eight of the paper's delays, also those the study "
+                             "dropped (the time-domain estimate has them at zero)")
     args = parser.parse_args()
 
     result = json.loads((args.directory / "result.json").read_text())
@@ -64,7 +72,7 @@ def main() -> None:
                                pairs=args.pairs.split(","), band=(0.0, args.band_max))
     for label in ("no delays", "with delays"):
         time_domain = Estimate.from_dict(result["estimates"][label])
-        structure = selected_structure(result, time_domain)
+        structure = selected_structure(result, time_domain, args.paper_delays)
         clock = time.perf_counter()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", IdentifiabilityWarning)
