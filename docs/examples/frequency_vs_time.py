@@ -10,6 +10,7 @@ time-domain RMSE (the paper's eq. 18) on the multisteps.
 Run from the repository root::
 
     python docs/examples/frequency_vs_time.py DIR/hover [--pairs q/long,...] [--band-max 10]
+        [--paper-delays]
 """
 
 from __future__ import annotations
