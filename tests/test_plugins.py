@@ -415,3 +415,13 @@ def documented_contracts() -> dict[str, dict[str, list[str] | None]]:
                 entries[span.split(":")[0].strip()] = None
         found[family] = entries
     return found
+
+
+def test_a_study_with_a_manager_refuses_a_process_pool(tmp_path):
+    from rotorid.errors import StudyError
+    from rotorid.study.case import FlightCase
+    from rotorid.study.pipeline import Study
+
+    case = FlightCase.load(Path(__file__).parent / "cases" / "tiny.toml")
+    with pytest.raises(StudyError, match="cannot be sent to other processes"):
+        Study([case], tmp_path, executor="process", manager=new_plugin_manager())
