@@ -1,4 +1,5 @@
-"""Atomic file writing, shared by every writer in rotorid, JSON-ready values and JSON reading.
+"""Atomic file writing, shared by every writer in rotorid, JSON-ready values, JSON reading and
+strict number parsing.
 
 A reader never sees a half-written file: the content goes to a temporary file in the target's
 directory, is flushed to disk, and only then replaces the target with :func:`os.replace`.
@@ -9,6 +10,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import stat
 import uuid
 from collections.abc import Callable, Mapping
@@ -79,3 +81,19 @@ def read_json_object(path: str | os.PathLike, what: str, content: str = "") -> d
         raise DataFileError(f"{what} {path} must hold a JSON object"
                             + (f" ({content})" if content else ""))
     return dict(record)
+
+
+#: A number as rotorid reads it from text: sign, decimal digits with an optional point, and an
+#: optional exponent; or the words nan and inf, which the readers then refuse by name. Python's
+#: other float syntax (``1_000``, surrounding words) is not a number here.
+_PLAIN_NUMBER = re.compile(r"[+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|nan|inf(?:inity)?)",
+                           re.IGNORECASE | re.ASCII)
+
+
+def parse_number(text: str) -> float:
+    """The number written in ``text`` (surrounding blanks allowed); ``ValueError`` for anything
+    but a plain decimal or exponent form."""
+    stripped = text.strip()
+    if not _PLAIN_NUMBER.fullmatch(stripped):
+        raise ValueError(f"{stripped!r} is not a plain decimal number")
+    return float(stripped)

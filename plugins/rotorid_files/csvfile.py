@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 from rotorid.data import ALL_CHANNELS
 from rotorid.errors import DataFileError
+from rotorid.io import parse_number
 
 from .records import KEY_PATTERN, assemble, columns_of, encode_value, header_of
 
@@ -83,7 +84,7 @@ def read(path: Path):
         row = []
         for name, field in zip(names, fields):
             try:
-                row.append(float(field))
+                row.append(parse_number(field))
             except ValueError:
                 raise DataFileError(f"{path}, line {number} (row {len(values)}), channel "
                                     f"{name!r}: {field.strip()!r} is not a number") from None

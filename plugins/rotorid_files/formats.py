@@ -20,7 +20,7 @@ from typing import ClassVar
 
 import attrs
 from rotorid.data import HOLDS, OUTPUT_CHANNELS, Maneuver, ManeuverSet
-from rotorid.errors import DataError, DataFileError, MissingFileError
+from rotorid.errors import DataError, DataFileError, MissingFileError, RotoridError
 from rotorid.io import atomic_write
 from rotorid.model.structure import STATES
 from rotorid.plugin.contracts import CaseData
@@ -50,8 +50,18 @@ def read_maneuver(path: str | os.PathLike) -> Maneuver:
     path = Path(path)
     reader = _format(path)[0]
     if not path.is_file():
+        if path.exists():
+            raise DataFileError(f"maneuver file {path} is not a regular file (a directory, "
+                                f"device or pipe); name a maneuver file")
         raise MissingFileError(f"maneuver file {path} does not exist")
-    return reader(path)
+    try:
+        return reader(path)
+    except RotoridError:
+        raise
+    except Exception as error:      # the reader library's own failure on a malformed file
+        raise DataFileError(f"{path}: cannot read it as a {path.suffix} maneuver file "
+                            f"({type(error).__name__}: {error}); check that the file is "
+                            f"complete and of that format") from None
 
 
 def write_maneuver(maneuver: Maneuver, path: str | os.PathLike) -> Path:
@@ -90,6 +100,9 @@ def _expand(location) -> list[Path]:
         if not found:
             raise MissingFileError(f"no file matches {location}")
         return found
+    if path.exists():
+        raise DataFileError(f"{path} is neither a regular file nor a directory; name maneuver "
+                            f"files, a directory or a glob pattern")
     raise MissingFileError(f"{location}: no such file or directory")
 
 

@@ -5,12 +5,14 @@ A generated data set lives in one directory: one ``<maneuver>.npz`` file per man
 and a JSON header with the metadata) and ``manifest.json`` holding the configuration, its
 SHA-256 digest and the file list. A later request with the same digest reads the files back
 instead of flying again; any change of configuration, seed or plant changes the digest and
-the set is regenerated: its files replace those the old manifest listed.
+the set is regenerated: its files replace those the old manifest listed (only maneuver files
+the store itself wrote are ever deleted).
 """
 
 from __future__ import annotations
 
 import json
+import zipfile
 from pathlib import Path
 
 from rotorid.data import ManeuverSet
@@ -43,6 +45,22 @@ def load_cached(directory, digest: str) -> ManeuverSet | None:
     return ManeuverSet([read_maneuver(f) for f in files])
 
 
+def _is_own_file(directory: Path, name: str) -> bool:
+    """Whether ``directory/name`` is a maneuver file this store wrote: a plain ``.npz`` file
+    directly in ``directory`` holding the ``files`` plugin's header. A manifest may list
+    anything; only such files are ever deleted."""
+    from rotorid_files.arrays import HEADER_KEY
+
+    path = directory / name
+    if path.parent != directory or path.suffix != ".npz" or not path.is_file():
+        return False
+    try:
+        with zipfile.ZipFile(path) as archive:
+            return f"{HEADER_KEY}.npy" in archive.namelist()
+    except (OSError, zipfile.BadZipFile):
+        return False
+
+
 def save(maneuvers: ManeuverSet, directory, digest: str, settings: dict) -> Path:
     """Write the maneuver files, then the manifest (last, so a crash leaves no stale match).
 
@@ -59,9 +77,8 @@ def save(maneuvers: ManeuverSet, directory, digest: str, settings: dict) -> Path
     paths = FileSource().save(maneuvers, directory, format="npz")
     written = {p.name for p in paths}
     for name in previous:
-        stale = directory / str(name)
-        if str(name) not in written and stale.parent == directory and stale.is_file():
-            stale.unlink()
+        if str(name) not in written and _is_own_file(directory, str(name)):
+            (directory / str(name)).unlink()
     text = json.dumps({"digest": digest, "settings": settings,
                        "files": [p.name for p in paths]}, indent=2, sort_keys=True)
     try:

@@ -27,6 +27,9 @@ from .model import Bo105Model
 from .parameters import BLADE_ANGLES, STICKS
 
 _MAX_STEP_KT = 20.0
+#: Highest airspeed a trim is attempted at, kt: well beyond the Bo-105's never-exceed speed
+#: (about 145 kt), so that an absurd request is refused before any continuation step.
+MAX_AIRSPEED_KT = 200.0
 _TOLERANCE = 1e-10
 
 #: The study's named flight conditions, airspeed in kt ("forward" is the 70 kt study point).
@@ -225,7 +228,7 @@ def trim(model: Bo105Model, airspeed_kt: float, climb_rate_mps: float = 0.0,
     """Trim ``model`` in straight flight.
 
     Args:
-        airspeed_kt: horizontal true airspeed in kt (0 = hover), 0 ≤ V.
+        airspeed_kt: horizontal true airspeed in kt (0 = hover), 0 ≤ V ≤ MAX_AIRSPEED_KT.
         climb_rate_mps: rate of climb in m/s (negative for descent).
         sideslip_deg: aerodynamic sideslip angle in deg (|β| < 90).
     Raises:
@@ -238,6 +241,9 @@ def trim(model: Bo105Model, airspeed_kt: float, climb_rate_mps: float = 0.0,
             raise TrimError(f"trim: {name} must be finite, got {value!r}")
     if airspeed_kt < 0:
         raise TrimError(f"trim: airspeed_kt must be ≥ 0 (forward flight), got {airspeed_kt}")
+    if airspeed_kt > MAX_AIRSPEED_KT:
+        raise TrimError(f"trim: no trim beyond {MAX_AIRSPEED_KT:g} kt (the truth model's "
+                        f"envelope), got airspeed_kt {airspeed_kt:g}; give a lower airspeed")
     if abs(sideslip_deg) >= 90:
         raise TrimError(f"trim: |sideslip_deg| must be below 90, got {sideslip_deg}")
     n_steps = max(1, math.ceil(airspeed_kt / _MAX_STEP_KT))

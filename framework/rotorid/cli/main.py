@@ -21,6 +21,9 @@ from rotorid.cli import commands
 from rotorid.errors import ExitStatus, PluginError, RotoridError, UsageError
 from rotorid.plugin.manager import create, registry
 
+#: Characters of an error message printed before the rest is cut (and counted).
+MESSAGE_LIMIT = 400
+
 
 def _command_modules():
     for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda i: i.name):
@@ -39,9 +42,16 @@ def _subcommands():
     return [(name, *found[name]) for name in sorted(found)]
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with its errors on one line: ``rotorid COMMAND: error: …; see … --help``."""
+
+    def error(self, message: str):
+        self.exit(ExitStatus.USAGE, f"{self.prog}: error: {message}; see {self.prog} --help\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand (built-in and registered by plugins)."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="rotorid",
         description="Time-domain system identification of helicopter flight dynamics.")
     parser.add_argument("--version", action="version", version=f"rotorid {__version__}")
@@ -64,11 +74,20 @@ def main(argv: list[str] | None = None) -> int:
         with _progress_on_stderr():
             return int(args.run(args) or ExitStatus.OK)
     except (RotoridError, OSError) as error:
-        print(f"rotorid {args.command}: error: {error}", file=sys.stderr)
+        print(f"rotorid {args.command}: error: {one_line(str(error))}", file=sys.stderr)
         return ExitStatus.USAGE if isinstance(error, UsageError) else ExitStatus.ERROR
     except KeyboardInterrupt:
         print(f"rotorid {args.command}: interrupted", file=sys.stderr)
         return ExitStatus.INTERRUPTED
+
+
+def one_line(message: str, limit: int = MESSAGE_LIMIT) -> str:
+    """``message`` on one line and at most about ``limit`` characters; what is cut is
+    counted at the end."""
+    text = " ".join(message.split())
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]}… ({len(text) - limit} more characters left out)"
 
 
 @contextlib.contextmanager

@@ -7,17 +7,18 @@ selected step) and ``result.json``.
 
 from __future__ import annotations
 
+import contextlib
 import json
 from pathlib import Path
 
 import attrs
 import numpy as np
 
-from rotorid.errors import RotoridError
+from rotorid.errors import DataFileError, RotoridError
 from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.reduction import ReductionStep
 from rotorid.plugin.contracts import Removal
-from rotorid.io import atomic_write, jsonable
+from rotorid.io import atomic_write, jsonable, read_json_object
 from rotorid.model.structure import ModelStructure
 from rotorid.study.case import FlightCase
 from rotorid.study.result import CaseResult
@@ -27,6 +28,8 @@ def prepare_directory(directory: Path, case: FlightCase, resume: bool) -> None:
     """Create ``directory`` for ``case`` and record its settings; without ``resume`` remove
     earlier resume points. Resuming results of other settings is an error."""
     (directory / "steps").mkdir(parents=True, exist_ok=True)
+    for stale in [*directory.glob(".*.tmp"), *directory.glob("*/.*.tmp")]:
+        stale.unlink()        # left by an interrupted atomic write; never a finished file
     marker = directory / "case.json"
     settings = json.dumps(jsonable(case.as_dict()), sort_keys=True)
     if marker.is_file() and resume and marker.read_text() != settings:
@@ -56,18 +59,31 @@ def load_steps(directory: Path, base: ModelStructure) -> list[ReductionStep]:
     steps, structure = [], base
     index = 0
     while _step_file(directory, index).is_file():
-        record = json.loads(_step_file(directory, index).read_text())
-        removal = None
-        if record["removal"] is not None:
-            removal = Removal(**{k: (np.inf if v is None else v)
-                                 for k, v in record["removal"].items()})
-            structure = structure.without(removal.parameter)
+        path = _step_file(directory, index)
+        with _resume_record(path) as record:
+            removal = None
+            if record["removal"] is not None:
+                removal = Removal(**{k: (np.inf if v is None else v)
+                                     for k, v in record["removal"].items()})
+                structure = structure.without(removal.parameter)
+            estimate = Estimate.from_dict(record["estimate"])
         if not structure.parameter_names:
             break
-        steps.append(ReductionStep(index, removal, Estimate.from_dict(record["estimate"]),
-                                   structure))
+        steps.append(ReductionStep(index, removal, estimate, structure))
         index += 1
     return steps
+
+
+@contextlib.contextmanager
+def _resume_record(path: Path):
+    """The JSON object of a resume file; a file that cannot be read or does not hold what it
+    should is named with the cause and the fix."""
+    try:
+        yield read_json_object(path, "resume file")
+    except (RotoridError, KeyError, TypeError, ValueError, AttributeError) as error:
+        cause = f"no {error}" if isinstance(error, KeyError) else str(error)
+        raise DataFileError(f"cannot resume from {path}: {cause}; delete that file (it is "
+                            f"recomputed) or run without --resume") from None
 
 
 def load_delays(directory: Path, selected_step: int) -> tuple[tuple[str, ...], Estimate] | None:
@@ -75,10 +91,10 @@ def load_delays(directory: Path, selected_step: int) -> tuple[tuple[str, ...], E
     saved = directory / "delays.json"
     if not saved.is_file():
         return None
-    record = json.loads(saved.read_text())
-    if record.get("selected_step") != selected_step:
-        return None
-    return tuple(record["dropped"]), Estimate.from_dict(record["estimate"])
+    with _resume_record(saved) as record:
+        if record.get("selected_step") != selected_step:
+            return None
+        return tuple(record["dropped"]), Estimate.from_dict(record["estimate"])
 
 
 def save_delays(directory: Path, selected_step: int, dropped: tuple[str, ...],

@@ -24,7 +24,7 @@ from pathlib import Path
 import attrs
 
 from rotorid.errors import DataError
-from rotorid.io import atomic_write, jsonable
+from rotorid.io import atomic_write, jsonable, parse_number
 from rotorid.study.case import FlightCase
 
 #: Name of the built-in case family on the command line.
@@ -32,6 +32,8 @@ FAMILY = "speed-sweep"
 #: Airspeeds of ``rotorid study speed-sweep`` without ``--speeds``: 0 to 120 kt every 10 kt.
 DEFAULT_SPEEDS = "0:120:10"
 MAX_SPEED_KT = 200.0
+#: Most airspeeds one sweep may hold: one per kt from 0 to MAX_SPEED_KT.
+MAX_SPEED_COUNT = 201
 
 
 def parse_speeds(text: str) -> tuple[float, ...]:
@@ -44,25 +46,41 @@ def parse_speeds(text: str) -> tuple[float, ...]:
     text = str(text).strip()
     try:
         if ":" in text:
-            start, stop, step = (float(part) for part in text.split(":"))
-            if not step > 0 or stop < start:
+            start, stop, step = (parse_number(part) for part in text.split(":"))
+            if not (step > 0 and start <= stop and math.isfinite(stop - start)):
                 raise ValueError
-            count = int(math.floor((stop - start) / step + 1e-9)) + 1
-            speeds = [round(start + k * step, 9) for k in range(count)]
         else:
-            speeds = [float(part) for part in text.split(",") if part.strip()]
+            speeds = [parse_number(part) for part in text.split(",") if part.strip()]
     except ValueError:
         raise DataError(f"cannot read the airspeed list {text!r}: {form}") from None
+    if ":" in text:
+        span = (stop - start) / step
+        _check_count(text, span + 1)
+        count = int(math.floor(span + 1e-9)) + 1
+        speeds = [round(start + k * step, 9) for k in range(count)]
     if not speeds:
         raise DataError(f"empty airspeed list {text!r}: {form}")
+    _check_count(text, len(speeds))
     return _checked(speeds)
+
+
+def _check_count(text: str, count: float) -> None:
+    if count > MAX_SPEED_COUNT:
+        raise DataError(f"the airspeed list {text!r} gives {count:.0f} airspeeds; a sweep holds "
+                        f"at most {MAX_SPEED_COUNT}: choose a larger step")
 
 
 def _checked(speeds) -> tuple[float, ...]:
     bad = [v for v in speeds if not (math.isfinite(v) and 0.0 <= v <= MAX_SPEED_KT)]
     if bad:
         raise DataError(f"airspeeds must lie in 0–{MAX_SPEED_KT:.0f} kt, got {bad}")
-    return tuple(sorted(set(speeds)))
+    speeds = sorted(set(speeds))
+    names = [case_name(v) for v in speeds]
+    for (lower, upper), (first, second) in zip(zip(speeds, speeds[1:]), zip(names, names[1:])):
+        if first == second:
+            raise DataError(f"airspeeds {lower:g} and {upper:g} kt share the case name {first} "
+                            f"(names resolve 0.1 kt); choose airspeeds at least 0.1 kt apart")
+    return tuple(speeds)
 
 
 def case_name(airspeed_kt: float) -> str:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import sys
 import time
 
+from rotorid.cli.arguments import output_directory, seed
+
 NAME = "generate"
 HELP = ("generate a condition's data set (16 multisteps, 4 sweeps) with the helisim truth "
         "model and write it as .npz maneuver files")
@@ -13,9 +15,9 @@ HELP = ("generate a condition's data set (16 multisteps, 4 sweeps) with the heli
 def add_arguments(parser) -> None:
     parser.add_argument("condition", choices=("hover", "forward"),
                         help="hover, or forward flight at 70 kt")
-    parser.add_argument("--out", required=True, metavar="DIR",
+    parser.add_argument("--out", required=True, metavar="DIR", type=output_directory,
                         help="directory for the maneuver files and manifest.json")
-    parser.add_argument("--seed", type=int, default=0,
+    parser.add_argument("--seed", type=seed, default=0,
                         help="seed of the sensor noise and gusts (0)")
     parser.add_argument("--turbulence", default="still",
                         choices=("still", "light", "moderate"),

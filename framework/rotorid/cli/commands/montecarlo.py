@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from rotorid.cli.arguments import output_directory, seed
+
 NAME = "montecarlo"
 HELP = ("check the Cramér-Rao bounds: repeat a case's final estimation on data with "
         "independent noise seeds; per parameter the sample std next to the mean bound and the "
@@ -16,12 +18,12 @@ def add_arguments(parser) -> None:
     parser.add_argument("case", metavar="CASE", help="hover, forward or a case TOML file "
                                                      "(generated data)")
     parser.add_argument("--runs", type=int, required=True, help="number of runs (≥ 2)")
-    parser.add_argument("--out", required=True,
+    parser.add_argument("--out", required=True, type=output_directory,
                         help="results directory; a finished study of the case there is reused "
                              "(else it is run first); montecarlo.json and the figure go to "
                              "OUT/CASE/")
     parser.add_argument("--quick", action="store_true", help="the case's --quick variant")
-    parser.add_argument("--seed", type=int,
+    parser.add_argument("--seed", type=seed,
                         help="first noise seed S; run k uses S + k (default: the case's seed)")
     parser.add_argument("--force", action="store_true",
                         help="overwrite the case's montecarlo.json if it exists")

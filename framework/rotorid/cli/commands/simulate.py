@@ -24,6 +24,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
+from rotorid.cli.arguments import output_directory
+
 NAME = "simulate"
 HELP = ("simulate a linear model over recorded inputs and write the simulated outputs as "
         "maneuver files")
@@ -37,7 +39,7 @@ def add_arguments(parser) -> None:
                         help="parameter values: a flat name→value JSON mapping or an estimate "
                              "written by `rotorid identify` (default: the model's initial "
                              "values)")
-    parser.add_argument("--out", required=True, metavar="DIR",
+    parser.add_argument("--out", required=True, metavar="DIR", type=output_directory,
                         help="output directory (created if needed)")
     parser.add_argument("--format", choices=("csv", "npz", "mat"), default="csv",
                         help="format of the written maneuver files (default csv)")

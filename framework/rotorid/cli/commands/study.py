@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from rotorid.cli.arguments import output_directory, seed
+
 NAME = "study"
 HELP = ("identify, reduce, add delays and verify: the built-in cases hover and forward "
         "(70 kt), all of them, a speed sweep, or case TOML files")
@@ -14,11 +16,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("cases", nargs="+", metavar="CASE",
                         help="hover, forward, all, speed-sweep (one hover-pipeline case per "
                              "airspeed of --speeds), or a case TOML file")
-    parser.add_argument("--out", required=True, help="results directory")
+    parser.add_argument("--out", required=True, type=output_directory, help="results directory")
     parser.add_argument("--quick", action="store_true",
                         help="reduced but honest run: shorter records, reduction stopped by "
                              "the criteria (hover: about 40 s on 2 cores)")
-    parser.add_argument("--seed", type=int, help="noise seed of generated data")
+    parser.add_argument("--seed", type=seed, help="noise seed of generated data (≥ 0)")
     parser.add_argument("--speeds", help="airspeeds of speed-sweep in kt: '0,40,80' or "
                                          "START:STOP:STEP (default 0:120:10)")
     parser.add_argument("--template", default="hover",

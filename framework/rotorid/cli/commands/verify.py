@@ -28,6 +28,8 @@ import json
 import logging
 from pathlib import Path
 
+from rotorid.cli.arguments import output_directory
+
 NAME = "verify"
 HELP = ("verify an identified model on frequency sweeps: ε = H_model/H_truth against the "
         "MUAD/AEE envelopes and the mismatch cost J, with figures and a JSON of the checks")
@@ -48,7 +50,7 @@ def add_arguments(parser) -> None:
                         help="which model of a study's result.json (default: with delays)")
     parser.add_argument("--envelopes", default=DEFAULT_ENVELOPES,
                         help=f"comma-separated envelope names ({DEFAULT_ENVELOPES})")
-    parser.add_argument("--out", default="verification", metavar="DIR",
+    parser.add_argument("--out", default="verification", metavar="DIR", type=output_directory,
                         help="output directory (created if needed; default ./verification)")
     parser.add_argument("--no-figures", action="store_true",
                         help="write only verification.json (faster)")

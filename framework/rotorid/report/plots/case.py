@@ -28,10 +28,18 @@ _STYLES = ("-", "--", "-.", ":")
 def save_figure(figure, stem: str | Path, formats: tuple[str, ...] = ("png", "svg"),
                 dpi: int = 110) -> list[Path]:
     """Write ``figure`` as ``<stem>.<format>`` for each of ``formats``, atomically; returns the
-    paths."""
+    paths. The same figure gives the same bytes: SVGs carry no date and fixed element ids."""
     return [atomic_write(Path(f"{stem}.{fmt}"),
-                         lambda handle, fmt=fmt: figure.savefig(handle, format=fmt, dpi=dpi))
+                         lambda handle, fmt=fmt: _save(figure, handle, fmt, dpi))
             for fmt in formats]
+
+
+def _save(figure, handle, fmt: str, dpi: int) -> None:
+    import matplotlib
+
+    with matplotlib.rc_context({"svg.hashsalt": "rotorid"}):
+        figure.savefig(handle, format=fmt, dpi=dpi,
+                       metadata={"Date": None} if fmt == "svg" else None)
 
 
 def plot_rmse_path(path: ReductionPath, title: str = "Model reduction"):

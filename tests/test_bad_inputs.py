@@ -1,0 +1,350 @@
+"""Bad inputs: each is refused with one line naming the offending item, the right exit status,
+no traceback, nothing written outside ``--out`` and no half-written file (issue 15).
+
+Every case builds its own tiny input in ``tmp_path`` and runs ``rotorid`` in this process with
+``tmp_path/work`` as the working directory. Resume state, the data-set store and figures are
+checked through the functions the commands call, so that no case flies or fits.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+import rotorid
+from rotorid.cli.main import MESSAGE_LIMIT, main, one_line
+from rotorid.errors import DataFileError, ExitStatus
+from rotorid.io import parse_number
+from rotorid.study.case import FlightCase
+from rotorid.study.persistence import load_delays, load_steps, prepare_directory
+from rotorid_files.formats import write_maneuver
+from rotorid_helisim import store
+from test_cli_simulate import MODEL, VALUES
+
+HEADER = "time,long,lat,coll,ped,ax,az,q,theta,ay,p,phi,r"
+
+
+def _csv_rows(value: str = "0.5") -> str:
+    rows = [",".join([f"{0.02 * k:.2f}"] + ["0"] * 12) for k in range(20)]
+    rows[5] = ",".join(["0.10", value] + ["0"] * 11)
+    return "\n".join([HEADER, *rows]) + "\n"
+
+
+def _maneuver(name: str = "m0") -> rotorid.Maneuver:
+    time = np.arange(50) * 0.02
+    return rotorid.Maneuver(name, time, np.zeros((50, 4)), np.zeros((50, 8)))
+
+
+def _good_npz(directory: Path) -> Path:
+    return write_maneuver(_maneuver(), directory / "good.npz")
+
+
+# ----------------------------------------------------------------- the inputs
+def _csv_with(value):
+    def make(tmp_path):
+        path = tmp_path / "bad.csv"
+        path.write_text(_csv_rows(value))
+        return path
+    return make
+
+
+def _bytes(name, content):
+    def make(tmp_path):
+        path = tmp_path / name
+        path.write_bytes(content)
+        return path
+    return make
+
+
+def _truncated_npz(tmp_path):
+    whole = _good_npz(tmp_path).read_bytes()
+    path = tmp_path / "cut.npz"
+    path.write_bytes(whole[: len(whole) // 2])
+    return path
+
+
+def _fifo(tmp_path):
+    path = tmp_path / "pipe.csv"
+    os.mkfifo(path)
+    return path
+
+
+def _empty_directory(tmp_path):
+    path = tmp_path / "nothing"
+    path.mkdir()
+    return path
+
+
+def _directory_named_csv(tmp_path):
+    path = tmp_path / "folder.csv"
+    path.mkdir()
+    return path
+
+
+#: Data files given to ``rotorid simulate``: (id, maker, words the one-line message contains).
+DATA_FILES = [
+    ("underscore-digits", _csv_with("1_000"), ["bad.csv", "'long'", "'1_000' is not a number"]),
+    ("hex-number", _csv_with("0x10"), ["bad.csv", "'0x10' is not a number"]),
+    ("word", _csv_with("fast"), ["bad.csv", "'fast' is not a number"]),
+    ("nan", _csv_with("nan"), ["bad.csv", "NaN or infinite"]),
+    ("overflow", _csv_with("1e999"), ["bad.csv", "NaN or infinite"]),
+    ("binary-csv", _bytes("junk.csv", bytes(range(256)) * 4), ["junk.csv"]),
+    ("empty-csv", _bytes("empty.csv", b""), ["empty.csv"]),
+    ("12-byte-mat", _bytes("tiny.mat", b"MATLAB 5.0 M"), ["tiny.mat", "cannot read"]),
+    ("126-byte-mat", _bytes("short.mat", b"MATLAB 5.0 MAT-file" + b" " * 107),
+     ["short.mat"]),
+    ("truncated-npz", _truncated_npz, ["cut.npz"]),
+    ("zero-npz", _bytes("zero.npz", b"\0" * 64), ["zero.npz"]),
+    ("unknown-suffix", _bytes("data.xlsx", b"PK"), ["data.xlsx", "unknown maneuver file format"]),
+    ("fifo", _fifo, ["pipe.csv", "neither a regular file nor a directory"]),
+    ("dev-null", lambda tmp_path: Path("/dev/null"),
+     ["/dev/null", "neither a regular file nor a directory"]),
+    ("empty-directory", _empty_directory, ["nothing", "no maneuver files"]),
+    ("directory-named-csv", _directory_named_csv, ["folder.csv", "no maneuver files"]),
+    ("missing", lambda tmp_path: tmp_path / "absent.csv", ["absent.csv", "no such file"]),
+    ("no-glob-match", lambda tmp_path: tmp_path / "runs" / "*.csv", ["no file matches"]),
+]
+
+
+def _simulate_inputs(make):
+    def command(tmp_path):
+        model = tmp_path / "model.toml"
+        model.write_text(MODEL)
+        values = tmp_path / "values.json"
+        values.write_text(json.dumps(VALUES))
+        return ["simulate", str(model), str(make(tmp_path)), "--values", str(values),
+                "--out", str(tmp_path / "out")]
+    return command
+
+
+def _plain(*args):
+    return lambda tmp_path: [a.format(tmp=tmp_path) for a in args]
+
+
+def _regular_file(tmp_path):
+    (tmp_path / "taken").write_text("not a directory")
+    return str(tmp_path / "taken")
+
+
+def _with_out(command, make_out):
+    return lambda tmp_path: [*command, "--out", make_out(tmp_path)]
+
+
+#: Command lines: (id, command maker, exit status, words the one-line message contains).
+COMMANDS = [
+    *[(f"data-{name}", _simulate_inputs(make), ExitStatus.ERROR, words)
+      for name, make, words in DATA_FILES],
+    # seeds
+    ("generate-negative-seed", _plain("generate", "hover", "--seed", "-1", "--out", "{tmp}/out"),
+     ExitStatus.USAGE, ["--seed", "≥ 0", "'-1'"]),
+    ("generate-fractional-seed", _plain("generate", "hover", "--seed", "1.5", "--out",
+                                        "{tmp}/out"), ExitStatus.USAGE, ["--seed", "'1.5'"]),
+    ("study-negative-seed", _plain("study", "hover", "--seed", "-5", "--out", "{tmp}/out"),
+     ExitStatus.USAGE, ["--seed", "'-5'"]),
+    ("study-word-seed", _plain("study", "hover", "--seed", "x", "--out", "{tmp}/out"),
+     ExitStatus.USAGE, ["--seed", "'x'"]),
+    ("montecarlo-negative-seed", _plain("montecarlo", "hover", "--runs", "3", "--seed", "-1",
+                                        "--out", "{tmp}/out"), ExitStatus.USAGE, ["--seed"]),
+    # --out of the wrong kind
+    *[(f"{command[0]}-out-is-a-file", _with_out(command, _regular_file), ExitStatus.USAGE,
+       ["--out", "taken", "not a directory"])
+      for command in (["study", "hover"], ["generate", "hover"],
+                      ["montecarlo", "hover", "--runs", "3"],
+                      ["simulate", "model.toml", "inputs.csv"], ["verify", "result.json"])],
+    ("study-out-is-dev-null", _plain("study", "hover", "--out", "/dev/null"), ExitStatus.USAGE,
+     ["--out", "/dev/null", "not a directory"]),
+    ("generate-out-below-a-file", lambda tmp_path: [
+        "generate", "hover", "--out", str(Path(_regular_file(tmp_path)) / "sub")],
+     ExitStatus.USAGE, ["--out", "cannot write into", "taken"]),
+    # airspeeds
+    ("trim-huge-airspeed", _plain("trim", "--airspeed-kt", "1e300"), ExitStatus.ERROR,
+     ["airspeed_kt", "200 kt", "1e+300"]),
+    ("trim-above-envelope", _plain("trim", "--airspeed-kt", "250"), ExitStatus.ERROR,
+     ["airspeed_kt", "200 kt"]),
+    ("trim-negative-airspeed", _plain("trim", "--airspeed-kt", "-5"), ExitStatus.ERROR,
+     ["airspeed_kt", "≥ 0"]),
+    ("trim-nan-airspeed", _plain("trim", "--airspeed-kt", "nan"), ExitStatus.ERROR,
+     ["airspeed_kt", "finite"]),
+    ("trim-word-airspeed", _plain("trim", "--airspeed-kt", "fast"), ExitStatus.USAGE,
+     ["--airspeed-kt", "'fast'"]),
+    ("speeds-too-many", _plain("study", "speed-sweep", "--speeds", "0:200:0.001", "--out",
+                               "{tmp}/out"), ExitStatus.ERROR, ["0:200:0.001", "200001", "201"]),
+    ("speeds-zero-step", _plain("study", "speed-sweep", "--speeds", "0:200:5e-324", "--out",
+                                "{tmp}/out"), ExitStatus.ERROR, ["0:200:5e-324", "at most 201"]),
+    ("speeds-same-name", _plain("study", "speed-sweep", "--speeds", "0:1:0.05", "--out",
+                                "{tmp}/out"), ExitStatus.ERROR, ["0.05", "0.1 kt apart"]),
+    ("speeds-underscore", _plain("study", "speed-sweep", "--speeds", "1_000", "--out",
+                                 "{tmp}/out"), ExitStatus.ERROR, ["'1_000'", "cannot read"]),
+    ("speeds-infinite", _plain("study", "speed-sweep", "--speeds", "0:inf:10", "--out",
+                               "{tmp}/out"), ExitStatus.ERROR, ["'0:inf:10'"]),
+    ("speeds-out-of-range", _plain("study", "speed-sweep", "--speeds", "0,250", "--out",
+                                   "{tmp}/out"), ExitStatus.ERROR, ["0–200 kt", "250"]),
+    ("speeds-without-sweep", _plain("study", "hover", "--speeds", "0,10", "--out", "{tmp}/out"),
+     ExitStatus.USAGE, ["--speeds", "speed-sweep"]),
+    ("unknown-command", _plain("fly"), ExitStatus.USAGE, ["invalid choice: 'fly'"]),
+    ("unknown-case", _plain("study", "cruise", "--out", "{tmp}/out"), ExitStatus.ERROR,
+     ["cruise"]),
+]
+
+
+def _files_under(root: Path) -> set[Path]:
+    return {p for p in root.rglob("*") if not p.is_dir()}
+
+
+def _run(argv) -> int:
+    try:
+        return main(argv)
+    except SystemExit as stop:          # argparse's errors
+        return stop.code
+
+
+@pytest.mark.parametrize("command, status, words", [c[1:] for c in COMMANDS],
+                         ids=[c[0] for c in COMMANDS])
+def test_a_bad_input_is_one_line_naming_it_and_writes_nothing(command, status, words, tmp_path,
+                                                              capsys, monkeypatch):
+    argv = command(tmp_path)
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    before = _files_under(tmp_path)
+    assert _run(argv) == status
+    error = capsys.readouterr().err
+    lines = error.splitlines()
+    assert len(lines) == 1, error
+    assert lines[0].startswith(f"rotorid {argv[0]}: error: ") or argv[0] == "fly", error
+    assert "Traceback" not in error
+    for word in words:
+        assert word in lines[0], (word, lines[0])
+    written = _files_under(tmp_path) - before
+    assert not [p for p in written if tmp_path / "out" not in p.parents], written
+    assert not [p for p in written if p.name.endswith(".tmp")], written
+
+
+def test_an_unwritable_out_is_refused_before_any_work(tmp_path, capsys):
+    if os.geteuid() == 0:
+        pytest.skip("root may write into any directory")
+    locked = tmp_path / "locked"
+    locked.mkdir(mode=0o500)
+    assert _run(["generate", "hover", "--out", str(locked / "data")]) == ExitStatus.USAGE
+    assert "cannot write into" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------- strict numbers, short errors
+@pytest.mark.parametrize("text, value", [("1", 1.0), ("-1.5", -1.5), (" 2e-3 ", 2e-3),
+                                         (".5", 0.5), ("5.", 5.0), ("+1E+2", 100.0)])
+def test_plain_numbers_are_read(text, value):
+    assert parse_number(text) == value
+
+
+@pytest.mark.parametrize("text", ["1_000", "0x10", "1e", "--1", "1,5", "", "e3", "1.2.3",
+                                  "½", "１"])
+def test_other_number_spellings_are_refused(text):
+    with pytest.raises(ValueError, match="not a plain decimal number"):
+        parse_number(text)
+
+
+def test_a_long_message_is_cut_with_a_count_of_what_is_left_out(tmp_path, capsys):
+    speeds = ",".join(str(v) for v in range(300, 500))
+    assert _run(["study", "speed-sweep", "--speeds", speeds, "--out",
+                 str(tmp_path / "out")]) == ExitStatus.ERROR
+    (line,) = capsys.readouterr().err.splitlines()
+    full = f"airspeeds must lie in 0–200 kt, got {[float(v) for v in range(300, 500)]}"
+    assert line.endswith(f"… ({len(full) - MESSAGE_LIMIT} more characters left out)")
+    assert len(line) < MESSAGE_LIMIT + 80
+    assert one_line("a\n  b\tc") == "a b c"
+
+
+# ----------------------------------------------------------------- resume state
+def _case_directory(tmp_path) -> Path:
+    directory = tmp_path / "out" / "tiny"
+    prepare_directory(directory, FlightCase(name="tiny", data={"source": "files"}), resume=True)
+    return directory
+
+
+@pytest.mark.parametrize("content, cause", [
+    ('{"index": 0, "removal": null, "estim', "not valid JSON"),
+    ("{}", "no 'removal'"),
+    ("[]", "must hold a JSON object"),
+    ('{"index": 0, "removal": null, "estimate": {}}', "cannot resume"),
+    ('{"index": 0, "removal": {"parameter": "M_q"}, "estimate": {}}', "cannot resume"),
+    ("", "not valid JSON"),
+])
+def test_a_damaged_step_file_is_named_with_the_fix(tmp_path, content, cause):
+    directory = _case_directory(tmp_path)
+    step = directory / "steps" / "step_000.json"
+    step.write_text(content)
+    with pytest.raises(DataFileError) as caught:
+        load_steps(directory, rotorid.ModelStructure.six_dof(rotorid.FlightCondition()))
+    message = str(caught.value)
+    assert str(step) in message and cause in message and "delete that file" in message
+    assert "\n" not in message
+
+
+@pytest.mark.parametrize("content", ["{", '{"selected_step": 3}', "[1]", ""])
+def test_a_damaged_delay_file_is_named_with_the_fix(tmp_path, content):
+    directory = _case_directory(tmp_path)
+    (directory / "delays.json").write_text(content)
+    with pytest.raises(DataFileError, match="delays.json.*delete that file"):
+        load_delays(directory, selected_step=3)
+
+
+def test_a_delay_file_of_another_step_is_recomputed(tmp_path):
+    directory = _case_directory(tmp_path)
+    for content in ("{}", '{"selected_step": 2, "dropped": []}'):
+        (directory / "delays.json").write_text(content)
+        assert load_delays(directory, selected_step=3) is None
+
+
+def test_opening_a_case_directory_removes_stale_temporary_files(tmp_path):
+    directory = _case_directory(tmp_path)
+    stale = [directory / ".result.json.0f1e.tmp", directory / "steps" / ".step_004.json.9a.tmp"]
+    kept = [directory / "steps" / "step_000.json", directory / "notes.tmp"]
+    for path in stale + kept:
+        path.write_text("x")
+    prepare_directory(directory, FlightCase(name="tiny", data={"source": "files"}), resume=True)
+    assert not any(p.exists() for p in stale) and all(p.exists() for p in kept)
+
+
+# ----------------------------------------------------------------- the data-set store
+def test_a_new_data_set_deletes_only_the_files_the_store_wrote(tmp_path):
+    directory = tmp_path / "data"
+    directory.mkdir()
+    own = write_maneuver(_maneuver("old_run"), directory / "old_run.npz")
+    foreign_npz = directory / "foreign.npz"
+    with zipfile.ZipFile(foreign_npz, "w") as archive:
+        archive.writestr("weights.npy", b"")
+    precious = directory / "precious.txt"
+    outside = tmp_path / "outside.npz"
+    write_maneuver(_maneuver("outside"), outside)
+    for path in (precious,):
+        path.write_text("keep me")
+    (directory / store.MANIFEST).write_text(json.dumps({"files": [
+        own.name, foreign_npz.name, precious.name, "../outside.npz", str(outside),
+        "missing.npz"]}))
+    store.save(rotorid.ManeuverSet([_maneuver("new_run")]), directory, "digest", {})
+    assert not own.exists()
+    assert foreign_npz.exists() and precious.exists() and outside.exists()
+    assert json.loads((directory / store.MANIFEST).read_text())["files"] == ["new_run.npz"]
+
+
+# ----------------------------------------------------------------- deterministic records
+def test_the_same_figure_gives_the_same_svg_and_png_bytes(tmp_path):
+    from matplotlib.figure import Figure
+    from rotorid.report.plots.case import save_figure
+
+    def figure():
+        drawn = Figure()
+        axis = drawn.subplots()
+        axis.fill_between([0, 1, 2], [0, 1, 0], [1, 2, 1], alpha=0.3)
+        axis.plot([0, 1, 2], [1, 0, 1], label="x")
+        axis.legend()
+        return drawn
+
+    first, second = save_figure(figure(), tmp_path / "a"), save_figure(figure(), tmp_path / "b")
+    for a, b in zip(first, second):
+        assert a.read_bytes() == b.read_bytes(), a.suffix
+    assert b"<dc:date>" not in first[1].read_bytes()
