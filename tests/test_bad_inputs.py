@@ -10,6 +10,10 @@ from __future__ import annotations
 
 import json
 import os
+import signal
+import subprocess
+import sys
+import time
 import zipfile
 from pathlib import Path
 
@@ -348,3 +352,23 @@ def test_the_same_figure_gives_the_same_svg_and_png_bytes(tmp_path):
     for a, b in zip(first, second):
         assert a.read_bytes() == b.read_bytes(), a.suffix
     assert b"<dc:date>" not in first[1].read_bytes()
+
+
+# ----------------------------------------------------------------- orphaned workers
+@pytest.mark.slow
+def test_pool_workers_end_when_the_parent_is_killed_and_write_nothing_after(tmp_path):
+    """A process pool's parent is SIGKILLed while its tasks sleep before writing a file; the
+    workers end with it and the files never appear."""
+    written = [tmp_path / f"late_{k}.txt" for k in range(2)]
+    script = f"""
+import os, signal, threading
+from rotorid.executors import run_tasks
+code = "import time, pathlib; time.sleep(2.0); pathlib.Path({{!r}}).write_text('late')"
+tasks = {{k: ((code.format(path),), {{}}) for k, path in enumerate({[str(p) for p in written]})}}
+threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGKILL)).start()
+run_tasks(exec, tasks, "process")
+"""
+    parent = subprocess.run([sys.executable, "-c", script], timeout=60)
+    assert parent.returncode == -signal.SIGKILL
+    time.sleep(2.5)
+    assert not any(p.exists() for p in written)

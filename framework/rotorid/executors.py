@@ -6,7 +6,8 @@ arguments), so any executor runs them:
 
 * ``None``: one after the other in this process;
 * ``"process"``: a local :class:`~concurrent.futures.ProcessPoolExecutor`, one worker per core
-  (at most one per task), shut down afterwards;
+  (at most one per task), shut down afterwards; a worker ends itself within
+  :data:`PARENT_CHECK_INTERVAL` s when the process that started the pool dies;
 * any :class:`~concurrent.futures.Executor`, e.g. a Dask cluster's
   ``dask.distributed.Client("tcp://HOST:8786").get_executor()``.
 
@@ -20,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import threading
 import time
 from collections.abc import Callable, Hashable, Iterator, Mapping
 from concurrent.futures import Executor, ProcessPoolExecutor
@@ -73,7 +75,8 @@ def run_tasks(function: Callable, tasks: Mapping[Hashable, Task], executor=None,
     if executor == "process" and len(tasks) <= 1:
         executor = None                          # a pool would only add start-up time
     if executor == "process":
-        with ProcessPoolExecutor(max_workers=max(1, min(len(tasks), cpu_count()))) as pool:
+        with ProcessPoolExecutor(max_workers=max(1, min(len(tasks), cpu_count())),
+                                 initializer=_stop_with, initargs=(os.getpid(),)) as pool:
             return run_tasks(function, tasks, pool, label)
     if executor is None:
         futures = {key: _Deferred(function, args, kwargs) for key, (args, kwargs) in tasks.items()}
@@ -81,6 +84,31 @@ def run_tasks(function: Callable, tasks: Mapping[Hashable, Task], executor=None,
         futures = {key: executor.submit(function, *args, **kwargs)
                    for key, (args, kwargs) in tasks.items()}
     return _collect(futures, label)
+
+
+#: Seconds between a pool worker's checks that the process which started it is alive.
+PARENT_CHECK_INTERVAL = 0.2
+
+
+def _stop_with(parent: int) -> None:
+    """Pool worker initializer: end this worker at once when ``parent`` (the process that
+    started the pool) has died or this worker was handed to another parent, so that an
+    orphaned worker never goes on writing results into the output directory."""
+    started_by = os.getppid()
+
+    def watch():
+        while True:
+            time.sleep(PARENT_CHECK_INTERVAL)
+            try:
+                os.kill(parent, 0)
+            except ProcessLookupError:
+                os._exit(1)
+            except PermissionError:       # alive, owned by someone else
+                pass
+            if os.getppid() != started_by:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="rotorid-parent-watch", daemon=True).start()
 
 
 class _Deferred:
