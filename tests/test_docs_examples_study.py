@@ -132,6 +132,11 @@ def test_forward_study_example_resumed_from_the_shared_quick_study(quick_study, 
     result = _run_example("study_forward", tmp_path, ["--no-figures"],
                           quick_study.out / "forward")
     assert result.resumed_steps == len(result.path.steps)
+    # Resuming gives the uninterrupted run's result file, apart from its timing.
+    records = [json.loads((out / "forward" / "result.json").read_text())
+               for out in (quick_study.out, tmp_path)]
+    assert [r.pop("timing")["resumed_steps"] for r in records] == [0, len(result.path.steps)]
+    assert records[0] == records[1]
     _check_forward_example(result, tmp_path, capsys.readouterr().out)
 
 
