@@ -32,10 +32,12 @@ from test_cli_simulate import MODEL, VALUES
 HEADER = "time,long,lat,coll,ped,ax,az,q,theta,ay,p,phi,r"
 
 
-def _csv_rows(value: str = "0.5") -> str:
-    rows = [",".join([f"{0.02 * k:.2f}"] + ["0"] * 12) for k in range(20)]
-    rows[5] = ",".join(["0.10", value] + ["0"] * 11)
-    return "\n".join([HEADER, *rows]) + "\n"
+def _csv_rows(value: str = "0.5", times=None, header: str = HEADER) -> str:
+    """A 40-row CSV maneuver with ``value`` in channel long at row 5."""
+    times = [f"{0.02 * k:.2f}" for k in range(40)] if times is None else times
+    rows = [",".join([t] + ["0"] * 12) for t in times]
+    rows[5] = ",".join([times[5], value] + ["0"] * 11)
+    return "\n".join([header, *rows]) + "\n"
 
 
 def _maneuver(name: str = "m0") -> rotorid.Maneuver:
@@ -54,6 +56,28 @@ def _csv_with(value):
         path.write_text(_csv_rows(value))
         return path
     return make
+
+
+def _csv_text(text):
+    def make(tmp_path):
+        path = tmp_path / "bad.csv"
+        path.write_text(text)
+        return path
+    return make
+
+
+def _times(change):
+    times = [0.02 * k for k in range(40)]
+    change(times)
+    return [f"{t:.4f}" for t in times]
+
+
+def _jump_at_row_20(times):
+    times[20:] = [t + 0.5 for t in times[20:]]
+
+
+def _back_at_row_7(times):
+    times[7] = times[6]
 
 
 def _bytes(name, content):
@@ -94,8 +118,19 @@ DATA_FILES = [
     ("underscore-digits", _csv_with("1_000"), ["bad.csv", "'long'", "'1_000' is not a number"]),
     ("hex-number", _csv_with("0x10"), ["bad.csv", "'0x10' is not a number"]),
     ("word", _csv_with("fast"), ["bad.csv", "'fast' is not a number"]),
-    ("nan", _csv_with("nan"), ["bad.csv", "NaN or infinite"]),
-    ("overflow", _csv_with("1e999"), ["bad.csv", "NaN or infinite"]),
+    *[(f"number-{text}", _csv_with(text), ["bad.csv", "'long'", f"{text!r} is not a number"])
+      for text in ("1e", "--1", "+-1", "1.2.3", "½", "١", "0b1", "1j", "true", "e3", "1__0",
+                   "0o7", "Infinity5", "1 000")],
+    *[(f"non-finite-{text}", _csv_with(text), ["bad.csv", "'long'", "NaN or infinite"])
+      for text in ("nan", "NaN", "inf", "-inf", "1e999", "-1e400")],
+    ("time-jump-at-row-20", _csv_text(_csv_rows(times=_times(_jump_at_row_20))),
+     ["bad.csv", "not uniformly sampled at row 20"]),
+    ("time-back-at-row-7", _csv_text(_csv_rows(times=_times(_back_at_row_7))),
+     ["bad.csv", "does not increase at row 7"]),
+    ("duplicated-channel", _csv_text(_csv_rows(header=HEADER.replace(",r", ",q"))),
+     ["bad.csv", "'q' appears twice"]),
+    ("short-row", _csv_text(_csv_rows() + "1.0,2.0\n"), ["bad.csv", "expected 13 values"]),
+    ("comments-only", _csv_text("# name: x\n# kind: 3211\n"), ["bad.csv", "no header row"]),
     ("binary-csv", _bytes("junk.csv", bytes(range(256)) * 4), ["junk.csv"]),
     ("empty-csv", _bytes("empty.csv", b""), ["empty.csv"]),
     ("12-byte-mat", _bytes("tiny.mat", b"MATLAB 5.0 M"), ["tiny.mat", "cannot read"]),

@@ -49,9 +49,14 @@ def check_time(time: np.ndarray, where: str) -> float:
     dt = (time[-1] - time[0]) / (time.size - 1)
     off = np.abs(steps - dt) > UNIFORM_TOLERANCE * max(dt, 1e-12) + 1e-9
     if np.any(off):
-        row = int(np.flatnonzero(off)[0]) + 1
+        # The first interval that differs from the typical (median) one: a single jump makes
+        # every interval differ from the mean.
+        typical = float(np.median(steps))
+        far = np.abs(steps - typical) > UNIFORM_TOLERANCE * typical + 1e-9
+        row = int(np.flatnonzero(far if far.any() else off)[0]) + 1
         raise DataError(f"{where}: channel 'time' is not uniformly sampled at row {row} "
-                        f"(step {steps[row - 1]:.6g} s, expected {dt:.6g} s); resample first")
+                        f"(step {steps[row - 1]:.6g} s, expected {typical:.6g} s); resample "
+                        f"first")
     return float(dt)
 
 
