@@ -40,9 +40,9 @@ def _csv_rows(value: str = "0.5", times=None, header: str = HEADER) -> str:
     return "\n".join([header, *rows]) + "\n"
 
 
-def _maneuver(name: str = "m0") -> rotorid.Maneuver:
-    time = np.arange(50) * 0.02
-    return rotorid.Maneuver(name, time, np.zeros((50, 4)), np.zeros((50, 8)))
+def _maneuver(name: str = "m0", samples: int = 50) -> rotorid.Maneuver:
+    time = np.arange(samples) * 0.02
+    return rotorid.Maneuver(name, time, np.zeros((samples, 4)), np.zeros((samples, 8)))
 
 
 def _good_npz(directory: Path) -> Path:
@@ -160,6 +160,40 @@ def _simulate_inputs(make):
     return command
 
 
+def _identify(change=lambda outputs: outputs, model=MODEL, samples=200):
+    """``rotorid identify`` of noise records whose outputs ``change`` edits."""
+    def command(tmp_path):
+        (tmp_path / "model.toml").write_text(model)
+        data = tmp_path / "flight"
+        data.mkdir()
+        rng = np.random.default_rng(3)
+        for k in range(2):
+            maneuver = _maneuver(f"m{k}", samples)
+            write_maneuver(maneuver.with_outputs(change(rng.normal(size=(samples, 8)))),
+                           data / f"m{k}.csv")
+        (tmp_path / "out").mkdir()
+        return ["identify", str(tmp_path / "model.toml"), str(data), "--quiet",
+                "--out", str(tmp_path / "out" / "result.json")]
+    return command
+
+
+def _set_column(index, value):
+    def change(outputs):
+        outputs[:, index] = value
+        return outputs
+    return change
+
+
+def _copy_column(source, target):
+    def change(outputs):
+        outputs[:, target] = outputs[:, source]
+        return outputs
+    return change
+
+
+NO_FREE_PARAMETER = MODEL.split("[structure]")[0] + '[structure]\npopulate = "none"\n'
+
+
 def _plain(*args):
     return lambda tmp_path: [a.format(tmp=tmp_path) for a in args]
 
@@ -177,6 +211,19 @@ def _with_out(command, make_out):
 COMMANDS = [
     *[(f"data-{name}", _simulate_inputs(make), ExitStatus.ERROR, words)
       for name, make, words in DATA_FILES],
+    # identification data and model
+    ("identify-zero-output", _identify(_set_column(2, 0.0)), ExitStatus.ERROR,
+     ["output 'q' is constant", "--outputs"]),
+    ("identify-constant-output", _identify(_set_column(0, 1.0)), ExitStatus.ERROR,
+     ["output 'ax' is constant", "value 1"]),
+    ("identify-all-outputs-constant", _identify(lambda y: y * 0 + 1.0), ExitStatus.ERROR,
+     ["output 'ax' is constant"]),
+    ("identify-duplicated-output", _identify(_copy_column(2, 5)), ExitStatus.ERROR,
+     ["outputs 'q' and 'p' hold the same record"]),
+    ("identify-too-few-samples", _identify(samples=3), ExitStatus.ERROR,
+     ["48 output samples cannot determine"]),
+    ("identify-no-free-parameter", _identify(model=NO_FREE_PARAMETER), ExitStatus.ERROR,
+     ["model.toml", "no free parameter"]),
     # seeds
     ("generate-negative-seed", _plain("generate", "hover", "--seed", "-1", "--out", "{tmp}/out"),
      ExitStatus.USAGE, ["--seed", "≥ 0", "'-1'"]),

@@ -136,7 +136,8 @@ def _record(estimate, model: str, out: Path) -> dict:
 def run(args) -> int:
     from rotorid.cli.commands.simulate import _load_inputs
     from rotorid.cli.files import refuse_overwrite
-    from rotorid.errors import ExitStatus, MissingFileError, RotoridWarning
+    from rotorid.errors import DataFileError, ExitStatus, MissingFileError, RotoridWarning
+    from rotorid.estimation.data_checks import check_fit_data
     from rotorid.io import atomic_write
     from rotorid.model.modelfile import load_model
     from rotorid.model.reference import is_model_reference, load_model_reference
@@ -144,14 +145,21 @@ def run(args) -> int:
 
     by_reference = is_model_reference(args.model)
     model = load_model_reference(args.model) if by_reference else load_model(args.model)
+    if not by_reference and not model.parameter_names:
+        raise DataFileError(f"{args.model}: the model has no free parameter to estimate (every "
+                            f"derivative is fixed or none is declared); declare at least one "
+                            f"derivative without a fixed value")
     out = refuse_overwrite(args.out, args.force)
     if not out.parent.is_dir():
         raise MissingFileError(f"cannot write {out}: directory {out.parent} does not exist")
     manager = new_plugin_manager([] if args.quiet else [ProgressPrinter()])
     with using(manager):
-        estimator = _estimator(args.estimator, _options(args))
+        options = _options(args)
+        estimator = _estimator(args.estimator, options)
         maneuvers = _load_inputs(args.data, args.hold,
                                  None if by_reference else model.units.name)
+        if not by_reference:
+            check_fit_data(maneuvers, options.get("outputs"), len(model.parameter_names))
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", RotoridWarning)
             estimate = estimator.estimate(model, maneuvers)
