@@ -149,13 +149,13 @@ DATA_FILES = [
 ]
 
 
-def _simulate_inputs(make):
+def _simulate_inputs(make, values=VALUES):
     def command(tmp_path):
         model = tmp_path / "model.toml"
         model.write_text(MODEL)
-        values = tmp_path / "values.json"
-        values.write_text(json.dumps(VALUES))
-        return ["simulate", str(model), str(make(tmp_path)), "--values", str(values),
+        (tmp_path / "values.json").write_text(json.dumps(values))
+        values_path = tmp_path / "values.json"
+        return ["simulate", str(model), str(make(tmp_path)), "--values", str(values_path),
                 "--out", str(tmp_path / "out")]
     return command
 
@@ -192,6 +192,11 @@ def _copy_column(source, target):
 
 
 NO_FREE_PARAMETER = MODEL.split("[structure]")[0] + '[structure]\npopulate = "none"\n'
+TEN_SECOND_DELAY = MODEL.replace("delay = 0.0", "delay = { initial = 10.0, fixed = true }")
+
+
+def _good_csv(tmp_path):
+    return write_maneuver(_maneuver("m0", 200), tmp_path / "m0.csv")
 
 
 def _plain(*args):
@@ -222,6 +227,10 @@ COMMANDS = [
      ["outputs 'q' and 'p' hold the same record"]),
     ("identify-too-few-samples", _identify(samples=3), ExitStatus.ERROR,
      ["48 output samples cannot determine"]),
+    ("identify-fixed-delay-longer-than-records", _identify(model=TEN_SECOND_DELAY),
+     ExitStatus.ERROR, ["delay tau_L_lat = 10 s", "record m0 (3.98 s)"]),
+    ("simulate-delay-longer-than-records", _simulate_inputs(_good_csv, {"tau_L_lat": 100.0}),
+     ExitStatus.ERROR, ["delay tau_L_lat = 100 s", "record m0"]),
     ("identify-no-free-parameter", _identify(model=NO_FREE_PARAMETER), ExitStatus.ERROR,
      ["model.toml", "no free parameter"]),
     # seeds

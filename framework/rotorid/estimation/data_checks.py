@@ -1,7 +1,7 @@
-"""Checks of identification data before a fit: what would make the output-error cost
-meaningless (a fitted output that never varies, two fitted outputs that are the same
-record, fewer samples than parameters) is named with the channel and the cause instead of
-surfacing as a diverging or singular fit."""
+"""Checks of data against a model before a fit or a simulation: what would make the
+output-error cost meaningless (a fitted output that never varies, two fitted outputs that are
+the same record, fewer samples than parameters, a delay as long as a record) is named with the
+channel and the cause instead of surfacing as a diverging, singular or all-zero result."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ import numpy as np
 
 from rotorid.data import OUTPUT_CHANNELS, ManeuverSet
 from rotorid.errors import DataError
+from rotorid.model.structure import ModelStructure
 
 #: An output whose standard deviation over all maneuvers is below this fraction of its
 #: largest magnitude (or exactly zero) carries no information.
@@ -18,9 +19,12 @@ CONSTANT_FRACTION = 1e-9
 
 
 def check_fit_data(maneuvers: ManeuverSet, outputs: Sequence[str] | None,
-                   n_parameters: int) -> None:
+                   model: ModelStructure) -> None:
     """Raise :class:`DataError` naming the channel and the fix when ``maneuvers`` cannot
-    inform a fit of ``n_parameters`` parameters on ``outputs`` (``None``: all eight)."""
+    inform a fit of ``model`` (from its initial values) on ``outputs`` (``None``: all
+    eight)."""
+    check_delays(model, maneuvers)
+    n_parameters = model.n_parameters
     names = tuple(n for n in (outputs or OUTPUT_CHANNELS) if n in OUTPUT_CHANNELS)
     columns = [OUTPUT_CHANNELS.index(n) for n in names]
     records = np.concatenate([m.outputs[:, columns] for m in maneuvers])
@@ -39,3 +43,19 @@ def check_fit_data(maneuvers: ManeuverSet, outputs: Sequence[str] | None,
     if records.size < n_parameters:
         raise DataError(f"{records.size} output samples cannot determine {n_parameters} "
                         f"parameters; give longer or more maneuvers or fewer parameters")
+
+
+def check_delays(model: ModelStructure, maneuvers: ManeuverSet, values=None) -> None:
+    """Raise :class:`DataError` when a delay of ``model`` (at ``values``, a vector or mapping
+    of its free parameters; default its initial values) is not shorter than the shortest
+    record of ``maneuvers``: the delayed term would never act."""
+    delays = {d.delay_name: d.delay.initial for d in model.derivatives if d.delay is not None}
+    if values is not None:
+        delays.update({n: v for n, v in model.as_mapping(values).items() if n in delays})
+    shortest = min(maneuvers, key=lambda m: m.time[-1] - m.time[0])
+    duration = float(shortest.time[-1] - shortest.time[0])
+    for name, tau in delays.items():
+        if tau >= duration:
+            raise DataError(f"delay {name} = {tau:g} s is not shorter than the record "
+                            f"{shortest.name} ({duration:g} s): the delayed term would never "
+                            f"act; check its unit (s) or give longer records")

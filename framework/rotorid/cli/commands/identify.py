@@ -159,7 +159,7 @@ def run(args) -> int:
         maneuvers = _load_inputs(args.data, args.hold,
                                  None if by_reference else model.units.name)
         if not by_reference:
-            check_fit_data(maneuvers, options.get("outputs"), len(model.parameter_names))
+            check_fit_data(maneuvers, options.get("outputs"), model)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", RotoridWarning)
             estimate = estimator.estimate(model, maneuvers)

@@ -85,6 +85,7 @@ def _load_inputs(locations, hold: str, units: str):
 
 
 def run(args) -> int:
+    from rotorid.estimation.data_checks import check_delays
     from rotorid.model.modelfile import load_model
     from rotorid.plugin.manager import create
     from rotorid.simulation.simulator import simulated_maneuvers
@@ -94,6 +95,7 @@ def run(args) -> int:
     if args.values is not None:
         structure, values = read_values(Path(args.values), structure)
     maneuvers = _load_inputs(args.inputs, args.hold, structure.units.name)
+    check_delays(structure, maneuvers, values)
     simulated = simulated_maneuvers(structure, values, maneuvers)
     paths = create("data-sources", "files", hold=args.hold).save(simulated, args.out, format=args.format)
     print(f"simulated {len(paths)} maneuver(s) with {structure.n_parameters} parameters; "
