@@ -149,10 +149,10 @@ DATA_FILES = [
 ]
 
 
-def _simulate_inputs(make, values=VALUES):
+def _simulate_inputs(make, values=VALUES, model_text=MODEL):
     def command(tmp_path):
         model = tmp_path / "model.toml"
-        model.write_text(MODEL)
+        model.write_text(model_text)
         (tmp_path / "values.json").write_text(json.dumps(values))
         values_path = tmp_path / "values.json"
         return ["simulate", str(model), str(make(tmp_path)), "--values", str(values_path),
@@ -231,6 +231,14 @@ COMMANDS = [
      ExitStatus.ERROR, ["delay tau_L_lat = 10 s", "record m0 (3.98 s)"]),
     ("simulate-delay-longer-than-records", _simulate_inputs(_good_csv, {"tau_L_lat": 100.0}),
      ExitStatus.ERROR, ["delay tau_L_lat = 100 s", "record m0"]),
+    *[(f"model-airspeed-{text}", _simulate_inputs(
+        _good_csv, model_text=MODEL.replace("airspeed_kt = 60.0", f"airspeed_kt = {text}")),
+       ExitStatus.ERROR, ["model.toml", words])
+      for text, words in (("1e6", "1e+06 kt is beyond any rotorcraft"),
+                          ("-5.0", "≥ 0 kt"), ("nan", "finite"), ('"70"', "airspeed_kt"))],
+    ("model-body-velocity-in-wrong-unit", _simulate_inputs(
+        _good_csv, model_text=MODEL.replace("airspeed_kt = 60.0", "u0_fps = 5000.0")),
+     ExitStatus.ERROR, ["model.toml", "beyond any rotorcraft"]),
     ("identify-no-free-parameter", _identify(model=NO_FREE_PARAMETER), ExitStatus.ERROR,
      ["model.toml", "no free parameter"]),
     # seeds

@@ -55,6 +55,11 @@ def _finite_float(instance, attribute, value):
         raise StructureError(f"flight condition: {attribute.name} must be finite, got {value!r}")
 
 
+#: Highest airspeed of a flight condition, kt: beyond any rotorcraft, tiltrotors included, so
+#: that a value in the wrong unit is refused.
+MAX_AIRSPEED_KT = 400.0
+
+
 @attrs.frozen
 class FlightCondition:
     """Trim point of the linear model, in SI: body velocities in m/s, attitudes in rad.
@@ -69,6 +74,12 @@ class FlightCondition:
     phi0: float = attrs.field(default=0.0, converter=float, validator=_finite_float)
 
     def __attrs_post_init__(self):
+        if self.airspeed_kt > MAX_AIRSPEED_KT:
+            raise StructureError(
+                f"flight condition: airspeed {self.airspeed_kt:.6g} kt is beyond any rotorcraft "
+                f"(at most {MAX_AIRSPEED_KT:g} kt); give airspeed_kt in kt or the body "
+                f"velocities in m/s (u0_mps) or ft/s (u0_fps)"
+            )
         for name in ("theta0", "phi0"):
             if abs(getattr(self, name)) >= math.pi / 2:
                 raise StructureError(
