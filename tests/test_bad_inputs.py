@@ -17,6 +17,7 @@ import time
 import zipfile
 from pathlib import Path
 
+import attrs
 import numpy as np
 import pytest
 import rotorid
@@ -95,6 +96,17 @@ def _truncated_npz(tmp_path):
     return path
 
 
+def _cut(suffix, keep):
+    """A good maneuver file of ``suffix`` cut to ``keep`` bytes (a fraction if below 1)."""
+    def make(tmp_path):
+        whole = write_maneuver(_maneuver("whole", 200), tmp_path / f"whole{suffix}").read_bytes()
+        size = int(len(whole) * keep) if keep < 1 else keep
+        path = tmp_path / f"cut{suffix}"
+        path.write_bytes(whole[:size])
+        return path
+    return make
+
+
 def _fifo(tmp_path):
     path = tmp_path / "pipe.csv"
     os.mkfifo(path)
@@ -123,6 +135,9 @@ DATA_FILES = [
                    "0o7", "Infinity5", "1 000")],
     *[(f"non-finite-{text}", _csv_with(text), ["bad.csv", "'long'", "NaN or infinite"])
       for text in ("nan", "NaN", "inf", "-inf", "1e999", "-1e400")],
+    *[(f"cut-{suffix[1:]}-{keep}", _cut(suffix, keep), [f"cut{suffix}"])
+      for suffix in (".npz", ".mat") for keep in (1, 12, 126, 127, 300, 0.5, 0.9)],
+    *[(f"cut-csv-{keep}", _cut(".csv", keep), ["cut.csv"]) for keep in (1, 40, 0.5, 0.93)],
     ("time-jump-at-row-20", _csv_text(_csv_rows(times=_times(_jump_at_row_20))),
      ["bad.csv", "not uniformly sampled at row 20"]),
     ("time-back-at-row-7", _csv_text(_csv_rows(times=_times(_back_at_row_7))),
@@ -160,7 +175,8 @@ def _simulate_inputs(make, values=VALUES, model_text=MODEL):
     return command
 
 
-def _identify(change=lambda outputs: outputs, model=MODEL, samples=200):
+def _identify(change=lambda outputs: outputs, model=MODEL, samples=200, dt=0.02,
+              units="flight-test"):
     """``rotorid identify`` of noise records whose outputs ``change`` edits."""
     def command(tmp_path):
         (tmp_path / "model.toml").write_text(model)
@@ -168,7 +184,8 @@ def _identify(change=lambda outputs: outputs, model=MODEL, samples=200):
         data.mkdir()
         rng = np.random.default_rng(3)
         for k in range(2):
-            maneuver = _maneuver(f"m{k}", samples)
+            maneuver = attrs.evolve(_maneuver(f"m{k}", samples), time=np.arange(samples) * dt,
+                                    units=units)
             write_maneuver(maneuver.with_outputs(change(rng.normal(size=(samples, 8)))),
                            data / f"m{k}.csv")
         (tmp_path / "out").mkdir()
@@ -239,6 +256,11 @@ COMMANDS = [
     ("model-body-velocity-in-wrong-unit", _simulate_inputs(
         _good_csv, model_text=MODEL.replace("airspeed_kt = 60.0", "u0_fps = 5000.0")),
      ExitStatus.ERROR, ["model.toml", "beyond any rotorcraft"]),
+    ("identify-time-in-ms", _identify(dt=20.0), ExitStatus.ERROR,
+     ["maneuver m0", "sample interval 20 s", "in ms"]),
+    ("identify-roll-in-deg-declared-rad", _identify(
+        lambda y: _set_column(6, 5.0 * (-1) ** np.arange(200))(0.01 * y), units="si"),
+     ExitStatus.ERROR, ["output 'phi'", "286.5° from trim", "deg declared as rad"]),
     ("identify-no-free-parameter", _identify(model=NO_FREE_PARAMETER), ExitStatus.ERROR,
      ["model.toml", "no free parameter"]),
     # seeds

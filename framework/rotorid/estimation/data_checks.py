@@ -1,10 +1,13 @@
 """Checks of data against a model before a fit or a simulation: what would make the
 output-error cost meaningless (a fitted output that never varies, two fitted outputs that are
 the same record, fewer samples than parameters, a delay as long as a record) is named with the
-channel and the cause instead of surfacing as a diverging, singular or all-zero result."""
+channel and the cause instead of surfacing as a diverging, singular or all-zero result; so
+are records no rotorcraft gives (a sample interval of seconds, attitudes beyond 90°), whose
+usual cause is a unit."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -12,10 +15,15 @@ import numpy as np
 from rotorid.data import OUTPUT_CHANNELS, ManeuverSet
 from rotorid.errors import DataError
 from rotorid.model.structure import ModelStructure
+from rotorid.units import unit_system
 
 #: An output whose standard deviation over all maneuvers is below this fraction of its
 #: largest magnitude (or exactly zero) carries no information.
 CONSTANT_FRACTION = 1e-9
+#: Longest sample interval that still resolves rotorcraft dynamics, s.
+MAX_SAMPLE_INTERVAL = 0.5
+#: Largest attitude perturbation from trim a small-perturbation model describes, deg.
+MAX_ATTITUDE_DEG = 90.0
 
 
 def check_fit_data(maneuvers: ManeuverSet, outputs: Sequence[str] | None,
@@ -23,6 +31,7 @@ def check_fit_data(maneuvers: ManeuverSet, outputs: Sequence[str] | None,
     """Raise :class:`DataError` naming the channel and the fix when ``maneuvers`` cannot
     inform a fit of ``model`` (from its initial values) on ``outputs`` (``None``: all
     eight)."""
+    _check_plausible(maneuvers)
     check_delays(model, maneuvers)
     n_parameters = model.n_parameters
     names = tuple(n for n in (outputs or OUTPUT_CHANNELS) if n in OUTPUT_CHANNELS)
@@ -59,3 +68,20 @@ def check_delays(model: ModelStructure, maneuvers: ManeuverSet, values=None) -> 
             raise DataError(f"delay {name} = {tau:g} s is not shorter than the record "
                             f"{shortest.name} ({duration:g} s): the delayed term would never "
                             f"act; check its unit (s) or give longer records")
+
+
+def _check_plausible(maneuvers: ManeuverSet) -> None:
+    """Sample interval and attitude magnitudes a rotorcraft record can have; the usual cause
+    of others is a unit (time in ms, angles in deg declared as rad)."""
+    for maneuver in maneuvers:
+        if maneuver.dt > MAX_SAMPLE_INTERVAL:
+            raise DataError(f"maneuver {maneuver.name}: sample interval {maneuver.dt:g} s is "
+                            f"longer than {MAX_SAMPLE_INTERVAL:g} s; is the time in ms? give "
+                            f"it in s")
+        degrees_per_unit = math.degrees(unit_system(maneuver.units).radian_per_angle)
+        for name in ("theta", "phi"):
+            largest = np.max(np.abs(maneuver.channel(name))) * degrees_per_unit
+            if largest > MAX_ATTITUDE_DEG:
+                raise DataError(f"maneuver {maneuver.name}: output {name!r} reaches "
+                                f"{largest:.4g}° from trim, beyond {MAX_ATTITUDE_DEG:g}°; are "
+                                f"angles in deg declared as rad in the data file?")
