@@ -1,5 +1,5 @@
-"""Registers the ``helisim`` data source and the ``trim`` and ``linearize`` commands (cheap to
-import; the truth model loads on use)."""
+"""Registers the ``helisim`` data source and the ``generate``, ``trim`` and ``linearize``
+commands (cheap to import; the truth model loads on use)."""
 
 import importlib
 
@@ -25,7 +25,10 @@ def _command(name: str):
 
 @hookimpl
 def rotorid_commands():
-    return [PluginDescriptor("trim", _command("trim"),
+    return [PluginDescriptor("generate", _command("generate"),
+                             "generate a condition's data set (16 multisteps, 4 sweeps) with "
+                             "the helisim truth model and write it as .npz maneuver files"),
+            PluginDescriptor("trim", _command("trim"),
                              "trim the Bo-105 truth model (hover, forward = 70 kt, or "
                              "--airspeed-kt V)"),
             PluginDescriptor("linearize", _command("linearize"),

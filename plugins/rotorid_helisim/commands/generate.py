@@ -7,9 +7,6 @@ import time
 
 from rotorid.cli.arguments import output_directory, seed
 
-NAME = "generate"
-HELP = ("generate a condition's data set (16 multisteps, 4 sweeps) with the helisim truth "
-        "model and write it as .npz maneuver files")
 
 
 def add_arguments(parser) -> None:
@@ -46,13 +43,12 @@ class _Progress:
 
 
 def run(args) -> int:
-    from rotorid.plugin.manager import create
+    from ..source import HelisimSource
 
     settings = {"condition": args.condition, "seed": args.seed, "turbulence": args.turbulence}
     if args.quick:
         settings["quick"] = True
-    source = create("data-sources", "helisim",
-                    progress=_Progress(f"flying the {args.condition} maneuvers"))
+    source = HelisimSource(progress=_Progress(f"flying the {args.condition} maneuvers"))
     maneuvers, cached = source.generate_into(settings, args.out)
     state = "unchanged, read from the cache" if cached else "written"
     print(f"{args.condition}: {len(maneuvers)} maneuvers {state} in {args.out}")
