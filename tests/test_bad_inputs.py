@@ -493,3 +493,33 @@ run_tasks(exec, tasks, "process")
     assert parent.returncode == -signal.SIGKILL
     time.sleep(2.5)
     assert not any(p.exists() for p in written)
+
+
+# ----------------------------------------------------------------- kill and resume
+@pytest.mark.slow
+def test_a_study_killed_after_its_first_step_resumes_to_the_same_files(tmp_path):
+    """`rotorid study` of the tiny case, SIGKILLed once its first reduction step is written,
+    then resumed: every file equals the uninterrupted run's byte for byte, result.json apart
+    from its timing key, and no temporary file is left."""
+    case = Path(__file__).parent / "cases" / "tiny.toml"
+    command = ["study", str(case), "--no-figures", "--executor", "serial"]
+    assert _run([*command, "--out", str(tmp_path / "whole")]) == ExitStatus.OK
+    killed = subprocess.Popen([sys.executable, "-m", "rotorid.cli.main", *command, "--out",
+                               str(tmp_path / "killed")], stderr=subprocess.DEVNULL)
+    first_step = tmp_path / "killed" / "tiny" / "steps" / "step_000.json"
+    deadline = time.monotonic() + 120
+    while not first_step.exists() and killed.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    killed.kill()
+    assert killed.wait() == -signal.SIGKILL, "the run ended before it could be killed"
+    assert _run([*command, "--out", str(tmp_path / "killed"), "--resume"]) == ExitStatus.OK
+    whole, resumed = tmp_path / "whole" / "tiny", tmp_path / "killed" / "tiny"
+    names = sorted(p.relative_to(whole) for p in _files_under(whole))
+    assert names == sorted(p.relative_to(resumed) for p in _files_under(resumed))
+    for name in names:
+        if name.name == "result.json":
+            records = [json.loads((root / name).read_text()) for root in (whole, resumed)]
+            assert records[0].pop("timing") != records[1].pop("timing")
+            assert records[0] == records[1]
+        else:
+            assert (whole / name).read_bytes() == (resumed / name).read_bytes(), name
