@@ -167,7 +167,9 @@ def test_delays_become_parameters_after_the_derivatives():
     assert structure.parameter_names[59:] == tuple(f"tau_{n}" for n in delayed)
     assert structure.is_delay().sum() == len(delayed)
     lower, upper = structure.bounds()
-    assert np.all(lower[structure.is_delay()] == 0.0) and np.all(np.isinf(upper))
+    assert np.all(lower[structure.is_delay()] == 0.0)
+    assert np.all(np.isinf(upper[~structure.is_delay()]))
+    assert np.all(upper[structure.is_delay()] == 1.0)     # the default bound, s
     with pytest.raises(StructureError, match="derivative L_q is not in this structure"):
         ModelStructure.six_dof(CONDITION).without("L_q").with_delays(["L_q"], missing="error")
 

@@ -97,12 +97,19 @@ def _optional_float(value):
     return None if value is None else _real(value)
 
 
+#: Upper bound of an estimated delay that declares none, s: well above the equivalent delays
+#: of rotor dynamics (below 0.3 s), so that a delay the data cannot determine stops at a bound
+#: instead of wandering off to seconds.
+DEFAULT_DELAY_UPPER = 1.0
+
+
 @attrs.frozen
 class Delay:
     """A pure time delay on one derivative's variable, in seconds.
 
-    The lower bound is always 0 s (a delay cannot lead). ``upper`` is optional; ``fixed``
-    keeps the delay at ``initial`` during estimation.
+    The lower bound is always 0 s (a delay cannot lead). ``upper`` is optional (estimation
+    then bounds the delay by :data:`DEFAULT_DELAY_UPPER`); ``fixed`` keeps the delay at
+    ``initial`` during estimation.
     """
 
     initial: float = attrs.field(default=0.0, converter=_real, validator=_finite("delay"))

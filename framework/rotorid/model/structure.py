@@ -31,6 +31,7 @@ import numpy as np
 from rotorid.errors import StructureError
 from rotorid.model.derivatives import (
     CONTROL_VARIABLES,
+    DEFAULT_DELAY_UPPER,
     FORCE_MOMENT_LETTERS,
     STATE_VARIABLES,
     Delay,
@@ -323,7 +324,8 @@ class ModelStructure:
     def bounds(self, enforce_signs: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper bounds of the parameter vector, each shape ``(n_parameters,)``.
 
-        Delays are bounded below by 0 (and above by their ``upper``); derivatives are
+        Delays are bounded below by 0 and above by their ``upper`` (by default
+        :data:`~rotorid.model.derivatives.DEFAULT_DELAY_UPPER`); derivatives are
         unbounded unless ``enforce_signs`` turns their sign priors into bounds.
         """
         lower, upper = [], []
@@ -337,7 +339,7 @@ class ModelStructure:
             upper.append(hi)
         for d in self.free_delays:
             lower.append(0.0)
-            upper.append(np.inf if d.delay.upper is None else d.delay.upper)
+            upper.append(DEFAULT_DELAY_UPPER if d.delay.upper is None else d.delay.upper)
         return np.array(lower, dtype=float), np.array(upper, dtype=float)
 
     def as_vector(self, values) -> np.ndarray:
