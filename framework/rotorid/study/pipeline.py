@@ -29,6 +29,7 @@ import attrs
 
 from rotorid.data import ManeuverSet
 from rotorid.errors import DataError, IdentifiabilityWarning, StudyError
+from rotorid.estimation.data_checks import check_fit_data
 from rotorid.estimation.reduction import ReductionPath, ReductionStep, reduce
 from rotorid.executors import check_executor, failure_error, run_tasks
 from rotorid.model.derivatives import delayed_derivative
@@ -185,6 +186,7 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     report(case.name, f"{len(ident)} identification and {0 if verif is None else len(verif)} "
                       f"verification maneuvers; trim {condition.describe()}")
     structure = base_structure(case, condition, ident.units)
+    check_fit_data(ident, case.estimator_options.get("outputs"), structure)
     estimator = create("estimators", case.estimator, **case.estimator_options)
     path, resumed = _reduce(case, structure, ident, estimator, directory, resume, report)
     clock["reduction"] = time.perf_counter()
