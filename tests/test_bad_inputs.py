@@ -261,6 +261,13 @@ COMMANDS = [
     ("identify-roll-in-deg-declared-rad", _identify(
         lambda y: _set_column(6, 5.0 * (-1) ** np.arange(200))(0.01 * y), units="si"),
      ExitStatus.ERROR, ["output 'phi'", "286.5° from trim", "deg declared as rad"]),
+    ("identify-values-times-1e300", _identify(lambda y: y * 1e300), ExitStatus.ERROR,
+     ["maneuver m0", "output 'theta' reaches 3.332e+300°", "unit and scale"]),
+    ("identify-acceleration-times-1000", _identify(_set_column(1, 1000.0)), ExitStatus.ERROR,
+     ["output 'az'", "31.08 g", "beyond 30 g"]),
+    ("identify-rate-in-wrong-unit", _identify(
+        lambda y: _set_column(5, 2000.0 * (-1) ** np.arange(200))(0.01 * y)),
+     ExitStatus.ERROR, ["output 'p'", "2000°/s", "beyond 1000°/s"]),
     ("identify-no-free-parameter", _identify(model=NO_FREE_PARAMETER), ExitStatus.ERROR,
      ["model.toml", "no free parameter"]),
     # seeds

@@ -2,8 +2,8 @@
 output-error cost meaningless (a fitted output that never varies, two fitted outputs that are
 the same record, fewer samples than parameters, a delay as long as a record) is named with the
 channel and the cause instead of surfacing as a diverging, singular or all-zero result; so
-are records no rotorcraft gives (a sample interval of seconds, attitudes beyond 90°), whose
-usual cause is a unit."""
+are records no rotorcraft gives (a sample interval of seconds, attitudes beyond 90°, rates
+beyond 1000 °/s, specific forces beyond 30 g), whose usual cause is a unit or a scale error."""
 
 from __future__ import annotations
 
@@ -24,6 +24,9 @@ CONSTANT_FRACTION = 1e-9
 MAX_SAMPLE_INTERVAL = 0.5
 #: Largest attitude perturbation from trim a small-perturbation model describes, deg.
 MAX_ATTITUDE_DEG = 90.0
+#: Largest angular rate and specific force a rotorcraft record can hold, deg/s and g.
+MAX_RATE_DEG_S = 1000.0
+MAX_ACCELERATION_G = 30.0
 
 
 def check_fit_data(maneuvers: ManeuverSet, outputs: Sequence[str] | None,
@@ -71,17 +74,23 @@ def check_delays(model: ModelStructure, maneuvers: ManeuverSet, values=None) -> 
 
 
 def _check_plausible(maneuvers: ManeuverSet) -> None:
-    """Sample interval and attitude magnitudes a rotorcraft record can have; the usual cause
-    of others is a unit (time in ms, angles in deg declared as rad)."""
+    """Sample interval and output magnitudes a rotorcraft record can have; the usual cause of
+    others is a unit (time in ms, angles in deg declared as rad) or a scale error."""
     for maneuver in maneuvers:
         if maneuver.dt > MAX_SAMPLE_INTERVAL:
             raise DataError(f"maneuver {maneuver.name}: sample interval {maneuver.dt:g} s is "
                             f"longer than {MAX_SAMPLE_INTERVAL:g} s; is the time in ms? give "
                             f"it in s")
-        degrees_per_unit = math.degrees(unit_system(maneuver.units).radian_per_angle)
-        for name in ("theta", "phi"):
-            largest = np.max(np.abs(maneuver.channel(name))) * degrees_per_unit
-            if largest > MAX_ATTITUDE_DEG:
-                raise DataError(f"maneuver {maneuver.name}: output {name!r} reaches "
-                                f"{largest:.4g}° from trim, beyond {MAX_ATTITUDE_DEG:g}°; are "
-                                f"angles in deg declared as rad in the data file?")
+        units = unit_system(maneuver.units)
+        degrees = math.degrees(units.radian_per_angle)
+        for names, scale, limit, unit in ((("theta", "phi"), degrees, MAX_ATTITUDE_DEG, "°"),
+                                          (("p", "q", "r"), degrees, MAX_RATE_DEG_S, "°/s"),
+                                          (("ax", "ay", "az"), 1 / units.g, MAX_ACCELERATION_G,
+                                           " g")):
+            for name in names:
+                largest = float(np.max(np.abs(maneuver.channel(name)))) * scale
+                if largest > limit:
+                    raise DataError(f"maneuver {maneuver.name}: output {name!r} reaches "
+                                    f"{largest:.4g}{unit} from trim, beyond {limit:g}{unit}; "
+                                    f"check the unit and scale of that channel in the data "
+                                    f"file (angles in deg declared as rad?)")
