@@ -88,6 +88,13 @@ class ConvergenceWarning(RotoridWarning):
     """An iterative procedure stopped without meeting its convergence criteria."""
 
 
+class DataWarning(RotoridWarning):
+    """Maneuver data look wrong before a fit (an input that never moves, outputs that are not
+    perturbations, an implausible unit, a clipped or dropped-out sensor, rates that do not
+    integrate to the attitudes); the message gives the numbers and the fix
+    (:mod:`rotorid.estimation.sanity`)."""
+
+
 class TrimError(RotoridError, ValueError):
     """A simulation model cannot be trimmed at the requested flight condition (outside the
     flight envelope, beyond control travel or power, or the trim iteration failed)."""

@@ -29,6 +29,11 @@ MAX_RATE_DEG_S = 1000.0
 MAX_ACCELERATION_G = 30.0
 
 
+def is_constant(record: np.ndarray) -> bool:
+    """Whether the samples ``record`` (any shape) never vary (see :data:`CONSTANT_FRACTION`)."""
+    return bool(np.std(record) <= CONSTANT_FRACTION * np.max(np.abs(record)))
+
+
 def check_fit_data(maneuvers: ManeuverSet, outputs: Sequence[str] | None,
                    model: ModelStructure) -> None:
     """Raise :class:`DataError` naming the channel and the fix when ``maneuvers`` cannot
@@ -41,7 +46,7 @@ def check_fit_data(maneuvers: ManeuverSet, outputs: Sequence[str] | None,
     columns = [OUTPUT_CHANNELS.index(n) for n in names]
     records = np.concatenate([m.outputs[:, columns] for m in maneuvers])
     for name, record in zip(names, records.T):
-        if np.std(record) <= CONSTANT_FRACTION * np.max(np.abs(record)):
+        if is_constant(record):
             raise DataError(f"output {name!r} is constant in every maneuver (value "
                             f"{record[0]:.6g}): it carries no information and makes the noise "
                             f"covariance singular; check the recording or leave it out with "

@@ -28,9 +28,10 @@ from typing import Protocol
 import attrs
 
 from rotorid.data import ManeuverSet
-from rotorid.errors import DataError, IdentifiabilityWarning, StudyError
+from rotorid.errors import DataError, DataWarning, IdentifiabilityWarning, StudyError
 from rotorid.estimation.data_checks import check_fit_data
 from rotorid.estimation.reduction import ReductionPath, ReductionStep, reduce
+from rotorid.estimation.sanity import check_before_fit
 from rotorid.executors import check_executor, failure_error, run_tasks
 from rotorid.model.derivatives import delayed_derivative
 from rotorid.model.modelfile import parse_model
@@ -94,6 +95,19 @@ def base_structure(case: FlightCase, condition: FlightCondition, units: str) -> 
     mapping = {"units": units, "condition": trim, "structure": dict(case.structure),
                "derivatives": dict(case.derivatives)}
     return parse_model(mapping, f"case {case.name}")
+
+
+def checked_structure(case: FlightCase, structure: ModelStructure, ident: ManeuverSet,
+                      report: Progress) -> ModelStructure:
+    """``structure`` after the sanity checks of the identification data
+    (:func:`~rotorid.estimation.sanity.check_before_fit`): each warning becomes a progress
+    line, and the derivatives of inputs that never move are dropped before the first fit."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DataWarning)
+        checked = check_before_fit(ident, structure)
+    for warning in caught:
+        report(case.name, f"warning: {warning.message}")
+    return checked
 
 
 def _reduce(case: FlightCase, structure: ModelStructure, ident: ManeuverSet, estimator,
@@ -187,6 +201,7 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
                       f"verification maneuvers; trim {condition.describe()}")
     structure = base_structure(case, condition, ident.units)
     check_fit_data(ident, case.estimator_options.get("outputs"), structure)
+    structure = checked_structure(case, structure, ident, report)
     estimator = create("estimators", case.estimator, **case.estimator_options)
     path, resumed = _reduce(case, structure, ident, estimator, directory, resume, report)
     clock["reduction"] = time.perf_counter()

@@ -16,8 +16,9 @@ maneuver files (CSV, NPZ, MAT), directories or glob patterns of the ``files`` da
 are converted to the model's unit system. The report goes to stdout; stderr gets one line per
 accepted iteration (unless ``--quiet``; an observer plugin of the
 ``rotorid_estimation_iteration`` hook, so it works with any estimator that reports through
-it) and one line per warning (an unidentifiable parameter
-combination, for instance). The estimate is written atomically as JSON (the format of
+it), the kinematic consistency fits and one line per warning: the sanity checks of the data
+before the fit (:mod:`rotorid.estimation.sanity`; the derivatives of an input that never moves
+are dropped before the fit), an unidentifiable parameter combination. The estimate is written atomically as JSON (the format of
 :meth:`rotorid.estimation.estimate.Estimate.as_dict`, plus ``structure``: the model file's path relative
 to the JSON file, so that ``rotorid verify RESULT.json SWEEPS...`` finds it; for a reference,
 ``model``: the reference, a file's path made relative the same way).
@@ -25,7 +26,9 @@ to the JSON file, so that ``rotorid verify RESULT.json SWEEPS...`` finds it; for
 
 from __future__ import annotations
 
+import contextlib
 import json
+import logging
 import os
 import sys
 import warnings
@@ -63,7 +66,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--hold", choices=("zoh", "foh"), default="zoh",
                         help="input hold between samples (default zoh)")
     parser.add_argument("--quiet", action="store_true",
-                        help="no progress lines on stderr")
+                        help="no progress lines on stderr (warnings stay)")
     parser.add_argument("--force", action="store_true",
                         help="overwrite RESULT.json if it exists")
     parser.add_argument("--strict", action="store_true",
@@ -133,11 +136,31 @@ def _record(estimate, model: str, out: Path) -> dict:
     return record
 
 
+@contextlib.contextmanager
+def _checks_log(quiet: bool):
+    """With ``quiet``, the sanity checks' report lines (the ``rotorid.checks`` logger's INFO
+    messages) are left out; their warnings stay."""
+    log = logging.getLogger("rotorid.checks")
+    level = log.level
+    if quiet:
+        log.setLevel(logging.WARNING)
+    try:
+        yield
+    finally:
+        log.setLevel(level)
+
+
+def _print_warnings(caught) -> None:
+    for warning in caught:
+        print(f"rotorid identify: warning: {warning.message}", file=sys.stderr, flush=True)
+
+
 def run(args) -> int:
     from rotorid.cli.commands.simulate import _load_inputs
     from rotorid.cli.files import refuse_overwrite
     from rotorid.errors import DataFileError, ExitStatus, MissingFileError, RotoridWarning
     from rotorid.estimation.data_checks import check_fit_data
+    from rotorid.estimation.sanity import check_before_fit
     from rotorid.io import atomic_write
     from rotorid.model.modelfile import load_model
     from rotorid.model.reference import is_model_reference, load_model_reference
@@ -160,11 +183,15 @@ def run(args) -> int:
                                  None if by_reference else model.units.name)
         if not by_reference:
             check_fit_data(maneuvers, options.get("outputs"), model)
+        with warnings.catch_warnings(record=True) as found, _checks_log(args.quiet):
+            warnings.simplefilter("always", RotoridWarning)
+            checked = check_before_fit(maneuvers, None if by_reference else model)
+        _print_warnings(found)
+        model = model if by_reference else checked
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", RotoridWarning)
             estimate = estimator.estimate(model, maneuvers)
-    for warning in caught:
-        print(f"rotorid identify: warning: {warning.message}", file=sys.stderr)
+    _print_warnings(caught)
     atomic_write(out, json.dumps(_record(estimate, args.model, out), indent=2))
     print(estimate.report())
     print(f"estimate written to {out}")

@@ -1,0 +1,164 @@
+"""Kinematic consistency of maneuver data, as flight-path reconstruction checks it.
+
+The attitudes obey the linearised Euler kinematics, θ̇ = cos Φ0 q − sin Φ0 r and
+φ̇ = p + tan Θ0 (sin Φ0 q + cos Φ0 r); where a maneuver carries the body velocities ``u v w``
+as extra channels, they obey u̇ = ax + (gravity and kinematic terms) and likewise for v and w
+(the known terms of :meth:`rotorid.model.structure.ModelStructure.known_state_matrix`). For each
+such channel y with driver f, a least-squares fit over all maneuvers of
+
+    y_i(t) = y0_i + k · ∫ f_i dt − k · b_i · t
+
+gives one scale factor k (1: consistent) and a bias b_i of the driver per maneuver (the
+measured rates or accelerations minus the true ones). :func:`check_kinematics` reports every
+fit on the ``rotorid.checks`` logger and warns when k or the bias is off.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import warnings
+
+import attrs
+import numpy as np
+
+from rotorid.data import OUTPUT_CHANNELS, ManeuverSet
+from rotorid.errors import DataWarning
+from rotorid.model.structure import STATES, FlightCondition, ModelStructure
+from rotorid.units import unit_system
+
+#: A scale factor further than this from 1 is reported.
+SCALE_TOLERANCE = 0.1
+#: A bias larger than this fraction of the driver's RMS is reported.
+BIAS_FRACTION = 0.05
+#: A fit whose residual exceeds this fraction of the channel's variation (about each
+#: maneuver's mean) compares noise with noise: the channel hardly moves, it is left out.
+MOTION_FRACTION = 0.3
+ACCELERATIONS = {"u": "ax", "v": "ay", "w": "az"}
+
+
+@attrs.frozen
+class KinematicFit:
+    """The fit of one channel against its integrated driver.
+
+    Attributes:
+        channel: the integrated channel (``theta``, ``phi``, ``u``, ``v`` or ``w``).
+        driver: what drives it, e.g. ``"q, r"`` or ``"ax, q, r, theta"``.
+        scale: k, the channel's change per unit of integrated driver (1: consistent).
+        bias: mean over the maneuvers of the driver's bias b_i, in the driver's unit (per s).
+        largest_bias: the b_i of largest magnitude.
+        residual: RMS of the fit's residual, in the channel's unit.
+        driver_rms: RMS of the driver, in its unit.
+        unit: the driver's unit.
+    """
+
+    channel: str
+    driver: str
+    scale: float
+    bias: float
+    largest_bias: float
+    residual: float
+    driver_rms: float
+    unit: str
+
+    def describe(self) -> str:
+        return (f"{self.channel} against integrated {self.driver}: scale {self.scale:.4g}, "
+                f"bias {self.bias:.3g} {self.unit} (largest {self.largest_bias:.3g}), "
+                f"residual RMS {self.residual:.3g}")
+
+
+def _states(maneuver) -> np.ndarray:
+    """(N, 8) states where known: measured q θ p φ r, velocities from extra channels, else 0."""
+    x = np.zeros((maneuver.n_samples, len(STATES)))
+    for i, name in enumerate(STATES):
+        if name in OUTPUT_CHANNELS:
+            x[:, i] = maneuver.channel(name)
+        elif name in maneuver.extra_channels:
+            x[:, i] = maneuver.extra_channels[name]
+    return x
+
+
+def _fit(targets, drivers, times) -> tuple[float, np.ndarray, float]:
+    """Least-squares k, the biases b_i and the residual RMS (see the module docstring)."""
+    n = len(targets)
+    columns = [np.concatenate([np.concatenate([[0.0], np.cumsum(
+        0.5 * (f[1:] + f[:-1]) * np.diff(t))]) for f, t in zip(drivers, times)])]
+    for i in range(n):
+        for basis in (np.ones_like, lambda t: t - t[0]):
+            columns.append(np.concatenate([basis(t) if j == i else np.zeros_like(t)
+                                           for j, t in enumerate(times)]))
+    design = np.column_stack(columns)
+    y = np.concatenate(targets)
+    solution, *_ = np.linalg.lstsq(design, y, rcond=None)
+    scale = float(solution[0])
+    biases = -solution[2::2] / scale if scale else np.full(n, np.nan)
+    residual = float(np.sqrt(np.mean((y - design @ solution) ** 2)))
+    return scale, biases, residual
+
+
+def kinematic_fits(maneuvers: ManeuverSet,
+                   condition: FlightCondition | None = None) -> tuple[KinematicFit, ...]:
+    """The fit of every attitude, and of every velocity the maneuvers all carry, against its
+    kinematic driver; channels that hardly move (see :data:`MOTION_FRACTION`) or have no
+    moving driver are left out."""
+    system = unit_system(maneuvers.units)
+    known = ModelStructure(condition or FlightCondition(), (), system).known_state_matrix()
+    channels = ["theta", "phi"] + [v for v in ACCELERATIONS
+                                   if all(v in m.extra_channels for m in maneuvers)]
+    states = [_states(m) for m in maneuvers]
+    times = [m.time for m in maneuvers]
+    fits = []
+    for channel in channels:
+        row = STATES.index(channel)
+        used = [STATES[j] for j in np.flatnonzero(known[row])]
+        drivers = [x @ known[row] for x in states]
+        if channel in ACCELERATIONS:
+            acceleration = ACCELERATIONS[channel]
+            used.insert(0, acceleration)
+            drivers = [f + m.channel(acceleration) for f, m in zip(drivers, maneuvers)]
+        targets = [x[:, row] for x in states]
+        if not np.any(np.concatenate(drivers)) or np.ptp(np.concatenate(targets)) == 0:
+            continue
+        scale, biases, residual = _fit(targets, drivers, times)
+        motion = np.sqrt(np.mean(np.concatenate([y - np.mean(y) for y in targets]) ** 2))
+        if residual > MOTION_FRACTION * motion:
+            continue
+        fits.append(KinematicFit(channel, ", ".join(used), scale, float(np.mean(biases)),
+                                 float(biases[np.argmax(np.abs(biases))]), residual,
+                                 float(np.sqrt(np.mean(np.concatenate(drivers) ** 2))),
+                                 system.label(ACCELERATIONS[channel]) if channel in ACCELERATIONS
+                                 else f"{system.label(channel)}/s"))
+    return tuple(fits)
+
+
+def _scale_advice(fit: KinematicFit) -> str:
+    ratio = math.degrees(1.0)
+    if abs(fit.scale / ratio - 1) < 0.15:
+        return (f"{fit.channel} is in deg and its driver ({fit.driver}) in rad: declare the "
+                f"driver's unit")
+    if abs(fit.scale * ratio - 1) < 0.15:
+        return (f"{fit.channel} is in rad and its driver ({fit.driver}) in deg: declare the "
+                f"channel's unit")
+    return "check the calibration (scale factor) of these sensors"
+
+
+def check_kinematics(maneuvers: ManeuverSet, condition: FlightCondition | None = None
+                     ) -> tuple[KinematicFit, ...]:
+    """Log every :func:`kinematic_fits` result on the ``rotorid.checks`` logger and issue a
+    :class:`~rotorid.errors.DataWarning` for a scale factor or bias that is off; return the
+    fits."""
+    log = logging.getLogger("rotorid.checks")
+    fits = kinematic_fits(maneuvers, condition)
+    for fit in fits:
+        log.info("kinematic consistency: %s", fit.describe())
+        if not abs(fit.scale - 1) <= SCALE_TOLERANCE:
+            warnings.warn(f"kinematic consistency: {fit.describe()}; a scale far from 1 "
+                          f"means inconsistent units or sensors: {_scale_advice(fit)}",
+                          DataWarning, stacklevel=2)
+        elif abs(fit.bias) > BIAS_FRACTION * fit.driver_rms:
+            warnings.warn(f"kinematic consistency: {fit.describe()}; the bias is "
+                          f"{abs(fit.bias) / fit.driver_rms:.0%} of the driver's RMS "
+                          f"({fit.driver_rms:.3g} {fit.unit}): estimate output biases "
+                          f"(--output-biases) or remove the sensor bias first",
+                          DataWarning, stacklevel=2)
+    return fits

@@ -1,0 +1,192 @@
+"""Sanity checks of maneuver data before a fit, reported as :class:`~rotorid.errors.DataWarning`.
+
+Unlike :mod:`rotorid.estimation.data_checks` (data a fit cannot use at all, refused), these
+find data a fit would use and be misled by; each warning gives the numbers and the fix:
+
+- an input that never moves: none of its derivatives can be estimated, so
+  :func:`without_unexcited` drops them from the structure before the first fit;
+- outputs that are not perturbations from trim: ``az`` holding 1 g, other outputs starting
+  far from zero (an offset, an absolute attitude);
+- an implausible unit scale: angular rates far too small (rad/s declared as deg/s) or too
+  large (deg/s declared as rad/s) for a maneuver that moves the controls;
+- a sensor that sits on one value for several samples: at its extreme (saturated or clipped)
+  or elsewhere (a dropout held at the last value);
+- rates and accelerations that do not integrate to the attitudes and velocities
+  (:mod:`rotorid.estimation.kinematics`).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+
+from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS, ManeuverSet
+from rotorid.errors import DataWarning
+from rotorid.estimation.data_checks import is_constant
+from rotorid.estimation.kinematics import check_kinematics
+from rotorid.model.structure import FlightCondition, ModelStructure
+from rotorid.units import unit_system
+
+#: Seconds at the start of a maneuver whose mean is its starting level.
+START_WINDOW = 1.0
+#: An output whose starting level exceeds this fraction of its swing is offset …
+OFFSET_FRACTION = 0.25
+#: … when the level is also this many standard deviations of the start window from zero.
+OFFSET_NOISE_RATIO = 3.0
+#: ``az`` whose median lies within this fraction of g of ±1 g includes gravity.
+ONE_G_TOLERANCE = 0.2
+#: Identical consecutive samples that make a flat run (clipping or a dropout).
+FLAT_RUN = 5
+#: Plausible range of the largest angular rate of a maneuver that moves the controls, deg/s.
+PLAUSIBLE_RATE_DEG = (1.0, 400.0)
+RATE_CHANNELS = ("q", "p", "r")
+
+
+def _warn(message: str) -> None:
+    warnings.warn(message, DataWarning, stacklevel=3)
+
+
+def unexcited_inputs(maneuvers: ManeuverSet) -> dict[str, float]:
+    """Inputs that hold one value in every maneuver: name → that value."""
+    inputs = np.concatenate([m.inputs for m in maneuvers])
+    return {name: float(column[0]) for name, column in zip(INPUT_CHANNELS, inputs.T)
+            if is_constant(column)}
+
+
+def without_unexcited(structure: ModelStructure | None,
+                      maneuvers: ManeuverSet) -> ModelStructure | None:
+    """Warn about every input that never moves; return ``structure`` without the free
+    derivatives of those inputs (they cannot be estimated), saying which were dropped.
+    ``None`` (a model of one's own) is returned as it is, after the warnings."""
+    for name, value in unexcited_inputs(maneuvers).items():
+        held = f"input {name!r} never moves (constant {value:.6g} in every maneuver)"
+        if structure is None:
+            _warn(f"{held}: its derivatives cannot be estimated; leave them out of the model "
+                  f"or add a maneuver that moves {name}")
+            continue
+        dropped = [d.name for d in structure.free_derivatives if d.variable == name]
+        if dropped:
+            structure = structure.without(*dropped)
+            _warn(f"{held}: its derivatives cannot be estimated, so the structure drops "
+                  f"{', '.join(dropped)} before the first fit; add a maneuver that moves "
+                  f"{name} to identify them")
+    return structure
+
+
+def _start(maneuver, column: int) -> tuple[float, float]:
+    """Mean and standard deviation of output ``column`` over the maneuver's first second."""
+    n = max(2, int(round(START_WINDOW / maneuver.dt)) + 1)
+    window = maneuver.outputs[:n, column]
+    return float(np.mean(window)), float(np.std(window))
+
+
+def _check_gravity(maneuvers: ManeuverSet) -> bool:
+    """Warn when ``az`` includes 1 g; return whether it did."""
+    system = unit_system(maneuvers.units)
+    az = np.concatenate([m.outputs[:, OUTPUT_CHANNELS.index("az")] for m in maneuvers])
+    median = float(np.median(az))
+    if abs(abs(median) - system.g) > ONE_G_TOLERANCE * system.g:
+        return False
+    unit = system.label("az")
+    _warn(f"output 'az' holds 1 g (median {median:.4g} {unit}, g = {system.g:.4g} {unit}): "
+          f"outputs are perturbations from trim; remove the trim value (rotorid identify "
+          f"--trim first-second, or subtract {median:.4g} {unit})")
+    return True
+
+
+def _check_offsets(maneuvers: ManeuverSet, skip: tuple[str, ...]) -> None:
+    system = unit_system(maneuvers.units)
+    for column, name in enumerate(OUTPUT_CHANNELS):
+        if name in skip:
+            continue
+        offsets = []
+        for m in maneuvers:
+            level, noise = _start(m, column)
+            swing = float(np.ptp(m.outputs[:, column]))
+            if abs(level) > OFFSET_FRACTION * swing and abs(level) > OFFSET_NOISE_RATIO * noise \
+                    and swing > 0:
+                offsets.append((abs(level), level, swing, m.name))
+        if not offsets:
+            continue
+        _, level, swing, where = max(offsets)
+        unit = system.label(name)
+        kind = " (an absolute attitude?)" if name in ("theta", "phi") else ""
+        _warn(f"output {name!r} starts away from zero in {len(offsets)} of {len(maneuvers)} "
+              f"maneuvers{kind}: {level:.4g} {unit} (mean of the first {START_WINDOW:g} s of "
+              f"{where}) against a swing of {swing:.4g} {unit}; outputs are perturbations "
+              f"from trim: remove the trim (rotorid identify --trim first-second, or the "
+              f"trim values) or estimate output biases (--output-biases)")
+
+
+def _check_rate_scale(maneuvers: ManeuverSet) -> None:
+    if all(is_constant(m.inputs) for m in maneuvers):
+        return
+    system = unit_system(maneuvers.units)
+    to_deg = math.degrees(1.0) / system.angle_per_radian
+    columns = [OUTPUT_CHANNELS.index(n) for n in RATE_CHANNELS]
+    largest = max(float(np.max(np.abs(m.outputs[:, columns]))) for m in maneuvers) * to_deg
+    unit = system.label("q")
+    value = f"{largest:.3g} deg/s" if unit == "deg/s" else \
+        f"{largest / to_deg:.3g} {unit} ({largest:.3g} deg/s)"
+    low, high = PLAUSIBLE_RATE_DEG
+    if largest < low:
+        _warn(f"the largest angular rate (p, q, r) in any maneuver is {value} while the inputs "
+              f"move: a maneuver for identification moves the aircraft by several deg/s; were "
+              f"the rates recorded in rad/s? Declare the data's units (units: si, or a unit "
+              f"per channel)")
+    elif largest > high:
+        _warn(f"the largest angular rate (p, q, r) in any maneuver is {value}, beyond any "
+              f"helicopter maneuver: were the rates recorded in deg/s? Declare the data's "
+              f"units (units: flight-test, or a unit per channel)")
+
+
+def _flat_runs(record: np.ndarray):
+    """(start, length) of every run of at least :data:`FLAT_RUN` identical samples."""
+    same = np.concatenate([[False], record[1:] == record[:-1], [False]])
+    edges = np.flatnonzero(np.diff(same.astype(int)))
+    for begin, end in zip(edges[::2], edges[1::2]):
+        if end - begin + 1 >= FLAT_RUN:
+            yield int(begin), int(end - begin + 1)
+
+
+def _check_flat_runs(maneuvers: ManeuverSet) -> None:
+    """Outputs that sit on one value: at the record's extreme (clipping) or not (dropout)."""
+    system = unit_system(maneuvers.units)
+    for m in maneuvers:
+        for column, name in enumerate(OUTPUT_CHANNELS):
+            record = m.outputs[:, column]
+            if is_constant(record):
+                continue
+            for start, length in _flat_runs(record):
+                value = record[start]
+                at = (f"{value:.6g} {system.label(name)} for {length} samples "
+                      f"({length * m.dt:.3g} s) from t = {m.time[start]:.4g} s in maneuver "
+                      f"{m.name!r}")
+                if value in (record.max(), record.min()):
+                    _warn(f"output {name!r} sits at its extreme {at}: a saturated or clipped "
+                          f"sensor; cut the maneuver before it or leave the maneuver out")
+                else:
+                    _warn(f"output {name!r} repeats {at}: a dropout held at the last value; "
+                          f"cut the maneuver before it or leave the maneuver out")
+                break
+
+
+def check_data(maneuvers: ManeuverSet, condition: FlightCondition | None = None) -> None:
+    """Issue a :class:`~rotorid.errors.DataWarning` for each finding about the outputs of
+    ``maneuvers`` (everything but unexcited inputs, see :func:`without_unexcited`).
+    ``condition`` is the trim the kinematic check linearises about (default: level hover)."""
+    one_g = _check_gravity(maneuvers)
+    _check_offsets(maneuvers, ("az",) if one_g else ())
+    _check_rate_scale(maneuvers)
+    _check_flat_runs(maneuvers)
+    check_kinematics(maneuvers, condition)
+
+
+def check_before_fit(maneuvers: ManeuverSet, structure: ModelStructure | None,
+                     condition: FlightCondition | None = None) -> ModelStructure | None:
+    """Every sanity check; returns ``structure`` without the derivatives of inputs that
+    never move (see :func:`without_unexcited`)."""
+    check_data(maneuvers, condition if structure is None else structure.condition)
+    return without_unexcited(structure, maneuvers)

@@ -1,0 +1,201 @@
+"""Sanity checks before a fit (rotorid.estimation.sanity, rotorid.estimation.kinematics): each
+fires on data the test spoils in one known way, with the numbers it was spoilt by, and clean
+closed-loop data stay silent."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import attrs
+import numpy as np
+import pytest
+from hover_reference import closed_loop_maneuvers, true_structure
+from rotorid import Maneuver, ManeuverSet
+from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS
+from rotorid.errors import DataWarning
+from rotorid.estimation.kinematics import kinematic_fits
+from rotorid.estimation.sanity import check_before_fit, check_data
+from rotorid.study.case import FlightCase
+from rotorid.study.pipeline import checked_structure
+from rotorid.units import FLIGHT_TEST
+
+
+@pytest.fixture(scope="module")
+def model():
+    return true_structure()
+
+
+@pytest.fixture(scope="module")
+def clean(model):
+    structure, values = model
+    return closed_loop_maneuvers(structure, values, duration=10.0)
+
+
+def _messages(maneuvers, structure=None, condition=None) -> list[str]:
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DataWarning)
+        if structure is None:
+            check_data(maneuvers, condition)
+        else:
+            check_before_fit(maneuvers, structure)
+    return [str(w.message) for w in caught if issubclass(w.category, DataWarning)]
+
+
+def _changed(maneuvers, change) -> ManeuverSet:
+    """Every maneuver's outputs passed through ``change(outputs_copy) -> outputs``."""
+    return ManeuverSet([m.with_outputs(change(m.outputs.copy())) for m in maneuvers])
+
+
+def _column(name: str) -> int:
+    return OUTPUT_CHANNELS.index(name)
+
+
+def test_clean_data_raise_no_warning_and_keep_the_structure(model, clean):
+    structure, _ = model
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DataWarning)
+        assert check_before_fit(clean, structure) == structure
+
+
+def test_an_absolute_pitch_attitude_is_named_with_its_offset(model, clean):
+    def offset(y):
+        y[:, _column("theta")] += 5.0
+        return y
+
+    messages = _messages(_changed(clean, offset), model[0])
+    [message] = [m for m in messages if m.startswith("output 'theta' starts away")]
+    assert "absolute attitude" in message and "16 of 16" in message
+    level = float(message.split(": ")[1].split(" deg")[0])
+    assert level == pytest.approx(5.0, abs=0.1)
+    assert "--trim first-second" in message
+
+
+def test_az_holding_one_g_is_named_and_not_reported_as_an_offset(model, clean):
+    def gravity(y):
+        y[:, _column("az")] -= 9.80665 / 0.3048
+        return y
+
+    messages = _messages(_changed(clean, gravity), model[0])
+    [message] = [m for m in messages if "'az'" in m]
+    assert message.startswith("output 'az' holds 1 g (median -32.")
+
+
+def test_rates_recorded_in_rad_per_s_are_named(model, clean):
+    def in_radians(y):
+        for name in ("q", "p", "r"):
+            y[:, _column(name)] = np.radians(y[:, _column(name)])
+        return y
+
+    messages = _messages(_changed(clean, in_radians), model[0])
+    assert any(m.startswith("the largest angular rate") and "rad/s?" in m for m in messages)
+    # the attitudes (deg) change 57.3 times as fast as the integrated rates
+    kinematic = [m for m in messages if m.startswith("kinematic consistency: theta")]
+    assert kinematic and "its driver (q, r) in rad" in kinematic[0]
+
+
+def test_an_input_that_never_moves_drops_its_derivatives_before_the_fit(model, clean):
+    structure, _ = model
+    column = INPUT_CHANNELS.index("lat")
+    still = []
+    for m in clean:
+        inputs = m.inputs.copy()
+        inputs[:, column] = 0.0
+        still.append(attrs.evolve(m, inputs=inputs))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DataWarning)
+        reduced = check_before_fit(ManeuverSet(still), structure)
+    dropped = sorted(set(structure.names) - set(reduced.names))
+    assert dropped == sorted(f"{letter}_lat" for letter in "XYZLMN")
+    [message] = [str(w.message) for w in caught if "'lat'" in str(w.message)]
+    assert message.startswith("input 'lat' never moves (constant 0 in every maneuver)")
+    assert "drops X_lat, Y_lat, Z_lat, L_lat, M_lat, N_lat before the first fit" in message
+
+
+def test_a_clipped_rate_gyro_and_a_dropout_are_named_with_time_and_length(model, clean):
+    first = clean[0]
+    q = first.outputs[:, _column("q")].copy()
+    limit = 0.6 * q.max()
+    clipped = np.minimum(q, limit)
+    held = first.outputs[:, _column("p")].copy()
+    held[400:408] = held[400]  # mid-record, away from the extremes
+    outputs = first.outputs.copy()
+    outputs[:, _column("q")], outputs[:, _column("p")] = clipped, held
+    spoilt = ManeuverSet([first.with_outputs(outputs), *clean[1:]])
+    messages = _messages(spoilt, model[0])
+    clip = [m for m in messages if m.startswith("output 'q' sits at its extreme")]
+    assert clip and f"{limit:.6g} deg/s" in clip[0]
+    run = np.flatnonzero(clipped == limit)
+    assert f"from t = {first.time[run[0]]:.4g} s" in clip[0]
+    [dropout] = [m for m in messages if m.startswith("output 'p' repeats")]
+    assert f"for 8 samples ({8 * first.dt:.3g} s) from t = {first.time[400]:.4g} s" in dropout
+
+
+def test_flight_path_reconstruction_finds_a_rate_bias_and_a_scale_factor(model, clean):
+    structure, _ = model
+
+    def biased(y):
+        y[:, _column("q")] += 0.5
+        return y
+
+    [theta] = [f for f in kinematic_fits(_changed(clean, biased), structure.condition)
+               if f.channel == "theta"]
+    # θ̇ = cos Φ0 q − sin Φ0 r: a bias of 0.5 deg/s on q is cos Φ0 · 0.5 on the driver
+    assert theta.bias == pytest.approx(0.5 * math.cos(structure.condition.phi0), rel=0.05)
+    assert theta.scale == pytest.approx(1.0, abs=0.02)
+    assert any("bias" in m and m.startswith("kinematic consistency: theta")
+               for m in _messages(_changed(clean, biased), structure))
+
+    def scaled(y):
+        y[:, _column("p")] *= 1.25
+        return y
+
+    [phi] = [f for f in kinematic_fits(_changed(clean, scaled), structure.condition)
+             if f.channel == "phi"]
+    assert phi.scale == pytest.approx(1 / 1.25, rel=0.03)
+
+
+def _hover_record(ax_scale: float, theta_amplitude: float) -> ManeuverSet:
+    """Analytic hover record, at rest for 1 s, then with s = t − 1 s: θ = A (1 − cos ωs) (deg),
+    u = 3 ft/s (1 − cos 2ωs), u̇ = ax − g θ (rad); ``ax`` is recorded ``ax_scale`` times its
+    true value. Sensor noise of 0.001 keeps the outputs from repeating a value."""
+    t = np.arange(0.0, 20.0, 0.01)
+    s = np.maximum(t - 1.0, 0.0)
+    omega = 0.8
+    theta = theta_amplitude * (1 - np.cos(omega * s))
+    u = 3.0 * (1 - np.cos(2 * omega * s))
+    ax = 6.0 * omega * np.sin(2 * omega * s) + FLIGHT_TEST.g * np.radians(theta)
+    outputs = np.zeros((t.size, 8))
+    outputs[:, _column("theta")] = theta
+    outputs[:, _column("q")] = theta_amplitude * omega * np.sin(omega * s)
+    outputs[:, _column("ax")] = ax_scale * ax
+    outputs += np.random.default_rng(1).normal(scale=1e-3, size=outputs.shape)
+    inputs = np.zeros((t.size, 4))
+    inputs[:, 0] = np.sin(omega * s)
+    return ManeuverSet([Maneuver("analytic", t, inputs, outputs, extra_channels={"u": u})])
+
+
+def test_accelerations_are_checked_against_velocities_where_the_data_carry_them():
+    consistent = {f.channel: f for f in kinematic_fits(_hover_record(1.0, 2.0))}
+    assert consistent["theta"].scale == pytest.approx(1.0, abs=1e-3)
+    assert consistent["u"].driver == "ax, theta"
+    assert consistent["u"].unit == "ft/s²"
+    assert consistent["u"].scale == pytest.approx(1.0, abs=1e-3)
+    assert not _messages(_hover_record(1.0, 2.0))
+    # with θ = 0 the driver is ax alone: recorded 0.8 times too small, u needs k = 1.25
+    [u] = kinematic_fits(_hover_record(0.8, 0.0))
+    assert u.scale == pytest.approx(1.25, rel=1e-3)
+    [message] = [m for m in _messages(_hover_record(0.8, 0.0)) if m.startswith("kinematic")]
+    assert message.startswith("kinematic consistency: u against integrated ax, theta: "
+                              "scale 1.25")
+
+
+def test_a_study_drops_unexcited_derivatives_and_reports_each_warning(model, clean):
+    structure, _ = model
+    still = ManeuverSet([attrs.evolve(m, inputs=m.inputs * [1, 1, 0, 1]) for m in clean])
+    lines = []
+    checked = checked_structure(FlightCase.load("hover"), structure, still,
+                                lambda case, message: lines.append((case, message)))
+    assert {"Z_coll", "M_coll"}.isdisjoint(checked.names) and "Z_w" in checked.names
+    assert lines == [("hover", line) for _, line in lines]
+    assert any(line.startswith("warning: input 'coll' never moves") for _, line in lines)
