@@ -6,7 +6,6 @@ import attrs
 import numpy as np
 from rotorid.data import ManeuverSet
 from rotorid.estimation.models import finite_difference_sensitivities, measured_outputs
-from rotorid.model.structure import STATES
 from rotorid.simulation.simulator import Simulator
 
 
@@ -81,12 +80,13 @@ class WithInitialStates:
         self.output_names = model.output_names
         self.n_base = len(model.parameter_names)
         self.parameter_names = tuple(model.parameter_names) + tuple(
-            f"x0_{m}_{s}" for m in self.maneuver_names for s in STATES)
+            f"x0_{m}_{s}" for m in self.maneuver_names for s in self.structure.states)
+        self.n_states = self.structure.n_states
 
     def start_states(self, maneuvers) -> np.ndarray:
-        """Each maneuver's ``initial_state`` (zeros without one), flattened to (8·M,)."""
-        return np.concatenate([np.zeros(8) if m.initial_state is None else m.initial_state
-                               for m in maneuvers])
+        """Each maneuver's ``initial_state`` (zeros without one), flattened to (n·M,)."""
+        return np.concatenate([np.zeros(self.n_states) if m.initial_state is None
+                               else m.initial_state for m in maneuvers])
 
     def initial_values(self) -> np.ndarray:
         extra = len(self.parameter_names) - self.n_base
@@ -99,27 +99,30 @@ class WithInitialStates:
                 np.concatenate([upper, np.full(extra, np.inf)]))
 
     def _simulator(self, values, maneuvers) -> Simulator:
-        states = np.asarray(values[self.n_base:], dtype=float).reshape(len(maneuvers), 8)
+        states = np.asarray(values[self.n_base:], dtype=float).reshape(len(maneuvers),
+                                                                        self.n_states)
         return Simulator(self.structure, maneuvers, initial_states=states)
 
     def simulate(self, values, maneuvers):
         return self._simulator(values, maneuvers).outputs(values[: self.n_base])
 
     def _free_responses(self, values, maneuvers) -> list[np.ndarray]:
-        """Per maneuver (N_i, 8, n_o): outputs of zero inputs from each unit initial state."""
+        """Per maneuver (N_i, n, n_o): outputs of zero inputs from each unit initial state."""
+        n = self.n_states
         quiet = ManeuverSet([attrs.evolve(m, name=f"{m.name}#{j}", inputs=np.zeros_like(m.inputs))
-                             for m in maneuvers for j in range(8)], hold=maneuvers.hold)
-        units = np.tile(np.eye(8), (len(maneuvers), 1))
+                             for m in maneuvers for j in range(n)], hold=maneuvers.hold)
+        units = np.tile(np.eye(n), (len(maneuvers), 1))
         responses = Simulator(self.structure, quiet, initial_states=units).outputs(
             values[: self.n_base])
-        return [np.stack(responses[8 * i: 8 * i + 8], axis=1) for i in range(len(maneuvers))]
+        return [np.stack(responses[n * i: n * i + n], axis=1) for i in range(len(maneuvers))]
 
     def sensitivities(self, values, maneuvers):
         outputs, sens = self._simulator(values, maneuvers).outputs_and_sensitivities(
             values[: self.n_base])
         full = []
         for i, (s, free) in enumerate(zip(sens, self._free_responses(values, maneuvers))):
-            extra = np.zeros((s.shape[0], 8 * len(maneuvers), s.shape[2]))
-            extra[:, 8 * i: 8 * i + 8] = free
+            n = self.n_states
+            extra = np.zeros((s.shape[0], n * len(maneuvers), s.shape[2]))
+            extra[:, n * i: n * i + n] = free
             full.append(np.concatenate([s, extra], axis=1))
         return outputs, full

@@ -19,8 +19,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
-from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS, ManeuverSet
-from rotorid.model.structure import STATES, ModelStructure
+from rotorid.data import ManeuverSet
+from rotorid.model.structure import ModelStructure
 
 _ACCELERATION = {"X": "ax", "Y": "ay", "Z": "az"}
 _RATE = {"L": "p", "M": "q", "N": "r"}
@@ -28,25 +28,31 @@ _VELOCITY_EQUATION = {"u": "ax", "v": "ay", "w": "az"}
 
 
 def reconstructed_states(structure: ModelStructure, maneuver) -> np.ndarray:
-    """States (N, 8) of one maneuver: measured q θ p φ r, integrated u v w (structure units)."""
-    out = maneuver.outputs
-    x = np.zeros((maneuver.n_samples, len(STATES)))
-    for name in ("q", "theta", "p", "phi", "r"):
-        x[:, STATES.index(name)] = out[:, OUTPUT_CHANNELS.index(name)]
+    """States (N, n) of one maneuver in structure units: the measured ones (q θ p φ r) as
+    measured, the velocities u v w integrated from their specific forces."""
+    states = structure.states
+    x = np.zeros((maneuver.n_samples, len(states)))
+    for row, name in enumerate(states):
+        if name in structure.outputs:
+            x[:, row] = maneuver.channel(name)
     known = structure.known_state_matrix()
-    start = (np.zeros(8) if maneuver.initial_state is None else maneuver.initial_state)
+    start = (np.zeros(len(states)) if maneuver.initial_state is None
+             else maneuver.initial_state)
     for name, accel in _VELOCITY_EQUATION.items():
-        row = STATES.index(name)
-        rate = out[:, OUTPUT_CHANNELS.index(accel)] + x @ known[row]
+        if name not in states or name in structure.outputs or accel not in structure.outputs:
+            continue
+        row = states.index(name)
+        rate = maneuver.channel(accel) + x @ known[row]
         x[:, row] = start[row] + cumulative_trapezoid(rate, maneuver.time, initial=0.0)
     return x
 
 
-def _regressor(maneuver, states: np.ndarray, variable: str, delay: float) -> np.ndarray:
-    if variable in INPUT_CHANNELS:
-        signal = maneuver.inputs[:, INPUT_CHANNELS.index(variable)]
+def _regressor(structure: ModelStructure, maneuver, states: np.ndarray, variable: str,
+               delay: float) -> np.ndarray:
+    if variable in structure.controls:
+        signal = maneuver.channel(variable)
     else:
-        signal = states[:, STATES.index(variable)]
+        signal = states[:, structure.states.index(variable)]
     if delay <= 0.0:
         return signal
     return np.interp(maneuver.time - delay, maneuver.time, signal, left=0.0)
@@ -65,13 +71,12 @@ def equation_error_start(structure: ModelStructure, maneuvers: ManeuverSet) -> n
         targets, columns = [], [[] for _ in free]
         for m, states in zip(maneuvers, recon):
             if letter in _ACCELERATION:
-                target = m.outputs[:, OUTPUT_CHANNELS.index(_ACCELERATION[letter])].copy()
+                target = m.channel(_ACCELERATION[letter]).copy()
             else:
-                rate = m.outputs[:, OUTPUT_CHANNELS.index(_RATE[letter])]
-                target = np.gradient(rate, m.time)
+                target = np.gradient(m.channel(_RATE[letter]), m.time)
             for d in members:
                 delay = d.delay.initial if d.delay is not None else 0.0
-                regressor = _regressor(m, states, d.variable, delay)
+                regressor = _regressor(structure, m, states, d.variable, delay)
                 if d.fixed:
                     target -= d.initial * regressor
                 else:

@@ -32,6 +32,7 @@ from rotorid.errors import StructureError
 from rotorid.model.derivatives import (
     CONTROL_VARIABLES,
     DEFAULT_DELAY_UPPER,
+    EQUATION_OF_LETTER,
     FORCE_MOMENT_LETTERS,
     STATE_VARIABLES,
     Delay,
@@ -159,10 +160,11 @@ class TermTable:
 
     Every array has one entry per derivative of the structure (free and fixed), shape ``(K,)``:
 
-    - ``equation``: row in the state vector (index into :data:`STATES`) the term drives;
-    - ``source``: column in ``[x; u]`` (0–7 states in :data:`STATES` order, 8–11 controls);
+    - ``equation``: row in the state vector (index into the structure's states) the term drives;
+    - ``source``: column in ``[x; u]`` (0 … n−1 the n states, n … n+m−1 the m controls);
     - ``gain``: derivative value; ``delay``: delay in s (0 where none);
-    - ``output``: row in :data:`OUTPUTS` of the specific force the term also feeds, −1 if none.
+    - ``output``: row in the structure's outputs of the specific force the term also feeds,
+      −1 if none.
     """
 
     equation: np.ndarray
@@ -246,6 +248,25 @@ class ModelStructure:
     @property
     def n_parameters(self) -> int:
         return len(self.free_derivatives) + len(self.free_delays)
+
+    @property
+    def n_states(self) -> int:
+        return len(self.states)
+
+    @property
+    def n_controls(self) -> int:
+        return len(self.controls)
+
+    @property
+    def n_outputs(self) -> int:
+        return len(self.outputs)
+
+    @property
+    def equation_rows(self) -> tuple[int, ...]:
+        """Rows of the state vector that derivative terms can drive (the force and moment
+        equations), in state order."""
+        driven = {EQUATION_OF_LETTER[letter] for letter in FORCE_MOMENT_LETTERS}
+        return tuple(i for i, name in enumerate(self.states) if name in driven)
 
     def is_delay(self) -> np.ndarray:
         """Boolean mask over :attr:`parameter_names`: True for delays."""
@@ -374,7 +395,7 @@ class ModelStructure:
 
     # ----------------------------------------------------------------- matrices
     def known_state_matrix(self) -> np.ndarray:
-        """The gravity and kinematic terms of A, shape (8, 8), in the structure's units."""
+        """The gravity and kinematic terms of A, shape (n, n), in the structure's units."""
         c = self.condition
         k = self.units.radian_per_angle
         g = self.units.g
@@ -382,8 +403,8 @@ class ModelStructure:
         u0, v0, w0 = c.u0 * scale, c.v0 * scale, c.w0 * scale
         st, ct = math.sin(c.theta0), math.cos(c.theta0)
         sp, cp = math.sin(c.phi0), math.cos(c.phi0)
-        i = {s: n for n, s in enumerate(STATES)}
-        a = np.zeros((8, 8))
+        i = {s: n for n, s in enumerate(self.states)}
+        a = np.zeros((self.n_states, self.n_states))
         a[i["u"], i["q"]] = -w0 * k
         a[i["u"], i["r"]] = v0 * k
         a[i["u"], i["theta"]] = -g * ct * k
@@ -403,21 +424,21 @@ class ModelStructure:
         return a
 
     def known_output_matrix(self) -> np.ndarray:
-        """The known part of C, shape (8, 8): the measured states q θ p φ r."""
-        c = np.zeros((len(OUTPUTS), len(STATES)))
-        for row, name in enumerate(OUTPUTS):
-            if name in STATES:
-                c[row, STATES.index(name)] = 1.0
+        """The known part of C, shape (p, n): the outputs that are states (q θ p φ r)."""
+        c = np.zeros((self.n_outputs, self.n_states))
+        for row, name in enumerate(self.outputs):
+            if name in self.states:
+                c[row, self.states.index(name)] = 1.0
         return c
 
     def terms(self, values=None) -> TermTable:
         """Every derivative term at the parameter vector ``values`` (default: initial)."""
         vector = self.initial_values() if values is None else self.as_vector(values)
         free = {n: v for n, v in zip(self.parameter_names, vector)}
-        sources = STATES + CONTROLS
+        sources = self.states + self.controls
         equation, source, gain, delay, output = [], [], [], [], []
         for d in self.derivatives:
-            equation.append(STATES.index(d.equation))
+            equation.append(self.states.index(d.equation))
             source.append(sources.index(d.variable))
             gain.append(d.initial if d.fixed else free[d.name])
             if d.delay is None:
@@ -425,23 +446,24 @@ class ModelStructure:
             else:
                 delay.append(d.delay.initial if d.delay.fixed else free[d.delay_name])
             out = ACCELERATION_OUTPUT.get(d.equation)
-            output.append(OUTPUTS.index(out) if out else -1)
+            output.append(self.outputs.index(out) if out in self.outputs else -1)
         as_int = lambda x: np.array(x, dtype=int)  # noqa: E731
         return TermTable(as_int(equation), as_int(source), np.array(gain, dtype=float),
                          np.array(delay, dtype=float), as_int(output))
 
     def matrices(self, values=None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """A (8×8), B (8×4), C (8×8), D (8×4) with every delay set to zero."""
+        """A (n×n), B (n×m), C (p×n), D (p×m) with every delay set to zero."""
         table = self.terms(values)
+        n = self.n_states
         a = self.known_state_matrix()
-        b = np.zeros((8, 4))
+        b = np.zeros((n, self.n_controls))
         c = self.known_output_matrix()
-        d = np.zeros((8, 4))
+        d = np.zeros((self.n_outputs, self.n_controls))
         for eq, src, gain, out in zip(table.equation, table.source, table.gain, table.output):
-            target, column = (a, src) if src < 8 else (b, src - 8)
+            target, column = (a, src) if src < n else (b, src - n)
             target[eq, column] += gain
             if out >= 0:
-                (c if src < 8 else d)[out, column] += gain
+                (c if src < n else d)[out, column] += gain
         return a, b, c, d
 
     def describe(self) -> str:

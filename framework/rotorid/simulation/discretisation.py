@@ -42,18 +42,15 @@ from rotorid.model.structure import ModelStructure
 
 #: Complex-step size; any tiny value works because no difference is taken.
 COMPLEX_STEP = 1e-30
-#: Rows of the state vector that derivative terms can drive (u w q v p r).
-EQUATION_ROWS = (0, 1, 2, 4, 5, 7)
-_N_X, _N_U, _N_E = 8, 4, len(EQUATION_ROWS)
 
 
 @attrs.frozen(eq=False)
 class DiscreteMaps:
     """Lagged maps of the discrete recursion and their parameter derivatives.
 
-    Every map is a dict lag → array. ``Ps``/``Cs`` map states (8) and ``Pu``/``Du`` map
-    controls (4); values have shape (8, 8) or (8, 4). The ``d*`` variants carry a leading
-    parameter axis (P, 8, ·) and are empty when derivatives were not requested.
+    Every map is a dict lag → array. ``Ps``/``Cs`` map the n states and ``Pu``/``Du`` the m
+    controls; values have shape (n, n), (n, m), (p, n) or (p, m). The ``d*`` variants carry a
+    leading parameter axis (P, ·, ·) and are empty when derivatives were not requested.
     ``state_history`` lists, per lag ≥ 1 of ``Ps``, the state columns it reads.
     """
 
@@ -74,35 +71,37 @@ _TAYLOR_TERMS = 18
 _TAYLOR_NORM = 0.5
 
 
-def _integrals(a: np.ndarray, s: np.ndarray):
+def _integrals(a: np.ndarray, s: np.ndarray, rows: tuple[int, ...]):
     """e^{As}, Γ(s)E and K(s)E for a batch of matrices and sub-interval lengths.
 
     Args:
-        a: (D, 8, 8) complex.
+        a: (D, n, n) complex.
         s: (D, S) complex sub-interval lengths in s.
+        rows: the e rows that derivative terms drive (the columns of E).
     Returns:
-        phi (D, S, 8, 8); gam (D, S, 8, 6) = ∫₀ˢ e^{Aσ} dσ·E; kin (D, S, 8, 6) =
-        ∫₀ˢ e^{Aσ}(s − σ) dσ·E, with E the columns of :data:`EQUATION_ROWS`.
+        phi (D, S, n, n); gam (D, S, n, e) = ∫₀ˢ e^{Aσ} dσ·E; kin (D, S, n, e) =
+        ∫₀ˢ e^{Aσ}(s − σ) dσ·E.
 
     The lengths are scaled by 2^−m so that ‖A·s‖₁ ≤ 1/2, the three series are summed there
     (e^X = Σ X^k/k!, Γ = s·Σ X^k/(k+1)!, K = s²·Σ X^k/(k+2)!), and m doubling steps
     φ(2t) = φ(t)², Γ(2t) = Γ(t) + φ(t)Γ(t), K(2t) = K(t) + tΓ(t) + φ(t)K(t) restore s.
     """
     d, n_s = s.shape
+    n_x, n_e = a.shape[-1], len(rows)
     norm = np.abs(a.real).sum(axis=1).max() * np.abs(s.real).max()
     doublings = max(0, math.ceil(math.log2(norm / _TAYLOR_NORM))) if norm > 0 else 0
     step = s / 2.0**doublings                                          # (D, S)
-    powers = np.empty((d, _TAYLOR_TERMS, _N_X, _N_X), dtype=complex)   # A^k
-    powers[:, 0] = np.eye(_N_X)
+    powers = np.empty((d, _TAYLOR_TERMS, n_x, n_x), dtype=complex)     # A^k
+    powers[:, 0] = np.eye(n_x)
     for k in range(1, _TAYLOR_TERMS):
         powers[:, k] = a @ powers[:, k - 1]
     k = np.arange(_TAYLOR_TERMS + 2)
     scaled = step[..., None] ** k / np.array([math.factorial(i) for i in k])  # (D, S, K+2)
     flat = powers.reshape(d, _TAYLOR_TERMS, -1)
-    phi = (scaled[..., :-2] @ flat).reshape(d, n_s, _N_X, _N_X)
-    columns = powers[..., list(EQUATION_ROWS)].reshape(d, _TAYLOR_TERMS, -1)
-    gam = (scaled[..., 1:-1] @ columns).reshape(d, n_s, _N_X, _N_E)
-    kin = (scaled[..., 2:] @ columns).reshape(d, n_s, _N_X, _N_E)
+    phi = (scaled[..., :-2] @ flat).reshape(d, n_s, n_x, n_x)
+    columns = powers[..., list(rows)].reshape(d, _TAYLOR_TERMS, -1)
+    gam = (scaled[..., 1:-1] @ columns).reshape(d, n_s, n_x, n_e)
+    kin = (scaled[..., 2:] @ columns).reshape(d, n_s, n_x, n_e)
     for _ in range(doublings):
         kin = kin + step[..., None, None] * gam + phi @ kin
         gam = gam + phi @ gam
@@ -111,7 +110,7 @@ def _integrals(a: np.ndarray, s: np.ndarray):
     return phi, gam, kin
 
 
-def _distinct_integrals(a: np.ndarray, s: np.ndarray):
+def _distinct_integrals(a: np.ndarray, s: np.ndarray, rows: tuple[int, ...]):
     """:func:`_integrals` computed once for the nominal direction 0 and for the directions
     that change A or a sub-interval; the others (control gains, outputs) share direction 0's.
     """
@@ -120,7 +119,7 @@ def _distinct_integrals(a: np.ndarray, s: np.ndarray):
     distinct = np.flatnonzero(changed)
     source = np.cumsum(changed) - 1          # direction → its row among the distinct ones
     source[~changed] = 0
-    return tuple(part[source] for part in _integrals(a[distinct], s[distinct]))
+    return tuple(part[source] for part in _integrals(a[distinct], s[distinct], rows))
 
 
 @attrs.frozen(eq=False)
@@ -129,7 +128,7 @@ class _Terms:
 
     equation: np.ndarray      # (K,) state row driven
     eq_col: np.ndarray        # (K,) column in E
-    source: np.ndarray        # (K,) 0–7 states, 8–11 controls
+    source: np.ndarray        # (K,) 0 … n−1 states, n … n+m−1 controls
     output: np.ndarray        # (K,) output row or −1
     delayed: np.ndarray       # (K,) bool: carries a delay
     gain: np.ndarray          # (K,) real
@@ -147,7 +146,7 @@ def _terms(structure: ModelStructure, values) -> _Terms:
         delayed.append(d.delay is not None)
         has_free_delay = d.delay is not None and not d.delay.fixed
         delay_param.append(index[d.delay_name] if has_free_delay else -1)
-    row_col = {row: k for k, row in enumerate(EQUATION_ROWS)}
+    row_col = {row: k for k, row in enumerate(structure.equation_rows)}
     return _Terms(table.equation, np.array([row_col[e] for e in table.equation]), table.source,
                   table.output, np.array(delayed, dtype=bool), table.gain, table.delay,
                   np.array(gain_param), np.array(delay_param))
@@ -191,8 +190,9 @@ def discrete_maps(structure: ModelStructure, values, dt: float, hold: str = "zoh
     gain, delay = _directions(terms, n_params, with_derivatives)
     n_dir = gain.shape[0]
     T = float(dt)
+    n_x, n_u, n_y = structure.n_states, structure.n_controls, structure.n_outputs
 
-    in_a = (~terms.delayed) & (terms.source < _N_X)
+    in_a = (~terms.delayed) & (terms.source < n_x)
     a = np.repeat(structure.known_state_matrix()[None].astype(complex), n_dir, axis=0)
     for k in np.flatnonzero(in_a):
         a[:, terms.equation[k], terms.source[k]] += gain[:, k]
@@ -205,12 +205,12 @@ def discrete_maps(structure: ModelStructure, values, dt: float, hold: str = "zoh
     s = np.full((n_dir, 1 + len(delayed_forcing)), T, dtype=complex)
     for col, k in enumerate(delayed_forcing, start=1):
         s[:, col] = T - frac[k]
-    phi, gam, kin = _distinct_integrals(a, s)
+    phi, gam, kin = _distinct_integrals(a, s, structure.equation_rows)
     slot = {k: col for col, k in enumerate(delayed_forcing, start=1)}
 
     ps_raw = {0: phi[:, 0]}
     pu_raw: dict = {}
-    implicit = np.zeros((n_dir, _N_X, _N_X), dtype=complex)
+    implicit = np.zeros((n_dir, n_x, n_x), dtype=complex)
     cs = {0: np.repeat(structure.known_output_matrix()[None].astype(complex), n_dir, axis=0)}
     du: dict = {}
     history_columns: dict = {}
@@ -220,30 +220,30 @@ def discrete_maps(structure: ModelStructure, values, dt: float, hold: str = "zoh
     for k in forcing:
         m, f, g, e = lag_m[k], frac[k], gain[:, k], terms.eq_col[k]
         j = slot.get(k)
-        gam_t, kin_t = gam[:, 0, :, e], kin[:, 0, :, e]                  # (D, 8)
+        gam_t, kin_t = gam[:, 0, :, e], kin[:, 0, :, e]                  # (D, n)
         gam_f = gam[:, j, :, e] if j else gam_t
         kin_f = kin[:, j, :, e] if j else kin_t
         lam_t = T * gam_t - kin_t
         lam_f = (T - f)[:, None] * gam_f - kin_f
         d_gam, d_lam = gam_t - gam_f, lam_t - lam_f
-        is_control = terms.source[k] >= _N_X
+        is_control = terms.source[k] >= n_x
         if is_control and hold == "zoh":
             pieces = {m + 1: d_gam, m: gam_f}
         else:
             ramp_early = ((2 * T - f)[:, None] * d_gam - d_lam) / T
             pieces = {m - 1: kin_f / T, m: gam_f - kin_f / T + ramp_early,
                       m + 1: d_gam - ramp_early}
-        column = terms.source[k] - (_N_X if is_control else 0)
+        column = terms.source[k] - (n_x if is_control else 0)
         for lag, vector in pieces.items():
-            vec = g[:, None] * vector                                      # (D, 8)
+            vec = g[:, None] * vector                                      # (D, n)
             if is_control:
-                target = np.zeros((n_dir, _N_X, _N_U), dtype=complex)
+                target = np.zeros((n_dir, n_x, n_u), dtype=complex)
                 target[:, :, column] = vec
                 _add(pu_raw, lag, target)
             elif lag == -1:
                 implicit[:, :, column] += vec
             else:
-                target = np.zeros((n_dir, _N_X, _N_X), dtype=complex)
+                target = np.zeros((n_dir, n_x, n_x), dtype=complex)
                 target[:, :, column] = vec
                 _add(ps_raw, lag, target)
                 if lag > 0:
@@ -254,12 +254,12 @@ def discrete_maps(structure: ModelStructure, values, dt: float, hold: str = "zoh
                        else {m: 1.0} if (is_control and hold == "zoh")
                        else {m + 1: f / T, m: 1.0 - f / T})
             for lag, w in weights.items():
-                shape = (n_dir, _N_X, _N_U if is_control else _N_X)
+                shape = (n_dir, n_y, n_u if is_control else n_x)
                 target = np.zeros(shape, dtype=complex)
                 target[:, out, column] = g * w
                 _add(du if is_control else cs, lag, target)
 
-    fold = np.linalg.inv(np.eye(_N_X) - implicit)
+    fold = np.linalg.inv(np.eye(n_x) - implicit)
     ps = {lag: fold @ m for lag, m in ps_raw.items()}
     pu = {lag: fold @ m for lag, m in pu_raw.items()}
     history = {lag: np.array(sorted(columns)) for lag, columns in history_columns.items()}

@@ -30,7 +30,7 @@ from rotorid import blas
 from rotorid.data import ManeuverSet
 from rotorid.errors import DataError, SimulationDivergedError, StructureError
 from rotorid.executors import cpu_count
-from rotorid.model.structure import ModelStructure
+from rotorid.model.structure import ACCELERATION_OUTPUT, ModelStructure
 from rotorid.simulation.discretisation import DiscreteMaps, discrete_maps
 
 #: A state perturbation beyond this magnitude (structure units) counts as divergence.
@@ -50,7 +50,7 @@ class _Group:
         self.lengths = [maneuvers[i].n_samples for i in indices]
         self.names = [maneuvers[i].name for i in indices]
         n = max(self.lengths)
-        self.inputs = np.zeros((n, len(indices), 4))
+        self.inputs = np.zeros((n, len(indices), maneuvers[indices[0]].inputs.shape[1]))
         for b, i in enumerate(indices):
             self.inputs[: self.lengths[b], b] = maneuvers[i].inputs
         self.x0 = np.array([initial_states[i] for i in indices], dtype=float)
@@ -61,14 +61,15 @@ class _Group:
 
 
 def _nonzero_columns(matrix: np.ndarray) -> np.ndarray:
-    """Columns (last axis) of ``matrix`` (…, 8, C) with at least one non-zero entry."""
+    """Columns (last axis) of ``matrix`` (…, R, C) with at least one non-zero entry."""
     return np.flatnonzero(np.any(matrix.reshape(-1, matrix.shape[-1]) != 0, axis=0))
 
 
 def _taps(*families) -> list[tuple[int, int]]:
-    """Sorted (lag, source) pairs that the maps read; sources 0–7 are states, 8–11 controls.
+    """Sorted (lag, source) pairs that the maps read; sources 0 … n−1 are the n states, n …
+    n+m−1 the m controls.
 
-    ``families`` are (maps, offset) pairs: maps lag → (P, 8, C), offset 0 for states and 8 for
+    ``families`` are (maps, offset) pairs: maps lag → (P, R, C), offset 0 for states and n for
     controls. Columns that are zero for every parameter are left out.
     """
     return sorted({(lag, offset + int(c)) for maps, offset in families
@@ -79,31 +80,31 @@ def _tap_weights(taps, families, n_params: int, width: int) -> np.ndarray:
     """(K, n_params·width) weights W with Σ_lag M[lag]·z[n − lag] = lagged(z)[n] @ W.
 
     Entry [k, p·width + i] is M[lag][p, i, column] of tap k = (lag, column); entries
-    i ≥ 8 (the history slots of the companion state) stay zero.
+    i ≥ R (the history slots of the companion state) stay zero.
     """
     index = {tap: k for k, tap in enumerate(taps)}
     weights = np.zeros((len(taps), n_params, width))
     for maps, offset in families:
         for lag, stack in maps.items():
             for c in _nonzero_columns(stack):
-                weights[index[(lag, offset + int(c))], :, :8] += stack[:, :, c]
+                weights[index[(lag, offset + int(c))], :, :stack.shape[1]] += stack[:, :, c]
     return weights.reshape(len(taps), n_params * width)
 
 
-def _sources(inputs: np.ndarray, states: np.ndarray | None = None) -> np.ndarray:
-    """(N, B, 12) source signals of the taps: the 8 states (zero where not needed), then the
-    4 controls; inputs (N, B, 4), states (N, B, ≥ 8) with the physical states first."""
-    sources = np.zeros(inputs.shape[:2] + (12,))
+def _sources(n_states: int, inputs: np.ndarray, states: np.ndarray | None = None) -> np.ndarray:
+    """(N, B, n + m) source signals of the taps: the n states (zero where not needed), then
+    the m controls; inputs (N, B, m), states (N, B, ≥ n) with the physical states first."""
+    sources = np.zeros(inputs.shape[:2] + (n_states + inputs.shape[2],))
     if states is not None:
-        sources[:, :, :8] = states[:, :, :8]
-    sources[:, :, 8:] = inputs
+        sources[:, :, :n_states] = states[:, :, :n_states]
+    sources[:, :, n_states:] = inputs
     return sources
 
 
 def lagged_sources(sources: np.ndarray, taps) -> np.ndarray:
     """(N, B, K) array whose column k is source column c at sample n − lag for tap (lag, c).
 
-    sources: (N, B, 12) states then controls, time-major. Samples outside the record are trim
+    sources: (N, B, n + m) states then controls, time-major. Samples outside the record are trim
     (zero): before t = 0 by convention, after the end because only FOH reads ahead (one
     sample) and the last sample's step is never used.
     """
@@ -123,29 +124,30 @@ class _Companion:
     """The lagged recursion in first-order form over z_n = [x_n; x_n−l[c] for each history slot].
 
     Attributes:
-        size: S = 8 + number of history slots (state column c at lag l, 1 ≤ l ≤ its depth).
+        size: S = n + number of history slots (state column c at lag l, 1 ≤ l ≤ its depth).
         transition: (S, S) map z_n → z_n+1 without forcing (Ps[0], the history maps, shifts).
-        output: (8, S) map z_n → the state part of y_n (Cs at every lag).
+        output: (p, S) map z_n → the state part of y_n (Cs at every lag).
     """
 
     def __init__(self, maps: DiscreteMaps):
+        n, p = maps.Ps[0].shape[0], maps.Cs[0].shape[0]
         depth: dict[int, int] = {}
         history = [(lag, columns) for lag, columns in maps.state_history.items()]
         history += [(lag, _nonzero_columns(m)) for lag, m in maps.Cs.items() if lag >= 1]
         for lag, columns in history:
             for c in columns:
                 depth[int(c)] = max(depth.get(int(c), 0), lag)
-        slots = {(c, lag): 8 + k for k, (c, lag) in enumerate(
+        slots = {(c, lag): n + k for k, (c, lag) in enumerate(
             (c, lag) for c in sorted(depth) for lag in range(1, depth[c] + 1))}
-        self.size = 8 + len(slots)
+        self.size = n + len(slots)
         self.transition = np.zeros((self.size, self.size))
-        self.transition[:8, :8] = maps.Ps[0]
-        self.output = np.zeros((8, self.size))
-        self.output[:, :8] = maps.Cs.get(0, 0.0)
+        self.transition[:n, :n] = maps.Ps[0]
+        self.output = np.zeros((p, self.size))
+        self.output[:, :n] = maps.Cs[0]
         for (c, lag), slot in slots.items():
             self.transition[slot, c if lag == 1 else slots[(c, lag - 1)]] = 1.0
             if lag in maps.Ps:
-                self.transition[:8, slot] = maps.Ps[lag][:, c]
+                self.transition[:n, slot] = maps.Ps[lag][:, c]
             if lag in maps.Cs:
                 self.output[:, slot] = maps.Cs[lag][:, c]
 
@@ -200,7 +202,7 @@ class Simulator:
     Args:
         structure: the model structure.
         maneuvers: the maneuvers (their recorded inputs drive the model).
-        initial_states: optional (n_maneuvers, 8) initial perturbation states in structure
+        initial_states: optional (n_maneuvers, n) initial perturbation states in structure
             units; default: each maneuver's ``initial_state`` or trim (zeros).
     """
 
@@ -223,29 +225,31 @@ class Simulator:
         self._last_states: tuple[bytes, list] | None = None
 
     def _initial_states(self, initial_states) -> np.ndarray:
-        n = len(self.maneuvers)
+        n, n_x = len(self.maneuvers), self.structure.n_states
         if initial_states is None:
-            return np.array([np.zeros(8) if m.initial_state is None else m.initial_state
+            return np.array([np.zeros(n_x) if m.initial_state is None else m.initial_state
                              for m in self.maneuvers])
         states = np.asarray(initial_states, dtype=float)
-        if states.shape != (n, 8):
-            raise DataError(f"initial_states must have shape ({n}, 8), got {states.shape}")
+        if states.shape != (n, n_x):
+            raise DataError(f"initial_states must have shape ({n}, {n_x}), one row of "
+                            f"{n_x} states per maneuver, got {states.shape}")
         if not np.all(np.isfinite(states)):
             raise DataError("initial_states contain NaN or infinite values")
         return states
 
     # ----------------------------------------------------------------- public
     def outputs(self, values=None) -> list[np.ndarray]:
-        """Simulated outputs, one (N_i, 8) array per maneuver (order of the set)."""
+        """Simulated outputs, one (N_i, p) array per maneuver (order of the set)."""
         return self._run(values, None)[0]
 
     def outputs_and_sensitivities(self, values=None):
-        """Outputs and ∂y/∂θ: per maneuver an (N_i, 8) and an (N_i, P, 8) array.
+        """Outputs and ∂y/∂θ: per maneuver an (N_i, p) and an (N_i, P, p) array.
 
         ``sens[i][n, p, k]`` is ∂y_k(t_n)/∂θ_p (views into one batch buffer: copy them
         before modifying).
         """
-        outputs, sinks = self._run(values, lambda group: _DenseSink(group, self.n_parameters))
+        outputs, sinks = self._run(values, lambda group: _DenseSink(
+            group, self.structure.n_outputs, self.n_parameters))
         sens: list = [None] * len(self.maneuvers)
         for group, sink in zip(self.groups, sinks):
             for b, (i, n) in enumerate(zip(group.indices, group.lengths)):
@@ -257,20 +261,21 @@ class Simulator:
 
         Args:
             values: parameter vector or mapping (see :meth:`outputs`).
-            residuals: per maneuver (N_i, 8) residuals e = z − y at ``values``.
-            weighting: (8, 8) symmetric positive semi-definite Q (for the output-error cost,
+            residuals: per maneuver (N_i, p) residuals e = z − y at ``values``.
+            weighting: (p, p) symmetric positive semi-definite Q (for the output-error cost,
                 R⁻¹ with the output weights).
         Returns:
             F (P, P) and G (P,), summed over every sample of every maneuver. Each time block
-            of the sensitivities is folded into F and G while it is in cache: the (N·8, P)
+            of the sensitivities is folded into F and G while it is in cache: the (N·p, P)
             sensitivities never exist as a whole.
         """
         if len(residuals) != len(self.maneuvers):
             raise DataError(f"{len(residuals)} residual arrays for {len(self.maneuvers)} "
                             "maneuvers")
-        if np.shape(weighting) != (8, 8):
-            raise DataError(f"the weighting must be (8, 8), one row and column per output, "
-                            f"got shape {np.shape(weighting)}")
+        n_y = self.structure.n_outputs
+        if np.shape(weighting) != (n_y, n_y):
+            raise DataError(f"the weighting must be ({n_y}, {n_y}), one row and column per "
+                            f"output, got shape {np.shape(weighting)}")
         leading = _direct_outputs(self.structure)
         factor = weighting_factor(weighting, leading)
         background = cpu_count() > 1
@@ -313,16 +318,15 @@ class Simulator:
         self._last_states = (key, last_states)
         return outputs, sinks
 
-    @staticmethod
-    def _states(maps: DiscreteMaps, companion: _Companion, group: _Group) -> np.ndarray:
+    def _states(self, maps: DiscreteMaps, companion: _Companion, group: _Group) -> np.ndarray:
         """Companion states z_n of every maneuver of the group, (N, B, S)."""
-        n, b = group.n_samples, len(group.indices)
-        families = [({lag: m[None] for lag, m in maps.Pu.items()}, 8)]
+        n, b, n_x = group.n_samples, len(group.indices), self.structure.n_states
+        families = [({lag: m[None] for lag, m in maps.Pu.items()}, n_x)]
         taps = _taps(*families)
         weights = _tap_weights(taps, families, 1, companion.size)
-        lagged = lagged_sources(_sources(group.inputs), taps)
+        lagged = lagged_sources(_sources(n_x, group.inputs), taps)
         start = np.zeros((b, companion.size))
-        start[:, :8] = group.x0
+        start[:, :n_x] = group.x0
         states = np.empty((n, b, companion.size))
 
         def forcing(first, stop, out):
@@ -335,15 +339,16 @@ class Simulator:
                    f"maneuvers {', '.join(group.names)}", maps.dt)
         return states
 
-    @staticmethod
-    def _outputs(maps: DiscreteMaps, companion: _Companion, group: _Group,
+    def _outputs(self, maps: DiscreteMaps, companion: _Companion, group: _Group,
                  states: np.ndarray) -> np.ndarray:
-        """y_n = output·z_n + Σ_lag Du[lag]·u_n−lag, (N, B, 8)."""
-        families = [({lag: m[None] for lag, m in maps.Du.items()}, 8)]
+        """y_n = output·z_n + Σ_lag Du[lag]·u_n−lag, (N, B, p)."""
+        n_x, n_y = self.structure.n_states, self.structure.n_outputs
+        families = [({lag: m[None] for lag, m in maps.Du.items()}, n_x)]
         taps = _taps(*families)
         y = states @ companion.output.T
         if taps:
-            y += lagged_sources(_sources(group.inputs), taps) @ _tap_weights(taps, families, 1, 8)
+            y += (lagged_sources(_sources(n_x, group.inputs), taps)
+                  @ _tap_weights(taps, families, 1, n_y))
         return y
 
     def _sensitivities(self, maps: DiscreteMaps, companion: _Companion, group: _Group,
@@ -353,16 +358,17 @@ class Simulator:
         The sensitivity states obey the companion recursion, forced by the derivative maps
         applied to the simulated states and inputs (one matrix product per time block for
         all maneuvers and parameters); the outputs add the derivative output maps' term.
-        Blocks reach the sink mapped by its ``output_map`` M (m, 8), laid out (L, m, B, P),
+        Blocks reach the sink mapped by its ``output_map`` M (k, p), laid out (L, k, B, P),
         with a function that completes them (adds the direct term) wherever the sink works.
         """
         b = states.shape[1]
         p, size = self.n_parameters, companion.size
-        forcing_maps = [(maps.dPs, 0), (maps.dPu, 8)]
-        direct_maps = [(maps.dCs, 0), (maps.dDu, 8)]
+        n_x, n_y = self.structure.n_states, self.structure.n_outputs
+        forcing_maps = [(maps.dPs, 0), (maps.dPu, n_x)]
+        direct_maps = [(maps.dCs, 0), (maps.dDu, n_x)]
         taps = _taps(*forcing_maps, *direct_maps)
-        lagged = lagged_sources(_sources(group.inputs, states), taps)
-        direct = _DirectTerm(_tap_weights(taps, direct_maps, p, 8), sink.output_map, p)
+        lagged = lagged_sources(_sources(n_x, group.inputs, states), taps)
+        direct = _DirectTerm(_tap_weights(taps, direct_maps, p, n_y), sink.output_map, p)
         forcing_weights = _tap_weights(taps, forcing_maps, p, size)
         forcing_weights = forcing_weights.reshape(len(taps), p, size)[:, direct.order]
         forcing_weights = forcing_weights.reshape(len(taps), p * size)
@@ -373,7 +379,7 @@ class Simulator:
                       out=out.reshape(-1, p * size))
 
         def emit(first, stop, z):
-            block = np.matmul(output, z.transpose(0, 2, 1))         # (L, m, B·P)
+            block = np.matmul(output, z.transpose(0, 2, 1))         # (L, k, B·P)
             sink.take(first, stop, block.reshape(stop - first, -1, b, p),
                       lambda block: direct.add(block, lagged[first:stop]))
 
@@ -386,7 +392,8 @@ class Simulator:
 
 def _direct_outputs(structure: ModelStructure) -> list[int]:
     """Outputs whose equations contain parameters directly (the accelerations)."""
-    return [k for k, name in enumerate(structure.outputs) if name in ("ax", "az", "ay")]
+    accelerations = set(ACCELERATION_OUTPUT.values())
+    return [k for k, name in enumerate(structure.outputs) if name in accelerations]
 
 
 def weighting_factor(weighting, leading=()) -> np.ndarray:
@@ -420,7 +427,7 @@ def weighting_factor(weighting, leading=()) -> np.ndarray:
 class _DirectTerm:
     """The output maps' own parameter derivatives applied to the lagged sources, mapped by M.
 
-    ``weights`` (K, P·8) from :func:`_tap_weights`; only its non-zero (parameter, output)
+    ``weights`` (K, P·p) from :func:`_tap_weights`; only its non-zero (parameter, output)
     columns are evaluated. A parameter enters one equation row, so it has at most one such
     column (its acceleration); the column adds M[:, output] times its value to the
     parameter's sensitivities. Unless M is the identity (where a column touches one output),
@@ -429,12 +436,14 @@ class _DirectTerm:
     """
 
     def __init__(self, weights: np.ndarray, output_map: np.ndarray, n_parameters: int):
+        n_y = output_map.shape[1]
         columns = _nonzero_columns(weights)
-        parameters, self.outputs = np.divmod(columns, 8)
+        parameters, self.outputs = np.divmod(columns, n_y)
         if np.unique(parameters).size != parameters.size:
             raise StructureError("a parameter enters more than one output equation directly")
         self.weights = weights[:, columns]
-        self.identity = output_map.shape == (8, 8) and np.array_equal(output_map, np.eye(8))
+        self.identity = (output_map.shape == (n_y, n_y)
+                         and np.array_equal(output_map, np.eye(n_y)))
         self.parameters = parameters
         self.order = np.arange(n_parameters)
         if self.identity:
@@ -449,7 +458,7 @@ class _DirectTerm:
                                initial=-1)) + 1
 
     def add(self, block: np.ndarray, lagged: np.ndarray) -> None:
-        """Add the term to ``block`` (L, m, B, P); ``lagged`` (L, B, K) sources of the block."""
+        """Add the term to ``block`` (L, k, B, P); ``lagged`` (L, B, K) sources of the block."""
         if not self.parameters.size:
             return
         values = lagged @ self.weights                              # (L, B, C)
@@ -461,11 +470,11 @@ class _DirectTerm:
 
 
 class _DenseSink:
-    """Keeps every block: ``dy`` (N, 8, B, P), the unmapped output sensitivities."""
+    """Keeps every block: ``dy`` (N, p, B, P), the unmapped output sensitivities."""
 
-    def __init__(self, group: _Group, n_parameters: int):
-        self.output_map = np.eye(8)
-        self.dy = np.empty((group.n_samples, 8, len(group.indices), n_parameters))
+    def __init__(self, group: _Group, n_outputs: int, n_parameters: int):
+        self.output_map = np.eye(n_outputs)
+        self.dy = np.empty((group.n_samples, n_outputs, len(group.indices), n_parameters))
 
     def take(self, first: int, stop: int, block: np.ndarray, complete) -> None:
         complete(block)
@@ -493,12 +502,13 @@ class _InformationSink:
                  background: bool):
         self.output_map = output_map
         n, b, m = group.n_samples, len(group.indices), output_map.shape[0]
+        n_y = output_map.shape[1]
         self.mapped_residuals = np.zeros((n, m, b))
         for k, (e, length) in enumerate(zip(residuals, group.lengths)):
             e = np.asarray(e, dtype=float)
-            if e.shape != (length, 8):
+            if e.shape != (length, n_y):
                 raise DataError(f"residuals of maneuver {group.names[k]!r} have shape "
-                                f"{e.shape}, expected ({length}, 8)")
+                                f"{e.shape}, expected ({length}, {n_y})")
             self.mapped_residuals[:length, :, k] = e @ output_map.T
         self.lengths = np.array(group.lengths)
         self.padded = bool(np.any(self.lengths < n))
@@ -547,9 +557,9 @@ def simulate(structure: ModelStructure, values, maneuvers: ManeuverSet,
         values: parameter vector (structure.parameter_names order), a name→value mapping,
             or ``None`` for the initial values.
         maneuvers: maneuvers whose recorded inputs drive the model.
-        initial_states: optional (n_maneuvers, 8) initial states.
+        initial_states: optional (n_maneuvers, n) initial states.
     Returns:
-        one (N_i, 8) array per maneuver, outputs [ax az q theta ay p phi r].
+        one (N_i, p) array per maneuver, outputs in ``structure.outputs`` order.
     Raises:
         SimulationDivergedError: the response grows without bound.
     """
@@ -562,7 +572,7 @@ def sensitivities(structure: ModelStructure, values, maneuvers: ManeuverSet,
     """Outputs and their exact parameter sensitivities.
 
     Returns:
-        (outputs, sensitivities): per maneuver an (N_i, 8) array and an (N_i, P, 8) array,
+        (outputs, sensitivities): per maneuver an (N_i, p) array and an (N_i, P, p) array,
         ``sens[n, p, k] = ∂y_k(t_n)/∂θ_p`` with P = structure.n_parameters in
         structure.parameter_names order (delays included).
     """

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from rotorid.errors import StructureError
-from rotorid.model.structure import CONTROLS, OUTPUTS, STATES, ModelStructure
+from rotorid.model.structure import ModelStructure
 
 
 def frequency_response(structure: ModelStructure, values, omega) -> np.ndarray:
@@ -19,8 +19,8 @@ def frequency_response(structure: ModelStructure, values, omega) -> np.ndarray:
         structure: model structure; values: parameter vector, mapping or ``None`` (initial).
         omega: frequencies in rad/s, shape (F,).
     Returns:
-        complex array (F, 8, 4): outputs [ax az q theta ay p phi r] × controls
-        [long lat coll ped], in the structure's units per control unit.
+        complex array (F, p, m): ``structure.outputs`` × ``structure.controls``, in the
+        structure's units per control unit.
     """
     omega = _checked_omega(omega)
     a, b, c, d = _delayed_matrices(structure, structure.terms(values), omega)
@@ -39,31 +39,32 @@ def response_sensitivities(structure: ModelStructure, values, omega
 
     Args: as :func:`frequency_response`.
     Returns:
-        ``(H, dH)``: H complex (F, 8, 4) as :func:`frequency_response`; dH complex
-        (F, P, 8, 4), ∂H/∂θ_p in ``structure.parameter_names`` order (per s for a delay).
+        ``(H, dH)``: H complex (F, p, m) as :func:`frequency_response`; dH complex
+        (F, P, p, m), ∂H/∂θ_p in ``structure.parameter_names`` order (per s for a delay).
     """
     omega = _checked_omega(omega)
     table = structure.terms(values)
     a, b, c, d = _delayed_matrices(structure, table, omega)
-    resolvent = np.linalg.inv(1j * omega[:, None, None] * np.eye(len(STATES)) - a)
-    x = resolvent @ b                                        # (F, 8, 4)
-    y = c @ resolvent                                        # (F, 8, 8)
+    n_x, n_y, n_u = structure.n_states, structure.n_outputs, structure.n_controls
+    resolvent = np.linalg.inv(1j * omega[:, None, None] * np.eye(n_x) - a)
+    x = resolvent @ b                                        # (F, n, m)
+    y = c @ resolvent                                        # (F, p, n)
     index = {name: i for i, name in enumerate(structure.parameter_names)}
-    sensitivities = np.zeros((omega.size, len(index), len(OUTPUTS), len(CONTROLS)), complex)
+    sensitivities = np.zeros((omega.size, len(index), n_y, n_u), complex)
     for k, derivative in enumerate(structure.derivatives):
         gain_index = index.get(derivative.name)
         delay_index = index.get(derivative.delay_name) if derivative.delay else None
         if gain_index is None and delay_index is None:
             continue
-        left = y[:, :, table.equation[k]].copy()            # (F, 8)
+        left = y[:, :, table.equation[k]].copy()            # (F, p)
         if table.output[k] >= 0:
             left[:, table.output[k]] += 1.0
         source = table.source[k]
-        if source < len(STATES):
+        if source < n_x:
             unit = left[:, :, None] * x[:, source, None, :]
         else:
-            unit = np.zeros((omega.size, len(OUTPUTS), len(CONTROLS)), complex)
-            unit[:, :, source - len(STATES)] = left
+            unit = np.zeros((omega.size, n_y, n_u), complex)
+            unit[:, :, source - n_x] = left
         unit *= np.exp(-1j * omega * table.delay[k])[:, None, None]
         if gain_index is not None:
             sensitivities[:, gain_index] += unit
@@ -80,24 +81,24 @@ def _checked_omega(omega) -> np.ndarray:
 
 
 def _delayed_matrices(structure: ModelStructure, table, omega: np.ndarray):
-    """A (F, 8, 8), B (F, 8, 4), C (F, 8, 8), D (F, 8, 4) at each frequency, every delayed
+    """A (F, n, n), B (F, n, m), C (F, p, n), D (F, p, m) at each frequency, every delayed
     term multiplied by e^(−jωτ)."""
-    n_f = omega.size
+    n_f, n_x, n_u = omega.size, structure.n_states, structure.n_controls
     a = np.repeat(structure.known_state_matrix()[None].astype(complex), n_f, axis=0)
-    b = np.zeros((n_f, 8, 4), dtype=complex)
+    b = np.zeros((n_f, n_x, n_u), dtype=complex)
     c = np.repeat(structure.known_output_matrix()[None].astype(complex), n_f, axis=0)
-    d = np.zeros((n_f, 8, 4), dtype=complex)
+    d = np.zeros((n_f, structure.n_outputs, n_u), dtype=complex)
     for eq, src, gain, tau, out in zip(table.equation, table.source, table.gain, table.delay,
                                        table.output):
         term = gain * np.exp(-1j * omega * tau)
-        if src < 8:
+        if src < n_x:
             a[:, eq, src] += term
             if out >= 0:
                 c[:, out, src] += term
         else:
-            b[:, eq, src - 8] += term
+            b[:, eq, src - n_x] += term
             if out >= 0:
-                d[:, out, src - 8] += term
+                d[:, out, src - n_x] += term
     return a, b, c, d
 
 
@@ -112,13 +113,10 @@ def state_response(a: np.ndarray, b: np.ndarray, omega: np.ndarray) -> np.ndarra
 def pair_response(structure: ModelStructure, values, omega, output: str,
                   control: str) -> np.ndarray:
     """Frequency response of one output/control pair, shape (F,)."""
-    if output not in OUTPUTS:
-        raise StructureError(f"unknown output {output!r}; outputs: {', '.join(OUTPUTS)}")
-    if control not in CONTROLS:
-        raise StructureError(f"unknown control {control!r}; controls: {', '.join(CONTROLS)}")
+    outputs, controls = structure.outputs, structure.controls
+    if output not in outputs:
+        raise StructureError(f"unknown output {output!r}; outputs: {', '.join(outputs)}")
+    if control not in controls:
+        raise StructureError(f"unknown control {control!r}; controls: {', '.join(controls)}")
     response = frequency_response(structure, values, omega)
-    return response[:, OUTPUTS.index(output), CONTROLS.index(control)]
-
-
-__all__ = ["frequency_response", "pair_response", "response_sensitivities", "state_response",
-           "STATES"]
+    return response[:, outputs.index(output), controls.index(control)]
