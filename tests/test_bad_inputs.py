@@ -176,8 +176,9 @@ def _simulate_inputs(make, values=VALUES, model_text=MODEL):
 
 
 def _identify(change=lambda outputs: outputs, model=MODEL, samples=200, dt=0.02,
-              units="flight-test"):
-    """``rotorid identify`` of noise records whose outputs ``change`` edits."""
+              units="flight-test", every=True):
+    """``rotorid identify`` of two noise records whose outputs ``change`` edits (in the
+    first record only unless ``every``)."""
     def command(tmp_path):
         (tmp_path / "model.toml").write_text(model)
         data = tmp_path / "flight"
@@ -186,7 +187,8 @@ def _identify(change=lambda outputs: outputs, model=MODEL, samples=200, dt=0.02,
         for k in range(2):
             maneuver = attrs.evolve(_maneuver(f"m{k}", samples), time=np.arange(samples) * dt,
                                     units=units)
-            write_maneuver(maneuver.with_outputs(change(rng.normal(size=(samples, 8)))),
+            outputs = rng.normal(size=(samples, 8))
+            write_maneuver(maneuver.with_outputs(change(outputs) if k == 0 or every else outputs),
                            data / f"m{k}.csv")
         (tmp_path / "out").mkdir()
         return ["identify", str(tmp_path / "model.toml"), str(data), "--quiet",
@@ -239,7 +241,7 @@ COMMANDS = [
     ("identify-constant-output", _identify(_set_column(0, 1.0)), ExitStatus.ERROR,
      ["output 'ax' is constant", "value 1"]),
     ("identify-all-outputs-constant", _identify(lambda y: y * 0 + 1.0), ExitStatus.ERROR,
-     ["output 'ax' is constant"]),
+     ["maneuver m0", "every fitted output is constant"]),
     ("identify-duplicated-output", _identify(_copy_column(2, 5)), ExitStatus.ERROR,
      ["outputs 'q' and 'p' hold the same record"]),
     ("identify-too-few-samples", _identify(samples=3), ExitStatus.ERROR,
@@ -261,6 +263,8 @@ COMMANDS = [
     ("identify-roll-in-deg-declared-rad", _identify(
         lambda y: _set_column(6, 5.0 * (-1) ** np.arange(200))(0.01 * y), units="si"),
      ExitStatus.ERROR, ["output 'phi'", "286.5° from trim", "deg declared as rad"]),
+    ("identify-one-flat-maneuver-among-good-ones", _identify(lambda y: y * 0.0, every=False),
+     ExitStatus.ERROR, ["maneuver m0", "every fitted output is constant"]),
     ("identify-values-times-1e300", _identify(lambda y: y * 1e300), ExitStatus.ERROR,
      ["maneuver m0", "output 'theta' reaches 3.332e+300°", "unit and scale"]),
     ("identify-acceleration-times-1000", _identify(_set_column(1, 1000.0)), ExitStatus.ERROR,
@@ -287,6 +291,15 @@ COMMANDS = [
       for command in (["study", "hover"], ["generate", "hover"],
                       ["montecarlo", "hover", "--runs", "3"],
                       ["simulate", "model.toml", "inputs.csv"], ["verify", "result.json"])],
+    ("identify-out-is-a-directory", _plain("identify", "model.toml", "data", "--out", "{tmp}"),
+     ExitStatus.USAGE, ["--out", "is not a regular file"]),
+    ("identify-out-is-dev-null", _plain("identify", "model.toml", "data", "--out", "/dev/null"),
+     ExitStatus.USAGE, ["--out", "/dev/null", "is not a regular file"]),
+    ("identify-out-below-a-file", lambda tmp_path: [
+        "identify", "model.toml", "data", "--out", str(Path(_regular_file(tmp_path)) / "r.json")],
+     ExitStatus.USAGE, ["--out", "cannot write into", "taken"]),
+    ("frequency-out-is-a-directory", _plain("frequency", "sweeps", "--out", "{tmp}"),
+     ExitStatus.USAGE, ["--out", "is not a regular file"]),
     ("study-out-is-dev-null", _plain("study", "hover", "--out", "/dev/null"), ExitStatus.USAGE,
      ["--out", "/dev/null", "not a directory"]),
     ("generate-out-below-a-file", lambda tmp_path: [

@@ -29,8 +29,23 @@ def output_directory(text: str) -> str:
     if path.exists() and not path.is_dir():
         raise argparse.ArgumentTypeError(f"{text} exists and is not a directory; give a "
                                          f"directory")
+    _check_writable(path)
+    return text
+
+
+def output_file(text: str) -> str:
+    """A file to write (returned as given): not a directory or device, in a writable directory
+    or one that can be created in a writable directory."""
+    path = Path(text)
+    if path.exists() and not path.is_file():
+        raise argparse.ArgumentTypeError(f"{text} exists and is not a regular file; give a "
+                                         f"file name")
+    _check_writable(path.absolute().parent)
+    return text
+
+
+def _check_writable(path: Path) -> None:
     existing = next(p for p in (path, *path.absolute().parents) if p.exists())
     if not existing.is_dir() or not os.access(existing, os.W_OK | os.X_OK):
         raise argparse.ArgumentTypeError(f"cannot write into {existing}; give a directory you "
                                          f"may write to")
-    return text

@@ -44,6 +44,12 @@ def check_fit_data(maneuvers: ManeuverSet, outputs: Sequence[str] | None,
     n_parameters = model.n_parameters
     names = tuple(n for n in (outputs or OUTPUT_CHANNELS) if n in OUTPUT_CHANNELS)
     columns = [OUTPUT_CHANNELS.index(n) for n in names]
+    for maneuver in maneuvers:
+        block = maneuver.outputs[:, columns]
+        if np.all(np.ptp(block, axis=0) == 0.0):
+            raise DataError(f"maneuver {maneuver.name}: every fitted output is constant (a "
+                            f"record without response, or a file of zeros); remove it from "
+                            f"the data")
     records = np.concatenate([m.outputs[:, columns] for m in maneuvers])
     for name, record in zip(names, records.T):
         if is_constant(record):

@@ -24,6 +24,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from rotorid.cli.arguments import output_file
+
 NAME = "frequency"
 HELP = ("frequency responses of sweeps as data: ω, H (dB, deg, complex), coherence and "
         "random error per pair, to JSON, CSV or MAT")
@@ -41,7 +43,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--conditioned", action="store_true",
                         help="condition each response on the other inputs that moved in its "
                              "sweeps (partial coherence)")
-    parser.add_argument("--out", required=True, metavar="FILE",
+    parser.add_argument("--out", required=True, metavar="FILE", type=output_file,
                         help="responses.json, responses.csv or responses.mat")
 
 

@@ -34,6 +34,7 @@ import sys
 import warnings
 from pathlib import Path
 
+from rotorid.cli.arguments import output_file
 from rotorid.plugin.hookspecs import hookimpl
 
 NAME = "identify"
@@ -48,7 +49,7 @@ def add_arguments(parser) -> None:
                         help="maneuver files (CSV/NPZ/MAT), directories or glob patterns")
     parser.add_argument("--estimator", default="output-error",
                         help="estimator plugin (default output-error; see `rotorid plugins`)")
-    parser.add_argument("--out", default="result.json", metavar="RESULT.json",
+    parser.add_argument("--out", default="result.json", metavar="RESULT.json", type=output_file,
                         help="where to write the estimate (default ./result.json)")
     parser.add_argument("--outputs", default=None, metavar="ax,az,...",
                         help="comma-separated outputs used in the cost (default: all of the "
