@@ -258,6 +258,18 @@ COMMANDS = [
     ("model-body-velocity-in-wrong-unit", _simulate_inputs(
         _good_csv, model_text=MODEL.replace("airspeed_kt = 60.0", "u0_fps = 5000.0")),
      ExitStatus.ERROR, ["model.toml", "beyond any rotorcraft"]),
+    ("identify-trim-not-pairs",
+     lambda tmp_path: [*_identify()(tmp_path), "--trim", "theta:5"], ExitStatus.USAGE,
+     ["argument --trim", "CHANNEL=VALUE"]),
+    ("identify-trim-unknown-channel",
+     lambda tmp_path: [*_identify()(tmp_path), "--trim", "pitch=5"], ExitStatus.ERROR,
+     ["trim value for unknown channel 'pitch'"]),
+    ("identify-sample-time-without-resample",
+     lambda tmp_path: [*_identify()(tmp_path), "--sample-time", "0.05"], ExitStatus.USAGE,
+     ["--sample-time needs --resample"]),
+    ("identify-decimate-without-sample-time",
+     lambda tmp_path: [*_identify()(tmp_path), "--resample", "decimate"], ExitStatus.ERROR,
+     ["'decimate' needs a sample_time"]),
     ("identify-time-in-ms", _identify(dt=20.0), ExitStatus.ERROR,
      ["maneuver m0", "sample interval 20 s", "in ms"]),
     ("identify-roll-in-deg-declared-rad", _identify(

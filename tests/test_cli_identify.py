@@ -8,7 +8,7 @@ import rotorid
 from rotorid.cli import main as cli
 from rotorid.errors import ExitStatus
 from rotorid.model.modelfile import load_model
-from rotorid_files.formats import write_maneuver
+from rotorid_files.formats import read_maneuver, write_maneuver
 
 MODEL = """
 units = "flight-test"
@@ -216,3 +216,32 @@ def test_bad_inputs_give_one_line_errors(case, tmp_path, capsys):
     message = _error_line(["identify", str(model), str(broken), "--out", out], capsys)
     assert "NaN" in message and "'q'" in message
     assert not (tmp_path / "r.json").exists()
+
+
+def test_trim_removal_before_the_fit(case, tmp_path, capsys):
+    """Absolute pitch attitudes (trim 5°) draw the offset warning; --trim theta=5 removes the
+    trim and the fit matches the one on perturbation data."""
+    model, data, _ = case
+    absolute = tmp_path / "absolute"
+    absolute.mkdir()
+    for path in sorted(data.glob("doublet_*.csv")):
+        m = read_maneuver(path)
+        outputs = m.outputs.copy()
+        outputs[:, rotorid.OUTPUTS.index("theta")] += 5.0
+        write_maneuver(m.with_outputs(outputs), absolute / path.name)
+    runs = {}
+    for label, extra in (("as recorded", []), ("trimmed", ["--trim", "theta=5.0"]),
+                         ("perturbations", [])):
+        out = tmp_path / f"{label}.json"
+        source = data if label == "perturbations" else absolute
+        status = cli.main(["identify", str(model), str(source), "--out", str(out), "--quiet",
+                           *extra])
+        runs[label] = (capsys.readouterr().err, json.loads(out.read_text(encoding="utf-8")))
+        assert status == 0, runs[label][0]
+    assert "warning: output 'theta' starts away from zero in 4 of 4 maneuvers (an absolute " \
+           "attitude?): 5" in runs["as recorded"][0]
+    assert "starts away" not in runs["trimmed"][0]
+    trimmed, reference = runs["trimmed"][1], runs["perturbations"][1]
+    for name, entry in reference["parameters"].items():
+        assert trimmed["parameters"][name]["value"] == pytest.approx(entry["value"], rel=1e-6,
+                                                                     abs=1e-9), name

@@ -13,6 +13,7 @@ from rotorid.errors import (
     ConvergenceWarning,
     DataError,
     DataFileError,
+    DataWarning,
     DerivativeError,
     EstimationError,
     IdentifiabilityWarning,
@@ -26,6 +27,7 @@ from rotorid.errors import (
 )
 from rotorid.estimation.integrated import InitialConditions, IntegratedModel
 from rotorid.estimation.result_file import IdentifiedModel, load_result, to_statespace
+from rotorid.ingestion import Ingestion
 from rotorid.model.derivatives import Delay, Derivative, Sign
 from rotorid.model.nonlinear import NonlinearModel, Parameter
 from rotorid.model.signals import ChannelLink, ChannelMap, ModelSignals, Signal, SignalSet
@@ -73,9 +75,9 @@ except PackageNotFoundError:  # running from a source tree without installation
 __all__ = [
     "CONTROLS", "OUTPUTS", "STATES", "FLIGHT_TEST", "SI",
     "CaseData", "ChannelLink", "ChannelMap", "Command", "ConvergenceWarning", "DataError",
-    "DataFileError", "DataSource", "Delay", "Derivative", "DerivativeError", "EnvelopeBounds",
+    "DataFileError", "DataSource", "DataWarning", "Delay", "Derivative", "DerivativeError", "EnvelopeBounds",
     "EnvelopeCheck", "Estimate", "EstimationError", "Estimator", "FlightCondition",
-    "IdentifiabilityWarning", "IdentifiedModel", "InitialConditions", "InputSignal",
+    "IdentifiabilityWarning", "IdentifiedModel", "Ingestion", "InitialConditions", "InputSignal",
     "IntegratedModel", "Integration", "LinearSystem", "Maneuver", "ManeuverSet",
     "MissingFileError", "ModelSignals", "ModelStructure", "NamedStateSpace", "NonlinearModel",
     "Parameter", "ParameterEstimate",

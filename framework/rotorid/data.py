@@ -17,6 +17,7 @@ import numpy as np
 
 from rotorid.errors import DataError
 from rotorid.frozen import readonly_array
+from rotorid.ingestion import Ingestion, prepare_columns
 from rotorid.model.structure import CONTROLS, OUTPUTS
 from rotorid.notebook import (
     maneuver_html,
@@ -56,7 +57,8 @@ def check_time(time: np.ndarray, where: str) -> float:
         row = int(np.flatnonzero(far if far.any() else off)[0]) + 1
         raise DataError(f"{where}: channel 'time' is not uniformly sampled at row {row} "
                         f"(step {steps[row - 1]:.6g} s, expected {typical:.6g} s); resample "
-                        f"first")
+                        f"first (the files source's resample option, rotorid identify "
+                        f"--resample linear)")
     return float(dt)
 
 
@@ -108,6 +110,40 @@ class Maneuver:
         if self.initial_state is not None and self.initial_state.shape != (8,):
             raise DataError(f"{where}: initial_state must have shape (8,), "
                             f"got {self.initial_state.shape}")
+
+    @classmethod
+    def from_columns(cls, name: str, columns: Mapping[str, np.ndarray], *,
+                     units: str = "flight-test", metadata: Mapping | None = None,
+                     initial_state=None, ingestion: Ingestion | Mapping | None = None,
+                     ) -> "Maneuver":
+        """A maneuver from named columns: ``time`` (s), the four controls, the eight outputs,
+        and any further columns as :attr:`extra_channels`; prepared first as ``ingestion``
+        says (units per channel, resampling, trim removal; :mod:`rotorid.ingestion`), each
+        step stated in the metadata."""
+        where = f"maneuver {name!r}"
+        missing = [c for c in ALL_CHANNELS if c not in columns]
+        if missing:
+            raise DataError(f"{where}: missing column(s) {', '.join(missing)}; a maneuver needs "
+                            f"{', '.join(ALL_CHANNELS)}")
+        prepared, notes = prepare_columns(columns, unit_system(units).name, ingestion, where)
+        return cls(name, prepared["time"],
+                   np.column_stack([prepared[c] for c in INPUT_CHANNELS]),
+                   np.column_stack([prepared[c] for c in OUTPUT_CHANNELS]),
+                   metadata={**dict(metadata or {}), **notes}, units=units,
+                   initial_state=initial_state,
+                   extra_channels={k: v for k, v in prepared.items() if k not in ALL_CHANNELS})
+
+    @classmethod
+    def from_dataframe(cls, frame, name: str, **options) -> "Maneuver":
+        """A maneuver from a table with ``columns`` and ``frame[column]`` (a pandas
+        DataFrame, a dict of arrays …; pandas is not needed); ``options`` as
+        :meth:`from_columns`."""
+        try:
+            names = list(frame.columns)
+        except AttributeError:
+            names = list(frame)
+        return cls.from_columns(name, {str(c): np.asarray(frame[c], dtype=float)
+                                       for c in names}, **options)
 
     def __repr__(self) -> str:
         return maneuver_summary(self)

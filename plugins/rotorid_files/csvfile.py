@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 from rotorid.data import ALL_CHANNELS
 from rotorid.errors import DataFileError
+from rotorid.ingestion import Ingestion
 from rotorid.io import parse_number
 
 from .records import KEY_PATTERN, assemble, columns_of, encode_value, header_of
@@ -48,8 +49,8 @@ def _encode(value, where: str) -> str:
     return encode_value(value, where)
 
 
-def read(path: Path):
-    """The maneuver stored in the CSV file ``path``."""
+def read(path: Path, ingestion: Ingestion):
+    """The maneuver stored in the CSV file ``path``, prepared as ``ingestion`` says."""
     try:
         lines = path.read_text(encoding="utf-8-sig").splitlines()
     except UnicodeDecodeError as error:
@@ -96,7 +97,7 @@ def read(path: Path):
     table = np.array(values, dtype=float).reshape(len(values), len(names))
     columns = {name: table[:, i] for i, name in enumerate(names)}
     note = f" (rows count samples from 0; row 0 is line {first_data_line} of the file)"
-    return assemble(path, columns, header, row_note=note)
+    return assemble(path, columns, header, ingestion, row_note=note)
 
 
 def write(maneuver, handle) -> None:

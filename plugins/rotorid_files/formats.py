@@ -5,8 +5,10 @@ One file holds one maneuver; the format follows the suffix. Every writer is atom
 
 In a flight case (:meth:`FileSource.case_data`) the ``[data]`` settings are
 ``identification`` and optionally ``verification`` (each a file, a directory, a glob or a list
-of them; relative ones are read from the case file's folder), ``hold`` and ``units``. Flight
-data carry no trim and no truth model: the case's ``[condition]`` table gives the trim.
+of them; relative ones are read from the case file's folder), ``hold``, ``units`` and the
+ingestion settings ``trim``, ``resample``, ``sample_time`` and ``channel_units``
+(:mod:`rotorid.ingestion`). Flight data carry no trim condition and no truth model: the case's
+``[condition]`` table gives the trim.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from typing import ClassVar
 import attrs
 from rotorid.data import HOLDS, OUTPUT_CHANNELS, Maneuver, ManeuverSet
 from rotorid.errors import DataError, DataFileError, MissingFileError, RotoridError
+from rotorid.ingestion import Ingestion
 from rotorid.io import atomic_write
 from rotorid.model.structure import STATES
 from rotorid.plugin.contracts import CaseData
@@ -45,8 +48,9 @@ def _format(path: Path):
                             f"use {', '.join(FORMATS)}") from None
 
 
-def read_maneuver(path: str | os.PathLike) -> Maneuver:
-    """Read the maneuver stored in ``path`` (``.csv``, ``.npz`` or ``.mat``)."""
+def read_maneuver(path: str | os.PathLike, ingestion: Ingestion | None = None) -> Maneuver:
+    """Read the maneuver stored in ``path`` (``.csv``, ``.npz`` or ``.mat``), prepared as
+    ``ingestion`` says (default: as recorded)."""
     path = Path(path)
     reader = _format(path)[0]
     if not path.is_file():
@@ -55,7 +59,7 @@ def read_maneuver(path: str | os.PathLike) -> Maneuver:
                                 f"device or pipe); name a maneuver file")
         raise MissingFileError(f"maneuver file {path} does not exist")
     try:
-        return reader(path)
+        return reader(path, ingestion or Ingestion())
     except RotoridError:
         raise
     except Exception as error:      # the reader library's own failure on a malformed file
@@ -123,12 +127,20 @@ class FileSource:
         hold: input hold of the loaded set, ``"zoh"`` or ``"foh"``.
         units: convert loaded maneuvers to this unit system (``"flight-test"`` or ``"si"``);
             ``None`` keeps the units the files declare (then they must all agree).
+        ingestion: how every file is prepared (:class:`rotorid.ingestion.Ingestion` or a
+            mapping of its settings: trim removal ``"first-second"`` or stated values,
+            resampling ``"linear"`` or ``"decimate"`` onto a uniform grid, the unit each
+            channel was recorded in); a file's own ``channel_units`` header adds to these.
     """
 
     hold: str = attrs.field(default="zoh", validator=_check_hold)
     units: str | None = attrs.field(default=None, converter=_optional_units)
+    ingestion: Ingestion = attrs.field(factory=Ingestion, converter=Ingestion.coerce)
     #: Case settings that name files: the study reads relative ones from the case's folder.
     path_settings: ClassVar[tuple[str, ...]] = ("identification", "verification")
+    #: Case settings that are attributes of the source, and those of its ingestion.
+    options: ClassVar[tuple[str, ...]] = ("hold", "units")
+    ingestion_settings: ClassVar[tuple[str, ...]] = tuple(attrs.fields_dict(Ingestion))
 
     def load(self, location) -> ManeuverSet:
         """Every maneuver in ``location``: one file, a directory (its ``.csv``, ``.npz`` and
@@ -136,7 +148,7 @@ class FileSource:
         list of these."""
         maneuvers, origin = [], {}
         for path in _expand(location):
-            maneuver = read_maneuver(path)
+            maneuver = read_maneuver(path, self.ingestion)
             if maneuver.name in origin:
                 raise DataFileError(f"maneuver name {maneuver.name!r} is used by both "
                                     f"{origin[maneuver.name]} and {path}; rename one")
@@ -152,7 +164,7 @@ class FileSource:
     def case_data(self, settings: Mapping, directory) -> CaseData:
         """A flight case's maneuvers from the files its settings name (``directory`` is not
         used: the files stay where they are)."""
-        known = (*self.path_settings, "hold", "units")
+        known = (*self.path_settings, *self.options, *self.ingestion_settings)
         unknown = sorted(set(settings) - set(known))
         if unknown:
             raise DataFileError(f"files data: unknown [data] setting(s) {unknown}; known: "
@@ -161,8 +173,10 @@ class FileSource:
         if "identification" not in settings:
             raise DataFileError("files data: [data] needs identification (files, a directory "
                                 "or a glob)")
-        reader = attrs.evolve(self, **{k: settings[k] for k in ("hold", "units")
-                                       if k in settings})
+        reader = attrs.evolve(
+            self, **{k: settings[k] for k in self.options if k in settings},
+            ingestion=attrs.evolve(self.ingestion, **{k: settings[k] for k in
+                                                      self.ingestion_settings if k in settings}))
         verification = settings.get("verification")
         return CaseData(reader.load(settings["identification"]),
                         None if verification is None else reader.load(verification),

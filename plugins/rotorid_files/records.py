@@ -2,8 +2,9 @@
 :class:`~rotorid.data.Maneuver`.
 
 A file holds one maneuver as named columns (``time``, the four controls, the eight outputs)
-plus a flat header: ``name``, ``units``, ``initial_state`` and any metadata key
-(``condition``, ``kind``, ``axis``, ``direction`` …). Header values are JSON values.
+plus a flat header: ``name``, ``units``, ``initial_state``, ``channel_units`` (channel → the
+unit it was recorded in, when not its unit system's) and any metadata key (``condition``,
+``kind``, ``axis``, ``direction`` …). Header values are JSON values.
 """
 
 from __future__ import annotations
@@ -13,13 +14,15 @@ import re
 from collections.abc import Mapping
 from pathlib import Path
 
+import attrs
 import numpy as np
 from rotorid.data import ALL_CHANNELS, INPUT_CHANNELS, OUTPUT_CHANNELS, Maneuver
 from rotorid.errors import DataError, DataFileError, RotoridError
+from rotorid.ingestion import Ingestion
 from rotorid.units import unit_system
 
 #: Header keys that are not metadata.
-RESERVED = ("name", "units", "initial_state")
+RESERVED = ("name", "units", "initial_state", "channel_units")
 #: Allowed metadata keys (also the ``# key: value`` syntax of CSV files).
 KEY_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_.-]*")
 
@@ -72,7 +75,7 @@ def vector(path: Path, channel: str, array) -> np.ndarray:
 
 
 def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
-             row_note: str = "") -> Maneuver:
+             ingestion: Ingestion, row_note: str = "") -> Maneuver:
     """Check columns and header read from ``path`` and build the maneuver.
 
     Args:
@@ -80,6 +83,8 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
             :data:`rotorid.data.ALL_CHANNELS`, all of the same length.
         header: flat header (see module docstring); ``name`` defaults to the file stem,
             ``units`` to ``"flight-test"``.
+        ingestion: what to do to the columns first (:mod:`rotorid.ingestion`); the file's
+            ``channel_units`` add to (and override) its ``channel_units``.
         row_note: appended to data errors, to say how rows map to lines of the file.
     """
     missing = [c for c in ALL_CHANNELS if c not in columns]
@@ -102,15 +107,15 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
         raise DataFileError(f"{path}: header 'name' must be a non-empty string, got {name!r}")
     try:
         units = unit_system(header.get("units", "flight-test")).name
-        return Maneuver(
-            name,
-            columns["time"],
-            np.column_stack([columns[c] for c in INPUT_CHANNELS]),
-            np.column_stack([columns[c] for c in OUTPUT_CHANNELS]),
-            metadata=metadata,
-            units=units,
-            initial_state=header.get("initial_state"),
-        )
+        declared = header.get("channel_units") or {}
+        if not isinstance(declared, Mapping):
+            raise DataError(f"'channel_units' must map channels to units, e.g. "
+                            f'{{"q": "rad/s"}}, got {declared!r}')
+        ingestion = attrs.evolve(ingestion, channel_units={**ingestion.channel_units,
+                                                          **declared})
+        return Maneuver.from_columns(name, columns, units=units, metadata=metadata,
+                                     initial_state=header.get("initial_state"),
+                                     ingestion=ingestion)
     except DataError as error:
         raise DataFileError(f"{path}: {error}{row_note}") from None
     except (RotoridError, TypeError, ValueError) as error:

@@ -10,6 +10,8 @@ import argparse
 import os
 from pathlib import Path
 
+from rotorid.io import parse_number
+
 
 def seed(text: str) -> int:
     """A noise seed: a whole number ≥ 0."""
@@ -49,3 +51,33 @@ def _check_writable(path: Path) -> None:
     if not existing.is_dir() or not os.access(existing, os.W_OK | os.X_OK):
         raise argparse.ArgumentTypeError(f"cannot write into {existing}; give a directory you "
                                          f"may write to")
+
+
+def trim(text: str) -> str | dict[str, float]:
+    """Trim to remove: ``first-second`` or stated values ``CHANNEL=VALUE,…`` (plain decimals,
+    in the data's units)."""
+    if text == "first-second":
+        return text
+    values = {}
+    for item in text.split(","):
+        channel, equals, value = item.partition("=")
+        try:
+            values[channel.strip()] = parse_number(value)
+        except ValueError:
+            equals = ""
+        if not equals or not channel.strip():
+            raise argparse.ArgumentTypeError(
+                f"trim is 'first-second' or CHANNEL=VALUE pairs such as theta=5.0,az=-32.17; "
+                f"got {item!r}")
+    return values
+
+
+def seconds(text: str) -> float:
+    """A positive time in s."""
+    try:
+        value = parse_number(text)
+    except ValueError:
+        value = -1.0
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"a time in s is a positive number, got {text!r}")
+    return value

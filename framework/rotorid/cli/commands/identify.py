@@ -5,7 +5,9 @@ Usage::
     rotorid identify MODEL.toml DATA... [--estimator output-error] [--out result.json]
                      [--outputs ax,az,...] [--noise full|diagonal] [--max-iterations N]
                      [--enforce-signs] [--output-biases] [--initial-states]
-                     [--hold zoh|foh] [--quiet] [--strict] [--force]
+                     [--hold zoh|foh] [--trim first-second|CH=VALUE,...]
+                     [--resample linear|decimate] [--sample-time S]
+                     [--quiet] [--strict] [--force]
 
 ``MODEL.toml`` is a model file (:mod:`rotorid.model.modelfile`); its initial values are the start
 values (all zero: the estimator chooses its own start, see docs/estimation.md). MODEL may
@@ -13,7 +15,8 @@ instead name a model of one's own by reference, ``package.module:Name`` or
 ``path/to/file.py:Name`` (:mod:`rotorid.model.reference`, docs/models.md); its data are read
 in the units the files declare. DATA are
 maneuver files (CSV, NPZ, MAT), directories or glob patterns of the ``files`` data source; they
-are converted to the model's unit system. The report goes to stdout; stderr gets one line per
+are converted to the model's unit system, after the trim removal and resampling asked for
+(:mod:`rotorid.ingestion`). The report goes to stdout; stderr gets one line per
 accepted iteration (unless ``--quiet``; an observer plugin of the
 ``rotorid_estimation_iteration`` hook, so it works with any estimator that reports through
 it), the kinematic consistency fits and one line per warning: the sanity checks of the data
@@ -34,12 +37,21 @@ import sys
 import warnings
 from pathlib import Path
 
-from rotorid.cli.arguments import output_file
+from rotorid.cli.arguments import output_file, seconds, trim
 from rotorid.plugin.hookspecs import hookimpl
 
 NAME = "identify"
 HELP = ("estimate the derivatives and delays of a model file from maneuver files; print the "
         "report and write the estimate as JSON")
+
+
+def _ingestion(args) -> dict:
+    """The files' ingestion settings from the command line (:mod:`rotorid.ingestion`)."""
+    from rotorid.errors import UsageError
+
+    if args.sample_time is not None and args.resample is None:
+        raise UsageError("--sample-time needs --resample linear or --resample decimate")
+    return {"trim": args.trim, "resample": args.resample, "sample_time": args.sample_time}
 
 
 def add_arguments(parser) -> None:
@@ -66,6 +78,16 @@ def add_arguments(parser) -> None:
                         help="estimate the initial perturbation state of every maneuver")
     parser.add_argument("--hold", choices=("zoh", "foh"), default="zoh",
                         help="input hold between samples (default zoh)")
+    parser.add_argument("--trim", type=trim, default=None,
+                        metavar="first-second|CH=VALUE,...",
+                        help="remove the trim from every file: each channel's mean over the "
+                             "first second, or stated values in the files' units")
+    parser.add_argument("--resample", choices=("linear", "decimate"), default=None,
+                        help="resample non-uniform time onto a uniform grid: linear "
+                             "interpolation, or anti-aliased decimation to --sample-time")
+    parser.add_argument("--sample-time", type=seconds, default=None, metavar="S",
+                        help="the grid's interval in s for --resample (default: the median "
+                             "step)")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress lines on stderr (warnings stay)")
     parser.add_argument("--force", action="store_true",
@@ -180,12 +202,13 @@ def run(args) -> int:
     with using(manager):
         options = _options(args)
         estimator = _estimator(args.estimator, options)
-        maneuvers = _load_inputs(args.data, args.hold,
-                                 None if by_reference else model.units.name)
-        if not by_reference:
-            check_fit_data(maneuvers, options.get("outputs"), model)
         with warnings.catch_warnings(record=True) as found, _checks_log(args.quiet):
             warnings.simplefilter("always", RotoridWarning)
+            maneuvers = _load_inputs(args.data, args.hold,
+                                     None if by_reference else model.units.name,
+                                     _ingestion(args))
+            if not by_reference:
+                check_fit_data(maneuvers, options.get("outputs"), model)
             checked = check_before_fit(maneuvers, None if by_reference else model)
         _print_warnings(found)
         model = model if by_reference else checked

@@ -67,12 +67,12 @@ def read_values(path: Path, structure):
     return structure, structure.as_vector(content)
 
 
-def _load_inputs(locations, hold: str, units: str):
+def _load_inputs(locations, hold: str, units: str, ingestion=None):
     from rotorid.data import ManeuverSet
     from rotorid.errors import DataFileError
     from rotorid.plugin.manager import create
 
-    source = create("data-sources", "files", hold=hold, units=units)
+    source = create("data-sources", "files", hold=hold, units=units, ingestion=ingestion)
     maneuvers = []
     for location in locations:
         maneuvers.extend(source.load(location))

@@ -1,0 +1,212 @@
+"""Preparing recorded columns for a :class:`~rotorid.data.Maneuver`: units per channel,
+resampling onto a uniform grid, trim removal.
+
+Flight data rarely arrive as rotorid wants them (uniform time, perturbations from trim, one
+unit system). An :class:`Ingestion` says what to do about it; :func:`prepare_columns` does it
+to one record's columns, in this order:
+
+1. **channel units**: a channel recorded in another unit than its unit system's
+   (``{"q": "rad/s"}`` in flight-test data) is converted into the system's unit;
+2. **resampling** (only when asked): ``"linear"`` interpolates every channel onto a uniform
+   grid (the median step, or ``sample_time``); ``"decimate"`` low-passes with a zero-phase FIR
+   filter and keeps every k-th sample, so that ``sample_time`` carries no aliased content.
+   Steps longer than :data:`GAP_FACTOR` median steps are time gaps, warned about
+   (:class:`~rotorid.errors.DataWarning`) and interpolated across;
+3. **trim removal**: ``"first-second"`` subtracts each channel's mean over the first second;
+   a mapping subtracts stated values (in the units after step 1).
+
+Each step taken is stated in the returned notes (``converted_units``, ``resampled``,
+``trim_removed``), which become the maneuver's metadata.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Mapping
+
+import attrs
+import numpy as np
+
+from rotorid.errors import DataError, DataWarning, SignalError
+from rotorid.units import CHANNEL_KINDS, canonical_unit, conversion_factor, unit_system
+
+RESAMPLE_METHODS = ("linear", "decimate")
+#: A step longer than this many median steps is a time gap.
+GAP_FACTOR = 3.0
+#: Seconds at the start whose mean is the trim under ``trim="first-second"``.
+TRIM_WINDOW = 1.0
+
+
+def _check_trim(instance, attribute, value):
+    if value is None or value == "first-second":
+        return
+    if not isinstance(value, Mapping) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) for v in value.values()):
+        raise DataError(f"trim {value!r} is neither 'first-second' nor channel = value pairs; "
+                        f"give trim = \"first-second\" or e.g. {{theta = 5.0, az = -32.17}}")
+
+
+def _check_resample(instance, attribute, value):
+    if value is not None and value not in RESAMPLE_METHODS:
+        raise DataError(f"unknown resampling method {value!r}; use one of "
+                        f"{', '.join(RESAMPLE_METHODS)}")
+
+
+def _optional_positive(value):
+    if value is None:
+        return None
+    value = float(value)
+    if not value > 0:
+        raise DataError(f"sample_time must be a positive number of seconds, got {value!r}")
+    return value
+
+
+def _units(value) -> dict[str, str]:
+    if not isinstance(value, Mapping):
+        raise DataError(f"channel_units must map channel names to units, e.g. "
+                        f"{{q = \"rad/s\"}}, got {value!r}")
+    return {str(k): canonical_unit(v) for k, v in value.items()}
+
+
+@attrs.frozen
+class Ingestion:
+    """What to do to recorded columns before they become a maneuver.
+
+    Attributes:
+        trim: ``None`` (the data are perturbations already), ``"first-second"`` or a mapping
+            channel → trim value to subtract.
+        resample: ``None`` (non-uniform time is refused), ``"linear"`` or ``"decimate"``.
+        sample_time: the grid's interval in s (default: the median step); ``"decimate"``
+            needs one longer than the record's step.
+        channel_units: channel → the unit it was recorded in, when that differs from its unit
+            system's (outputs and extra channels only; controls keep their unit).
+    """
+
+    trim: str | Mapping[str, float] | None = attrs.field(default=None, validator=_check_trim)
+    resample: str | None = attrs.field(default=None, validator=_check_resample)
+    sample_time: float | None = attrs.field(default=None, converter=_optional_positive)
+    channel_units: Mapping[str, str] = attrs.field(factory=dict, converter=_units)
+
+    def __attrs_post_init__(self):
+        if self.resample == "decimate" and self.sample_time is None:
+            raise DataError("resample = 'decimate' needs a sample_time (the interval after "
+                            "decimation, s)")
+
+    @classmethod
+    def coerce(cls, value) -> "Ingestion":
+        """An :class:`Ingestion` from itself, ``None`` or a mapping of its attributes."""
+        if isinstance(value, cls):
+            return value
+        return cls(**dict(value or {}))
+
+
+def _convert_units(columns: dict, channel_units: Mapping[str, str], units: str,
+                   where: str) -> dict:
+    system = unit_system(units)
+    for channel, unit in channel_units.items():
+        if channel not in columns:
+            continue
+        kind = CHANNEL_KINDS.get(channel)
+        if kind is None or kind == "control":
+            raise DataError(f"{where}: channel {channel!r} cannot be given a unit ({unit}): "
+                            f"units convert outputs and extra channels, controls keep theirs")
+        target = canonical_unit(system.label(channel))
+        try:
+            factor = conversion_factor(unit, target)
+        except SignalError as error:
+            raise DataError(f"{where}: channel {channel!r}: {error}") from None
+        columns[channel] = columns[channel] * factor
+    return columns
+
+
+def _uniform_grid(time: np.ndarray, step: float) -> np.ndarray:
+    count = int(np.floor((time[-1] - time[0]) / step + 1e-9)) + 1
+    return time[0] + step * np.arange(count)
+
+
+def _warn_gaps(time: np.ndarray, step: float, where: str) -> None:
+    """One warning naming the time gaps (steps over :data:`GAP_FACTOR` grid steps)."""
+    steps = np.diff(time)
+    gaps = np.flatnonzero(steps > GAP_FACTOR * step)
+    if gaps.size:
+        row = gaps[np.argmax(steps[gaps])]
+        warnings.warn(f"{where}: {gaps.size} time gap(s) longer than {GAP_FACTOR:g} steps of "
+                      f"{step:.4g} s, the longest {steps[row]:.4g} s after t = "
+                      f"{time[row]:.6g} s; resampling interpolates across them, cut the record "
+                      f"there if the aircraft moved in between", DataWarning, stacklevel=5)
+
+
+def _resample(columns: dict, ingestion: Ingestion, where: str) -> tuple[dict, str | None]:
+    time = columns["time"]
+    steps = np.diff(time)
+    if time.size < 2 or np.any(steps <= 0) or not np.all(np.isfinite(time)):
+        raise DataError(f"{where}: channel 'time' must be finite and increasing to be resampled")
+    median = float(np.median(steps))
+    uniform = np.allclose(steps, median, rtol=1e-6, atol=1e-9)
+    if uniform and ingestion.sample_time in (None, median):
+        return columns, None
+    _warn_gaps(time, max(median, ingestion.sample_time or 0.0), where)
+    if ingestion.resample == "linear":
+        step = ingestion.sample_time or median
+        grid = _uniform_grid(time, step)
+        note = (f"linear interpolation onto a uniform {step:.6g} s grid (recorded steps "
+                f"{steps.min():.6g}–{steps.max():.6g} s, median {median:.6g} s)")
+        return {k: (grid if k == "time" else np.interp(grid, time, v))
+                for k, v in columns.items()}, note
+    from scipy.signal import decimate
+
+    factor = int(round(ingestion.sample_time / median))
+    if factor < 2:
+        raise DataError(f"{where}: decimation to {ingestion.sample_time:g} s needs a record "
+                        f"sampled at least twice as fast (median step {median:.6g} s); use "
+                        f"resample = 'linear'")
+    fine = _uniform_grid(time, ingestion.sample_time / factor)
+    n = (fine.size - 1) // factor * factor + 1
+    fine = fine[:n]
+    resampled = {"time": fine[::factor]}
+    for name, values in columns.items():
+        if name != "time":
+            resampled[name] = decimate(np.interp(fine, time, values), factor, ftype="fir",
+                                       zero_phase=True)
+    note = (f"anti-aliased decimation by {factor} (zero-phase FIR low-pass, after linear "
+            f"interpolation onto a {ingestion.sample_time / factor:.6g} s grid) to "
+            f"{ingestion.sample_time:.6g} s (recorded median step {median:.6g} s)")
+    return resampled, note
+
+
+def _remove_trim(columns: dict, trim, where: str) -> tuple[dict, dict]:
+    if trim == "first-second":
+        time = columns["time"]
+        window = time <= time[0] + TRIM_WINDOW + 1e-9
+        values = {k: float(np.mean(v[window])) for k, v in columns.items() if k != "time"}
+    else:
+        unknown = sorted(set(trim) - set(columns) - {"time"})
+        if unknown or "time" in trim:
+            raise DataError(f"{where}: trim value for unknown channel "
+                            f"{(unknown or ['time'])[0]!r}; channels: "
+                            f"{', '.join(c for c in columns if c != 'time')}")
+        values = {k: float(v) for k, v in trim.items()}
+    return {k: v - values.get(k, 0.0) for k, v in columns.items()}, values
+
+
+def prepare_columns(columns: Mapping[str, np.ndarray], units: str,
+                    ingestion: Ingestion | Mapping | None, where: str
+                    ) -> tuple[dict[str, np.ndarray], dict]:
+    """One record's ``columns`` (name → (N,) values, including ``time`` in s) after the
+    steps of ``ingestion`` (see the module docstring), in the unit system ``units``; and the
+    notes stating each step taken, for the maneuver's metadata. ``where`` names the record in
+    errors and warnings."""
+    ingestion = Ingestion.coerce(ingestion)
+    prepared = {k: np.asarray(v, dtype=float).reshape(-1) for k, v in columns.items()}
+    notes: dict = {}
+    if ingestion.channel_units:
+        prepared = _convert_units(prepared, ingestion.channel_units, units, where)
+        notes["converted_units"] = {k: v for k, v in ingestion.channel_units.items()
+                                  if k in prepared}
+    if ingestion.resample is not None:
+        prepared, note = _resample(prepared, ingestion, where)
+        if note:
+            notes["resampled"] = note
+    if ingestion.trim is not None:
+        prepared, notes["trim_removed"] = _remove_trim(prepared, ingestion.trim, where)
+    return prepared, notes

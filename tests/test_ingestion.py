@@ -1,0 +1,196 @@
+"""Ingestion (rotorid.ingestion, Maneuver.from_columns/from_dataframe, the files source's
+options and MAT layouts): trim removal, resampling with the method stated, units per channel."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+import scipy.io
+from rotorid import Maneuver
+from rotorid.data import ALL_CHANNELS
+from rotorid.errors import DataError, DataFileError, DataWarning
+from rotorid.plugin.manager import create
+from rotorid_files.formats import read_maneuver
+
+
+def _columns(time, make=lambda t, k: (k + 1) * np.sin(0.5 * t + k)) -> dict:
+    """Every channel of ALL_CHANNELS over ``time``: channel k is ``make(time, k)``."""
+    columns = {name: make(time, k) for k, name in enumerate(ALL_CHANNELS[1:])}
+    return {"time": time, **columns}
+
+
+class Table:
+    """A table as pandas shows one (``columns``, ``table[name]``), without pandas."""
+
+    def __init__(self, columns: dict):
+        self._columns = columns
+        self.columns = list(columns)
+
+    def __getitem__(self, name):
+        return self._columns[name]
+
+
+def test_first_second_trim_removes_each_channels_starting_level():
+    time = np.arange(0.0, 5.0, 0.01)
+    columns = _columns(time, lambda t, k: np.where(t > 2.0, 1.0, 0.0) + 10.0 * k)
+    m = Maneuver.from_columns("trimmed", columns, ingestion={"trim": "first-second"})
+    assert np.allclose(m.outputs[:200], 0.0) and np.allclose(m.outputs[-1], 1.0)
+    assert m.metadata["trim_removed"]["r"] == pytest.approx(10.0 * (len(ALL_CHANNELS) - 2))
+    assert m.metadata["trim_removed"]["long"] == 0.0
+
+
+def test_stated_trim_values_are_subtracted_and_unknown_channels_named():
+    time = np.arange(0.0, 2.0, 0.02)
+    columns = _columns(time)
+    columns["theta"] = columns["theta"] + 5.0
+    m = Maneuver.from_columns("stated", columns, ingestion={"trim": {"theta": 5.0}})
+    assert np.allclose(m.channel("theta"), _columns(time)["theta"])
+    with pytest.raises(DataError, match="trim value for unknown channel 'pitch'"):
+        Maneuver.from_columns("bad", columns, ingestion={"trim": {"pitch": 5.0}})
+
+
+def test_linear_resampling_of_jittered_time_states_the_method():
+    rng = np.random.default_rng(3)
+    time = np.cumsum(rng.uniform(0.015, 0.025, 500))
+    line = _columns(time, lambda t, k: 2.0 * t - k)
+    m = Maneuver.from_columns("jitter", line, ingestion={"resample": "linear",
+                                                         "sample_time": 0.02})
+    assert m.dt == pytest.approx(0.02)
+    assert m.time[0] == time[0] and m.time[-1] <= time[-1]
+    assert np.allclose(m.channel("q"), 2.0 * m.time - ALL_CHANNELS.index("q") + 1)
+    assert m.metadata["resampled"].startswith("linear interpolation onto a uniform 0.02 s grid")
+
+
+def test_non_uniform_time_is_refused_without_resampling_and_the_error_says_how():
+    time = np.array([0.0, 0.02, 0.04, 0.07, 0.09])
+    with pytest.raises(DataError, match="not uniformly sampled at row 3.*resample"):
+        Maneuver.from_columns("uneven", _columns(time))
+
+
+def test_decimation_removes_what_would_alias():
+    """1 kHz record: a 1 Hz motion plus 180 Hz vibration, decimated to 50 Hz. Taking every
+    20th sample aliases the vibration to 20 Hz at full amplitude; the anti-aliased decimation
+    keeps the 1 Hz motion alone."""
+    time = np.arange(0.0, 20.0, 0.001)
+    columns = _columns(time, lambda t, k: np.sin(2 * math.pi * t)
+                       + 0.5 * np.sin(2 * math.pi * 180.0 * t))
+    m = Maneuver.from_columns("vibration", columns,
+                              ingestion={"resample": "decimate", "sample_time": 0.02})
+    assert m.dt == pytest.approx(0.02)
+    inner = slice(50, -50)                       # away from the filter's end effects
+    motion = np.sin(2 * math.pi * m.time)
+    assert np.max(np.abs(m.channel("p")[inner] - motion[inner])) < 0.01
+    subsampled = columns["p"][::20]
+    assert np.max(np.abs(subsampled[inner] - motion[inner])) > 0.4
+    assert "anti-aliased decimation by 20" in m.metadata["resampled"]
+
+
+def test_a_time_gap_is_warned_about_once_with_its_length():
+    time = np.concatenate([np.arange(0.0, 3.0, 0.02), np.arange(3.5, 6.0, 0.02)])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DataWarning)
+        m = Maneuver.from_columns("gap", _columns(time), ingestion={"resample": "linear"})
+    [warning] = caught
+    assert "1 time gap(s)" in str(warning.message)
+    assert "the longest 0.52 s after t = 2.98 s" in str(warning.message)
+    assert m.duration == pytest.approx(5.98)
+
+
+def test_channel_units_convert_into_the_unit_system():
+    time = np.arange(0.0, 2.0, 0.02)
+    columns = _columns(time)
+    radians = dict(columns, q=np.radians(columns["q"]), ax=columns["ax"] / 32.174)
+    m = Maneuver.from_columns("units", radians,
+                              ingestion={"channel_units": {"q": "rad/s", "ax": "g"}})
+    assert np.allclose(m.channel("q"), columns["q"])
+    assert np.allclose(m.channel("ax"), columns["ax"], rtol=1e-4)
+    assert m.metadata["converted_units"] == {"q": "rad/s", "ax": "g"}
+    with pytest.raises(DataError, match="'long' cannot be given a unit"):
+        Maneuver.from_columns("units", columns, ingestion={"channel_units": {"long": "deg"}})
+    with pytest.raises(DataError, match="cannot convert deg"):
+        Maneuver.from_columns("units", columns, ingestion={"channel_units": {"q": "deg"}})
+
+
+def test_from_dataframe_takes_any_table_and_keeps_extra_columns():
+    time = np.arange(0.0, 2.0, 0.02)
+    columns = _columns(time)
+    columns["u"] = 3.0 * time
+    m = Maneuver.from_dataframe(Table(columns), "table", metadata={"kind": "doublet"})
+    assert np.array_equal(m.channel("theta"), columns["theta"])
+    assert np.array_equal(m.extra_channels["u"], columns["u"])
+    assert m.metadata == {"kind": "doublet"}
+    with pytest.raises(DataError, match=r"maneuver 'x': missing column\(s\) time;"):
+        Maneuver.from_dataframe(Table({k: v for k, v in columns.items() if k != "time"}), "x")
+    pandas = pytest.importorskip("pandas")
+    frame = pandas.DataFrame(columns)
+    assert np.array_equal(Maneuver.from_dataframe(frame, "frame").outputs, m.outputs)
+
+
+def _record(tmp_path, time, name="uneven"):
+    path = tmp_path / f"{name}.csv"
+    lines = [",".join(ALL_CHANNELS)]
+    columns = _columns(time)
+    lines += [",".join(repr(float(columns[c][i])) for c in ALL_CHANNELS)
+              for i in range(time.size)]
+    path.write_text("# units: flight-test\n" + "\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def test_the_files_source_resamples_and_trims_when_asked(tmp_path):
+    rng = np.random.default_rng(5)
+    path = _record(tmp_path, np.cumsum(rng.uniform(0.015, 0.025, 300)))
+    with pytest.raises(DataFileError, match="not uniformly sampled"):
+        create("data-sources", "files").load(path)
+    source = create("data-sources", "files",
+                    ingestion={"resample": "linear", "trim": "first-second"})
+    [m] = source.load(path)
+    assert "resampled" in m.metadata and "trim_removed" in m.metadata
+    assert abs(np.mean(m.outputs[m.time <= m.time[0] + 1.0])) < 1e-12
+    with pytest.raises(DataError, match="unknown resampling method 'cubic'"):
+        create("data-sources", "files", ingestion={"resample": "cubic"})
+
+
+def test_a_case_gives_ingestion_settings_in_its_data_table(tmp_path):
+    path = _record(tmp_path, np.cumsum(np.random.default_rng(6).uniform(0.015, 0.025, 300)))
+    data = create("data-sources", "files").case_data(
+        {"identification": str(path), "resample": "linear", "sample_time": 0.05,
+         "channel_units": {"q": "rad/s"}}, tmp_path)
+    [m] = data.identification
+    assert m.dt == pytest.approx(0.05) and m.metadata["converted_units"] == {"q": "rad/s"}
+
+
+def test_a_csv_header_declares_the_unit_of_a_channel(tmp_path):
+    time = np.arange(0.0, 2.0, 0.02)
+    path = _record(tmp_path, time, "perchannel")
+    path.write_text('# channel_units: {"p": "rad/s"}\n' + path.read_text(encoding="utf-8"),
+                    encoding="utf-8")
+    m = read_maneuver(path)
+    assert np.allclose(m.channel("p"), np.degrees(_columns(time)["p"]))
+
+
+def test_mat_files_in_struct_and_column_matrix_layouts(tmp_path):
+    time = np.arange(0.0, 2.0, 0.02)
+    reference = Maneuver.from_columns("ref", _columns(time))
+    channels = {c: reference.channel(c) for c in ALL_CHANNELS}
+    order = list(reversed(ALL_CHANNELS))
+    matrix = np.column_stack([channels[c] for c in order])
+    names = np.array(order, dtype=object)                         # a MATLAB cell array
+    layouts = {
+        "struct": {"flight": {**channels, "header": '{"name": "flight_1"}'}},
+        "matrix": {"data": matrix, "channels": names},
+        "struct_of_matrix": {"run": {"data": matrix, "channels": names}},
+        "char_rows": {"data": matrix.T, "channels": np.array(order)},   # channels as rows
+    }
+    for layout, variables in layouts.items():
+        path = tmp_path / f"{layout}.mat"
+        scipy.io.savemat(path, variables)
+        m = read_maneuver(path)
+        assert np.allclose(m.outputs, reference.outputs), layout
+        assert np.allclose(m.inputs, reference.inputs), layout
+        assert m.name == ("flight_1" if layout == "struct" else layout)
+    scipy.io.savemat(tmp_path / "short.mat", {"data": matrix, "channels": names[:-1]})
+    with pytest.raises(DataFileError, match="'data' has 13 columns but 'channels' names 12"):
+        read_maneuver(tmp_path / "short.mat")
