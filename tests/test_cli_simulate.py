@@ -18,7 +18,7 @@ airspeed_kt = 60.0
 theta0_deg = 2.0
 
 [structure]
-populate = "six-dof"
+populate = "all"
 
 [derivatives.L_lat]
 delay = 0.0

@@ -17,7 +17,7 @@ airspeed_kt = 0.0
 theta0_deg = 0.0
 phi0_deg = 0.0
 [structure]
-populate = "six-dof"
+populate = "all"
 [derivatives.L_lat]
 initial = 1.0
 sign = "positive"
@@ -101,13 +101,13 @@ def test_save_then_load_gives_an_equal_structure(tmp_path, build):
 
 def test_written_file_is_compact_and_readable():
     text = format_model(reduced_structure())
-    assert 'populate = "six-dof"' in text
+    assert 'populate = "all"' in text
     assert '"X_v", "Y_p", "Z_ped", "M_coll",' in text
     assert "[derivatives.M_w]\nfixed = 0.0\n" in text
     assert "[derivatives.L_long]\ndelay = { initial = 0.01, upper = 0.3 }" in text
     assert "[derivatives.L_q]\ndelay = { initial = 0.04, fixed = true }" in text
     assert "[derivatives.X_u]" not in text  # default settings are not repeated
-    assert text.startswith("# rotorid model: ModelStructure(70.0 kt")
+    assert text.startswith("# rotorid model: ModelStructure(six-dof, 70.0 kt")
 
 
 def test_out_of_order_structures_are_written_explicitly():
@@ -134,12 +134,18 @@ def test_out_of_order_structures_are_written_explicitly():
     ('[condition]\nairspeed_kt = true\n', r"\[condition\] airspeed_kt must be a number"),
     ('[condition]\nairspeed_kt = -10.0\n', "airspeed must be a finite number ≥ 0 kt"),
     ('[condition]\ntheta0_deg = 95.0\n', r"\|theta0\| must be below 90°"),
-    ('[condition]\n[structure]\npopulate = "full"\n', "populate = 'full'; use 'six-dof' or"),
+    ('[condition]\n[structure]\npopulate = "full"\n', "populate = 'full'; use 'all' or"),
+    ('[condition]\n[structure]\ntemplate = "vertical"\n',
+     "template = 'vertical'; use 'six-dof' or 'longitudinal' or 'lateral'"),
+    ('[condition]\n[structure]\ntemplate = "longitudinal"\nremove = ["L_p"]\n',
+     "derivative L_p is not in this structure"),
+    ('[condition]\n[structure]\ntemplate = "longitudinal"\n[derivatives.Y_v]\n',
+     "derivative Y_v does not fit the longitudinal template"),
     ('[condition]\n[structure]\nremove = "X_u"\n', "remove must be a list of derivative names"),
     ('[condition]\n[structure]\nremove = ["X_q", "X_q"]\n', "remove lists X_q twice"),
     ('[condition]\n[structure]\nremove = ["W_u"]\n', "unknown force/moment letter 'W'"),
     ('[condition]\n[structure]\npopulate = "none"\nremove = ["X_u"]\n',
-     "remove needs populate = 'six-dof'"),
+     "remove needs populate = 'all'"),
     ('[condition]\n[structure]\nremove = ["M_w"]\n[derivatives.M_w]\nfixed = 0.0\n',
      r"M_w both removed and declared in \[derivatives\]"),
     ('[condition]\n[derivatives.L_k]\n', "derivative 'L_k': unknown variable 'k'"),

@@ -177,6 +177,12 @@ class Maneuver:
         raise DataError(f"unknown channel {name!r}; channels: "
                         f"{', '.join(ALL_CHANNELS + tuple(self.extra_channels))}")
 
+    def columns(self, names) -> np.ndarray:
+        """The channels called ``names`` side by side, shape (N, len(names))."""
+        if not names:
+            return np.zeros((self.n_samples, 0))
+        return np.column_stack([self.channel(name) for name in names])
+
     def with_outputs(self, outputs, name: str | None = None) -> "Maneuver":
         """A copy with other outputs (e.g. a simulation), same time and inputs."""
         return attrs.evolve(self, outputs=outputs, name=name or self.name)

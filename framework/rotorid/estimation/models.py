@@ -23,7 +23,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from rotorid.data import OUTPUT_CHANNELS, ManeuverSet
+from rotorid.data import ManeuverSet
 from rotorid.errors import StructureError
 from rotorid.estimation.integrated import IntegratedModel
 from rotorid.model.nonlinear import NonlinearModel
@@ -50,12 +50,7 @@ def measured_outputs(model, maneuvers: ManeuverSet) -> list[np.ndarray]:
     gives), (N_i, n_o) per maneuver."""
     if hasattr(model, "measured"):
         return model.measured(maneuvers)
-    unknown = [n for n in model.output_names if n not in OUTPUT_CHANNELS]
-    if unknown:
-        raise StructureError(f"model outputs {unknown} are not maneuver channels "
-                             f"({', '.join(OUTPUT_CHANNELS)})")
-    columns = [OUTPUT_CHANNELS.index(n) for n in model.output_names]
-    return [m.outputs[:, columns] for m in maneuvers]
+    return [m.columns(model.output_names) for m in maneuvers]
 
 
 def finite_difference_sensitivities(model, values, maneuvers: ManeuverSet,

@@ -10,8 +10,10 @@ Example (flight-test units; derivative values in the structure's units)::
     phi0_deg = 0.0
 
     [structure]
-    populate = "six-dof"             # all 60 derivatives, free, starting at 0; or "none"
-    remove = ["X_v", "Y_p"]          # only with populate = "six-dof"
+    template = "six-dof"             # or "longitudinal", "lateral" (rotorid.model.templates)
+    populate = "all"                 # all of the template's derivatives (60 for six-dof),
+                                     # free, starting at 0; or "none"
+    remove = ["X_v", "Y_p"]          # only with populate = "all"
 
     [derivatives.L_lat]              # settings of one derivative (added when populate = "none")
     initial = 1.0                    # start value
@@ -38,10 +40,11 @@ from rotorid.errors import DataFileError, MissingFileError, RotoridError
 from rotorid.io import atomic_write
 from rotorid.model.derivatives import Derivative
 from rotorid.model.structure import FlightCondition, ModelStructure
+from rotorid.model.templates import SIX_DOF, TEMPLATES
 
-POPULATE = ("six-dof", "none")
+POPULATE = ("all", "none")
 _TOP_KEYS = ("units", "condition", "structure", "derivatives")
-_STRUCTURE_KEYS = ("populate", "remove")
+_STRUCTURE_KEYS = ("template", "populate", "remove")
 _DERIVATIVE_KEYS = ("initial", "sign", "delay", "fixed")
 _DELAY_KEYS = {"initial": "number", "upper": "number", "fixed": "boolean"}
 
@@ -100,7 +103,12 @@ def _structure(mapping: Mapping, source: str) -> ModelStructure:
         _require("number", value, f"{source}: [condition] {key}")
     settings = _require("table", mapping.get("structure", {}), f"{source}: [structure]")
     _check_keys(settings, _STRUCTURE_KEYS, f"{source}: [structure]")
-    populate = _require("string", settings.get("populate", "six-dof"),
+    template = _require("string", settings.get("template", SIX_DOF.name),
+                        f"{source}: [structure] template")
+    if template not in TEMPLATES:
+        raise DataFileError(f"{source}: [structure] template = {template!r}; use "
+                            f"{' or '.join(map(repr, TEMPLATES))}")
+    populate = _require("string", settings.get("populate", "all"),
                         f"{source}: [structure] populate")
     if populate not in POPULATE:
         raise DataFileError(f"{source}: [structure] populate = {populate!r}; use "
@@ -117,14 +125,14 @@ def _structure(mapping: Mapping, source: str) -> ModelStructure:
     condition = FlightCondition.from_mapping(condition)
     if populate == "none":
         if remove:
-            raise DataFileError(f"{source}: [structure] remove needs populate = 'six-dof'; "
+            raise DataFileError(f"{source}: [structure] remove needs populate = 'all'; "
                                 f"with 'none', declare only the derivatives you want")
-        return ModelStructure(condition, derivatives, units)
+        return ModelStructure(condition, derivatives, units, template)
     both = sorted(set(remove) & set(declared))
     if both:
         raise DataFileError(f"{source}: {', '.join(both)} both removed and declared in "
                             f"[derivatives]; keep one")
-    structure = ModelStructure.six_dof(condition, units).without(*remove)
+    structure = ModelStructure.populated(condition, template, units).without(*remove)
     for derivative in derivatives:
         structure = structure.replacing(derivative)
     return structure
@@ -191,19 +199,21 @@ def _derivative_lines(derivative: Derivative) -> list[str]:
 
 
 def format_model(structure: ModelStructure) -> str:
-    """The model file text of ``structure``: ``populate = "six-dof"`` with a ``remove`` list
-    when its derivatives keep the six-DoF order, else ``populate = "none"`` with every
-    derivative listed; derivative tables only where settings differ from the defaults."""
+    """The model file text of ``structure``: its template, ``populate = "all"`` with a
+    ``remove`` list when its derivatives keep the template's order, else ``populate = "none"``
+    with every derivative listed; derivative tables only where settings differ from the
+    defaults."""
     c = structure.condition
     lines = [f"# rotorid model: {structure.describe()}",
              f'units = "{structure.units.name}"', "", "[condition]",
              f"u0_mps = {_number(c.u0)}", f"v0_mps = {_number(c.v0)}",
              f"w0_mps = {_number(c.w0)}", f"theta0_deg = {_number(_degrees(c.theta0))}",
-             f"phi0_deg = {_number(_degrees(c.phi0))}", "", "[structure]"]
-    full = ModelStructure.six_dof(c, structure.units).names
+             f"phi0_deg = {_number(_degrees(c.phi0))}", "", "[structure]",
+             f'template = "{structure.template.name}"']
+    full = structure.template.derivative_names()
     kept = set(structure.names)
     if [n for n in full if n in kept] == list(structure.names):
-        lines.append('populate = "six-dof"')
+        lines.append('populate = "all"')
         removed = [f'"{n}"' for n in full if n not in kept]
         rows = [", ".join(removed[i:i + 8]) for i in range(0, len(removed), 8)]
         lines.append("remove = [" + "".join(f"\n    {row}," for row in rows)

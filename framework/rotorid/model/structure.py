@@ -1,6 +1,8 @@
-"""Flight condition and the linear 6-DoF model structure.
+"""Flight condition and the linear helicopter model structure.
 
-The structure is the paper's coupled rigid-body model about straight trimmed flight::
+A structure has the shape of its template (:mod:`rotorid.model.templates`): the paper's coupled
+rigid-body model about straight trimmed flight (``six-dof``, default) or its ``longitudinal``
+or ``lateral`` subset, whose equations are the six-dof's rows for its states::
 
     states   x = [u w q theta v p phi r]
     controls u = [long lat coll ped]
@@ -30,21 +32,24 @@ import numpy as np
 
 from rotorid.errors import StructureError
 from rotorid.model.derivatives import (
-    CONTROL_VARIABLES,
     DEFAULT_DELAY_UPPER,
     EQUATION_OF_LETTER,
     FORCE_MOMENT_LETTERS,
-    STATE_VARIABLES,
     Delay,
     Derivative,
     Sign,
     delayed_derivative,
 )
+from rotorid.model.signals import ModelSignals
+from rotorid.model.templates import (
+    CONTROLS,
+    OUTPUTS,
+    SIX_DOF,
+    STATES,
+    StructureTemplate,
+    structure_template,
+)
 from rotorid.units import FLIGHT_TEST, FOOT, KNOT, UnitSystem, unit_system
-
-STATES = ("u", "w", "q", "theta", "v", "p", "phi", "r")
-CONTROLS = CONTROL_VARIABLES
-OUTPUTS = ("ax", "az", "q", "theta", "ay", "p", "phi", "r")
 
 #: Output measuring each force equation's specific force.
 ACCELERATION_OUTPUT = {"u": "ax", "v": "ay", "w": "az"}
@@ -176,40 +181,67 @@ class TermTable:
 
 @attrs.frozen
 class ModelStructure:
-    """A frozen linear model structure: flight condition, derivatives and unit system.
+    """A frozen linear model structure: flight condition, derivatives, unit system and
+    template (the states, controls and outputs; ``six-dof`` by default).
 
-    Build the paper's fully populated structure with :meth:`six_dof`, then shape it with
-    :meth:`without`, :meth:`fixing`, :meth:`with_delays` and :meth:`with_initial`; each returns
-    a new structure.
+    Build a fully populated structure with :meth:`populated` (:meth:`six_dof` for the
+    paper's), then shape it with :meth:`without`, :meth:`fixing`, :meth:`with_delays` and
+    :meth:`with_initial`; each returns a new structure.
     """
 
     condition: FlightCondition
     derivatives: tuple[Derivative, ...] = attrs.field(converter=tuple,
                                                       validator=_unique_derivatives)
     units: UnitSystem = attrs.field(default=FLIGHT_TEST, converter=unit_system)
+    template: StructureTemplate = attrs.field(default=SIX_DOF, converter=structure_template)
 
-    states = STATES
-    controls = CONTROLS
-    outputs = OUTPUTS
+    def __attrs_post_init__(self):
+        for derivative in self.derivatives:
+            self.template.check(derivative)
 
     # ----------------------------------------------------------------- constructors
     @classmethod
-    def six_dof(cls, condition: FlightCondition, units: str | UnitSystem = FLIGHT_TEST,
-                signs: Mapping[str, str] | None = None) -> "ModelStructure":
-        """The fully populated structure: every X Y Z L M N derivative over u v w p q r and
-        the four controls, free, starting at zero (60 parameters).
+    def populated(cls, condition: FlightCondition, template: str | StructureTemplate = SIX_DOF,
+                  units: str | UnitSystem = FLIGHT_TEST,
+                  signs: Mapping[str, str] | None = None) -> "ModelStructure":
+        """The fully populated structure of ``template``: every derivative of its force and
+        moment equations over its velocity and rate states and its controls, free, starting
+        at zero (60 for ``six-dof``, 15 for ``longitudinal`` and ``lateral``).
 
         ``signs`` optionally attaches sign priors, e.g. ``{"L_p": "negative"}``.
         """
+        template = structure_template(template)
         signs = dict(signs or {})
-        derivatives = []
-        for letter in FORCE_MOMENT_LETTERS:
-            for variable in STATE_VARIABLES + CONTROL_VARIABLES:
-                name = f"{letter}_{variable}"
-                derivatives.append(Derivative(name, sign=signs.pop(name, Sign.NONE)))
+        derivatives = [Derivative(name, sign=signs.pop(name, Sign.NONE))
+                       for name in template.derivative_names()]
         if signs:
-            raise StructureError(f"sign priors given for unknown derivatives: {sorted(signs)}")
-        return cls(condition, derivatives, units)
+            raise StructureError(f"sign priors given for derivatives the {template.name} "
+                                 f"template does not have: {sorted(signs)}")
+        return cls(condition, derivatives, units, template)
+
+    @classmethod
+    def six_dof(cls, condition: FlightCondition, units: str | UnitSystem = FLIGHT_TEST,
+                signs: Mapping[str, str] | None = None) -> "ModelStructure":
+        """The paper's fully populated structure (:meth:`populated` with ``six-dof``)."""
+        return cls.populated(condition, SIX_DOF, units, signs)
+
+    # ----------------------------------------------------------------- signals
+    @property
+    def states(self) -> tuple[str, ...]:
+        return self.template.states
+
+    @property
+    def controls(self) -> tuple[str, ...]:
+        return self.template.controls
+
+    @property
+    def outputs(self) -> tuple[str, ...]:
+        return self.template.outputs
+
+    @property
+    def signals(self) -> ModelSignals:
+        """States, inputs and outputs as named signals in the structure's units."""
+        return self.template.signals(self.units)
 
     # ----------------------------------------------------------------- lookup
     @property
@@ -395,7 +427,8 @@ class ModelStructure:
 
     # ----------------------------------------------------------------- matrices
     def known_state_matrix(self) -> np.ndarray:
-        """The gravity and kinematic terms of A, shape (n, n), in the structure's units."""
+        """The gravity and kinematic terms of A, shape (n, n), in the structure's units: the
+        six-dof model's rows and columns of the structure's states."""
         c = self.condition
         k = self.units.radian_per_angle
         g = self.units.g
@@ -403,8 +436,8 @@ class ModelStructure:
         u0, v0, w0 = c.u0 * scale, c.v0 * scale, c.w0 * scale
         st, ct = math.sin(c.theta0), math.cos(c.theta0)
         sp, cp = math.sin(c.phi0), math.cos(c.phi0)
-        i = {s: n for n, s in enumerate(self.states)}
-        a = np.zeros((self.n_states, self.n_states))
+        i = {s: n for n, s in enumerate(STATES)}
+        a = np.zeros((len(STATES), len(STATES)))
         a[i["u"], i["q"]] = -w0 * k
         a[i["u"], i["r"]] = v0 * k
         a[i["u"], i["theta"]] = -g * ct * k
@@ -421,7 +454,8 @@ class ModelStructure:
         a[i["phi"], i["p"]] = 1.0
         a[i["phi"], i["q"]] = sp * st / ct
         a[i["phi"], i["r"]] = cp * st / ct
-        return a
+        rows = [i[name] for name in self.states]
+        return a[np.ix_(rows, rows)]
 
     def known_output_matrix(self) -> np.ndarray:
         """The known part of C, shape (p, n): the outputs that are states (q θ p φ r)."""
@@ -469,6 +503,7 @@ class ModelStructure:
     def describe(self) -> str:
         """Short summary: condition, units, counts."""
         n_fixed = len(self.derivatives) - len(self.free_derivatives)
-        return (f"ModelStructure({self.condition.describe()}, {self.units.name} units, "
+        return (f"ModelStructure({self.template.name}, {self.condition.describe()}, "
+                f"{self.units.name} units, "
                 f"{len(self.free_derivatives)} free derivatives, {n_fixed} fixed, "
                 f"{len(self.free_delays)} free delays)")

@@ -42,17 +42,18 @@ _BLOCK_SAMPLES = 64
 
 
 class _Group:
-    """Maneuvers sharing one sample time, padded to a common length (time-major arrays)."""
+    """Maneuvers sharing one sample time, padded to a common length (time-major arrays);
+    ``inputs`` holds the ``controls`` channels, in that order."""
 
-    def __init__(self, dt: float, indices: list[int], maneuvers, initial_states):
+    def __init__(self, dt: float, indices: list[int], maneuvers, initial_states, controls):
         self.dt = dt
         self.indices = indices
         self.lengths = [maneuvers[i].n_samples for i in indices]
         self.names = [maneuvers[i].name for i in indices]
         n = max(self.lengths)
-        self.inputs = np.zeros((n, len(indices), maneuvers[indices[0]].inputs.shape[1]))
+        self.inputs = np.zeros((n, len(indices), len(controls)))
         for b, i in enumerate(indices):
-            self.inputs[: self.lengths[b], b] = maneuvers[i].inputs
+            self.inputs[: self.lengths[b], b] = maneuvers[i].columns(controls)
         self.x0 = np.array([initial_states[i] for i in indices], dtype=float)
 
     @property
@@ -219,7 +220,8 @@ class Simulator:
         for i, m in enumerate(maneuvers):
             key = next((dt for dt in groups if abs(dt - m.dt) <= 1e-9 * dt), m.dt)
             groups.setdefault(key, []).append(i)
-        self.groups = [_Group(dt, idx, maneuvers.maneuvers, states) for dt, idx in groups.items()]
+        self.groups = [_Group(dt, idx, maneuvers.maneuvers, states, structure.controls)
+                       for dt, idx in groups.items()]
         # The companion states of the last parameter vector simulated, per group: an
         # estimator asks for the sensitivities at the values it has just simulated.
         self._last_states: tuple[bytes, list] | None = None

@@ -82,7 +82,7 @@ class FlightCase:
     condition: Mapping = attrs.field(factory=dict, converter=dict)
     pairs: tuple[str, ...] = PAPER_PAIRS
     envelopes: tuple[str, ...] = PAPER_ENVELOPES
-    structure: Mapping = attrs.field(factory=lambda: {"populate": "six-dof"}, converter=dict)
+    structure: Mapping = attrs.field(factory=lambda: {"populate": "all"}, converter=dict)
     derivatives: Mapping = attrs.field(factory=dict, converter=dict)
     estimator: str = "output-error"
     estimator_options: Mapping = attrs.field(factory=dict, converter=dict)
@@ -125,7 +125,7 @@ class FlightCase:
         estimator = dict(tables["estimator"])
         case = cls(name=str(mapping["name"]), description=str(mapping.get("description", "")),
                    data=_resolved(data, folder), condition=tables["condition"],
-                   structure=tables["structure"] or {"populate": "six-dof"},
+                   structure=tables["structure"] or {"populate": "all"},
                    derivatives=tables["derivatives"],
                    estimator=str(estimator.pop("name", "output-error")),
                    estimator_options=estimator, quick_settings=tables["quick"],
