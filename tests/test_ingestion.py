@@ -194,3 +194,28 @@ def test_mat_files_in_struct_and_column_matrix_layouts(tmp_path):
     scipy.io.savemat(tmp_path / "short.mat", {"data": matrix, "channels": names[:-1]})
     with pytest.raises(DataFileError, match="'data' has 13 columns but 'channels' names 12"):
         read_maneuver(tmp_path / "short.mat")
+
+
+def test_nan_dropouts_are_interpolated_across_only_when_resampling(tmp_path):
+    time = np.arange(0.0, 2.0, 0.02)
+    path = _record(tmp_path, time, "dropout")
+    lines = path.read_text(encoding="utf-8").splitlines()
+    header = lines[1].split(",")
+    for row in (20, 21, 22):                                 # samples 20–22 of q missing
+        fields = lines[2 + row].split(",")
+        fields[header.index("q")] = "nan"
+        lines[2 + row] = ",".join(fields)
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    with pytest.raises(DataFileError, match="line 23 \\(row 20\\), channel 'q': value is NaN"):
+        read_maneuver(path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DataWarning)
+        [m] = create("data-sources", "files", ingestion={"resample": "linear"}).load(path)
+    [warning] = caught
+    assert "channel 'q' has 1 NaN gap(s), 3 samples, the first at t = 0.4 s" in \
+        str(warning.message)
+    q = _columns(time)["q"]
+    # a straight line between samples 19 and 23
+    assert np.allclose(m.channel("q")[20:23], q[19] + (q[23] - q[19]) * np.array([1, 2, 3]) / 4)
+    assert m.metadata["resampled"] == ("linear interpolation across 3 NaN samples on the "
+                                       "recorded 0.02 s grid")

@@ -10,8 +10,9 @@ to one record's columns, in this order:
 2. **resampling** (only when asked): ``"linear"`` interpolates every channel onto a uniform
    grid (the median step, or ``sample_time``); ``"decimate"`` low-passes with a zero-phase FIR
    filter and keeps every k-th sample, so that ``sample_time`` carries no aliased content.
-   Steps longer than :data:`GAP_FACTOR` median steps are time gaps, warned about
-   (:class:`~rotorid.errors.DataWarning`) and interpolated across;
+   Steps longer than :data:`GAP_FACTOR` median steps are time gaps, and NaN samples are
+   dropouts: both are warned about (:class:`~rotorid.errors.DataWarning`) and interpolated
+   across;
 3. **trim removal**: ``"first-second"`` subtracts each channel's mean over the first second;
    a mapping subtracts stated values (in the units after step 1).
 
@@ -136,15 +137,39 @@ def _warn_gaps(time: np.ndarray, step: float, where: str) -> None:
                       f"there if the aircraft moved in between", DataWarning, stacklevel=5)
 
 
+def _fill_nan_gaps(columns: dict, where: str) -> tuple[dict, int]:
+    """Every channel with NaN samples (dropouts) interpolated across them, with one
+    :class:`~rotorid.errors.DataWarning` per channel naming the gaps; and how many samples
+    were filled."""
+    time = columns["time"]
+    filled, count = dict(columns), 0
+    for name, values in columns.items():
+        missing = np.isnan(values)
+        if name == "time" or not missing.any():
+            continue
+        if missing.all():
+            raise DataError(f"{where}: channel {name!r} holds no number at all")
+        starts = np.flatnonzero(np.diff(np.concatenate([[0], missing.astype(int)])) == 1)
+        warnings.warn(f"{where}: channel {name!r} has {starts.size} NaN gap(s), "
+                      f"{int(missing.sum())} samples, the first at t = {time[starts[0]]:.6g} s "
+                      f"(a dropout); resampling interpolates across them",
+                      DataWarning, stacklevel=5)
+        filled[name] = np.interp(time, time[~missing], values[~missing])
+        count += int(missing.sum())
+    return filled, count
+
+
 def _resample(columns: dict, ingestion: Ingestion, where: str) -> tuple[dict, str | None]:
     time = columns["time"]
     steps = np.diff(time)
     if time.size < 2 or np.any(steps <= 0) or not np.all(np.isfinite(time)):
         raise DataError(f"{where}: channel 'time' must be finite and increasing to be resampled")
+    columns, filled = _fill_nan_gaps(columns, where)
     median = float(np.median(steps))
     uniform = np.allclose(steps, median, rtol=1e-6, atol=1e-9)
     if uniform and ingestion.sample_time in (None, median):
-        return columns, None
+        return columns, (f"linear interpolation across {filled} NaN samples on the recorded "
+                         f"{median:.6g} s grid" if filled else None)
     _warn_gaps(time, max(median, ingestion.sample_time or 0.0), where)
     if ingestion.resample == "linear":
         step = ingestion.sample_time or median

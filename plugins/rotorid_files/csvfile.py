@@ -89,10 +89,12 @@ def read(path: Path, ingestion: Ingestion):
             except ValueError:
                 raise DataFileError(f"{path}, line {number} (row {len(values)}), channel "
                                     f"{name!r}: {field.strip()!r} is not a number") from None
-        bad = [n for n, v in zip(names, row) if not np.isfinite(v)]
+        bad = [n for n, v in zip(names, row)
+               if not np.isfinite(v) and not (ingestion.resample and np.isnan(v))]
         if bad:
             raise DataFileError(f"{path}, line {number} (row {len(values)}), channel "
-                                f"{bad[0]!r}: value is NaN or infinite")
+                                f"{bad[0]!r}: value is NaN or infinite; a NaN gap is "
+                                f"interpolated across when the data are resampled")
         values.append(row)
     table = np.array(values, dtype=float).reshape(len(values), len(names))
     columns = {name: table[:, i] for i, name in enumerate(names)}
