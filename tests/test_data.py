@@ -87,9 +87,9 @@ def test_wrong_shapes_are_rejected():
         Maneuver("bad", np.arange(5.0), np.zeros((5, 4)), np.zeros((4, 8)))
     with pytest.raises(DataError, match=r"expected shape \(5, 4\)"):
         Maneuver("bad", np.arange(5.0), np.zeros((5, 3)), np.zeros((5, 8)))
-    with pytest.raises(DataError, match=r"initial_state must have shape \(8,\)"):
+    with pytest.raises(DataError, match=r"initial_state must be a vector of states"):
         Maneuver("bad", np.arange(5.0), np.zeros((5, 4)), np.zeros((5, 8)),
-                 initial_state=np.zeros(4))
+                 initial_state=np.zeros((2, 4)))
 
 
 def test_sets_index_select_and_merge():

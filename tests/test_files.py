@@ -221,7 +221,7 @@ def set_cell(row, channel, text):
     ("# only: comments\n\n", "no header row"),
     ("# kind: a\n# kind: b\n" + csv_text(), r"line 2: header key 'kind' is given twice"),
     ("# units: imperial\n" + csv_text(), "bad header: unknown unit system 'imperial'"),
-    ("# initial_state: [1, 2]\n" + csv_text(), r"initial_state must have shape \(8,\)"),
+    ("# initial_state: [[1, 2]]\n" + csv_text(), "initial_state must be a vector"),
     ("# name: 3\n" + csv_text(), "header 'name' must be a non-empty string"),
     (csv_text().splitlines()[0] + "\n", "at least 2 samples"),
 ])
@@ -234,13 +234,20 @@ def test_bad_csv_files_are_rejected_naming_file_line_and_channel(tmp_path, text,
 
 
 def test_missing_and_unknown_csv_channels(tmp_path):
+    """A file may lack channels (a model that uses one names it); a misspelt one is refused."""
     path = tmp_path / "m.csv"
     header = [c for c in ALL_CHANNELS if c != "theta"]
-    path.write_text("\n".join([",".join(header)] + [",".join(["0"] * 12)] * 3))
-    with pytest.raises(DataFileError, match=r"missing channel\(s\) theta"):
-        read_maneuver(path)
+    path.write_text("\n".join([",".join(header)]
+                              + [",".join([str(0.1 * row)] + ["0"] * 11) for row in range(3)]))
+    maneuver = read_maneuver(path)
+    assert maneuver.output_names == ("ax", "az", "q", "ay", "p", "phi", "r")
+    with pytest.raises(DataError, match="maneuver 'm' has no channel 'theta', which the model"):
+        maneuver.channel("theta")
     path.write_text("\n".join([",".join(header + ["Theta"])] + [",".join(["0"] * 13)] * 3))
-    with pytest.raises(DataFileError, match=r"missing channel\(s\) theta"):
+    with pytest.raises(DataFileError, match=r"unknown channel\(s\) 'Theta'"):
+        read_maneuver(path)
+    path.write_text("\n".join([",".join(ALL_CHANNELS[1:])] + [",".join(["0"] * 12)] * 3))
+    with pytest.raises(DataFileError, match=r"missing channel\(s\) time"):
         read_maneuver(path)
     path.write_text("\n".join([",".join(ALL_CHANNELS + ("psi",))] + [",".join(["0"] * 14)] * 3))
     with pytest.raises(DataFileError, match=r"unknown channel\(s\) 'psi'"):
@@ -282,7 +289,7 @@ def nan_at(channel, row):
 
 @pytest.mark.parametrize("fmt", ["npz", "mat"])
 @pytest.mark.parametrize("arrays, fragment", [
-    (edited(q=None), r"missing channel\(s\) q;"),
+    (edited(time=None), r"missing channel\(s\) time;"),
     (edited(ay=lambda a: a["ay"][:-1]), r"channel 'ay' has 9 samples but 'time' has 10"),
     (edited(p=nan_at("p", 7)), r"channel 'p' is NaN or infinite at row 7"),
     (edited(time=lambda a: a["time"][::-1].copy()), r"channel 'time' does not increase at row 1"),

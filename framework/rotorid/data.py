@@ -1,11 +1,14 @@
 """Maneuver time histories.
 
-A :class:`Maneuver` is one record: uniformly sampled time, the four control inputs and the
-eight measured outputs, all perturbations from trim, plus metadata. A :class:`ManeuverSet`
-is what estimators, simulators and verification consume: several maneuvers (lengths and sample
-times may differ) and the hold of the inputs between samples.
+A :class:`Maneuver` is one record: uniformly sampled time, the control inputs and the measured
+outputs, all perturbations from trim, plus metadata. A :class:`ManeuverSet` is what
+estimators, simulators and verification consume: several maneuvers (lengths and sample times
+may differ) and the hold of the inputs between samples.
 
-Channel order is fixed: inputs :data:`INPUT_CHANNELS`, outputs :data:`OUTPUT_CHANNELS`.
+The default layout is the six-dof helicopter's: inputs :data:`INPUT_CHANNELS`, outputs
+:data:`OUTPUT_CHANNELS`. A record may hold fewer of them (``input_names``, ``output_names``,
+in that order), e.g. the longitudinal channels only; models pick what they use by name and a
+channel a model uses but the record lacks is named when it is asked for.
 """
 
 from __future__ import annotations
@@ -62,6 +65,14 @@ def check_time(time: np.ndarray, where: str) -> float:
     return float(dt)
 
 
+def _check_layout(names: tuple[str, ...], layout: tuple[str, ...], role: str,
+                  where: str) -> None:
+    """``names`` must be some of the ``layout`` channels, in its order."""
+    if list(names) != [c for c in layout if c in names] or len(set(names)) != len(names):
+        raise DataError(f"{where}: {role} channels {', '.join(names)} must be some of "
+                        f"{', '.join(layout)}, each once and in that order")
+
+
 def _check_block(block: np.ndarray, channels, rows: int, where: str) -> None:
     if block.shape != (rows, len(channels)):
         raise DataError(f"{where}: expected shape ({rows}, {len(channels)}) for channels "
@@ -74,7 +85,11 @@ def _check_block(block: np.ndarray, channels, rows: int, where: str) -> None:
 
 @attrs.frozen(eq=False)
 class Maneuver:
-    """One maneuver: time (N,), inputs (N, 4) and outputs (N, 8), perturbations from trim.
+    """One maneuver: time (N,), inputs (N, m) and outputs (N, p), perturbations from trim.
+
+    ``input_names`` and ``output_names`` name the columns (default the six-dof helicopter's
+    four controls and eight outputs; a subset of them, in that order, for records without the
+    others). ``initial_state`` is a state vector of the model the record is simulated with.
 
     Units are those of ``units`` (flight-test by default: ft/s², deg/s, deg, % of travel).
     ``metadata`` holds free-form descriptors such as ``condition`` (``"hover"``), ``kind``
@@ -95,21 +110,25 @@ class Maneuver:
         default=None, converter=lambda x: None if x is None else readonly_array(x))
     extra_channels: Mapping[str, np.ndarray] = attrs.field(
         factory=dict, converter=lambda m: {str(k): readonly_array(v) for k, v in dict(m).items()})
+    input_names: tuple[str, ...] = attrs.field(default=INPUT_CHANNELS, converter=tuple)
+    output_names: tuple[str, ...] = attrs.field(default=OUTPUT_CHANNELS, converter=tuple)
 
     def __attrs_post_init__(self):
         where = f"maneuver {self.name!r}"
         check_time(self.time, where)
-        _check_block(self.inputs, INPUT_CHANNELS, self.time.size, where)
-        _check_block(self.outputs, OUTPUT_CHANNELS, self.time.size, where)
+        _check_layout(self.input_names, INPUT_CHANNELS, "input", where)
+        _check_layout(self.output_names, OUTPUT_CHANNELS, "output", where)
+        _check_block(self.inputs, self.input_names, self.time.size, where)
+        _check_block(self.outputs, self.output_names, self.time.size, where)
         for name, values in self.extra_channels.items():
             if name in ALL_CHANNELS:
                 raise DataError(f"{where}: extra channel {name!r} repeats a fixed channel; "
                                 "give it another name")
             _check_block(values.reshape(-1, 1) if values.ndim <= 1 else values, (name,),
                          self.time.size, where)
-        if self.initial_state is not None and self.initial_state.shape != (8,):
-            raise DataError(f"{where}: initial_state must have shape (8,), "
-                            f"got {self.initial_state.shape}")
+        if self.initial_state is not None and self.initial_state.ndim != 1:
+            raise DataError(f"{where}: initial_state must be a vector of states, "
+                            f"got shape {self.initial_state.shape}")
 
     @classmethod
     def from_columns(cls, name: str, columns: Mapping[str, np.ndarray], *,
@@ -121,17 +140,23 @@ class Maneuver:
         says (units per channel, resampling, trim removal; :mod:`rotorid.ingestion`), each
         step stated in the metadata."""
         where = f"maneuver {name!r}"
-        missing = [c for c in ALL_CHANNELS if c not in columns]
+        inputs = tuple(c for c in INPUT_CHANNELS if c in columns)
+        outputs = tuple(c for c in OUTPUT_CHANNELS if c in columns)
+        missing = [label for label, present in (("time", "time" in columns),
+                                                ("every input", inputs),
+                                                ("every output", outputs)) if not present]
         if missing:
-            raise DataError(f"{where}: missing column(s) {', '.join(missing)}; a maneuver needs "
-                            f"{', '.join(ALL_CHANNELS)}")
+            raise DataError(f"{where}: missing column(s) {', '.join(missing)}; a maneuver "
+                            f"needs time, at least one input ({', '.join(INPUT_CHANNELS)}) and "
+                            f"at least one output ({', '.join(OUTPUT_CHANNELS)})")
         prepared, notes = prepare_columns(columns, unit_system(units).name, ingestion, where)
         return cls(name, prepared["time"],
-                   np.column_stack([prepared[c] for c in INPUT_CHANNELS]),
-                   np.column_stack([prepared[c] for c in OUTPUT_CHANNELS]),
+                   np.column_stack([prepared[c] for c in inputs]),
+                   np.column_stack([prepared[c] for c in outputs]),
                    metadata={**dict(metadata or {}), **notes}, units=units,
                    initial_state=initial_state,
-                   extra_channels={k: v for k, v in prepared.items() if k not in ALL_CHANNELS})
+                   extra_channels={k: v for k, v in prepared.items() if k not in ALL_CHANNELS},
+                   input_names=inputs, output_names=outputs)
 
     @classmethod
     def from_dataframe(cls, frame, name: str, **options) -> "Maneuver":
@@ -168,14 +193,24 @@ class Maneuver:
         """Time history of one channel by name (``time``, an input, an output or an extra)."""
         if name == "time":
             return self.time
-        if name in INPUT_CHANNELS:
-            return self.inputs[:, INPUT_CHANNELS.index(name)]
-        if name in OUTPUT_CHANNELS:
-            return self.outputs[:, OUTPUT_CHANNELS.index(name)]
+        if name in self.input_names:
+            return self.inputs[:, self.input_names.index(name)]
+        if name in self.output_names:
+            return self.outputs[:, self.output_names.index(name)]
         if name in self.extra_channels:
             return self.extra_channels[name]
+        if name in ALL_CHANNELS:
+            raise DataError(f"maneuver {self.name!r} has no channel {name!r}, which the model "
+                            f"uses; give the record a {name!r} column, or choose a model "
+                            f"without it (a structure template such as longitudinal or "
+                            f"lateral)")
         raise DataError(f"unknown channel {name!r}; channels: "
-                        f"{', '.join(ALL_CHANNELS + tuple(self.extra_channels))}")
+                        f"{', '.join(self.channel_names + tuple(self.extra_channels))}")
+
+    @property
+    def channel_names(self) -> tuple[str, ...]:
+        """``time``, the inputs and the outputs the record holds (extras apart)."""
+        return ("time",) + self.input_names + self.output_names
 
     def columns(self, names) -> np.ndarray:
         """The channels called ``names`` side by side, shape (N, len(names))."""
@@ -183,9 +218,13 @@ class Maneuver:
             return np.zeros((self.n_samples, 0))
         return np.column_stack([self.channel(name) for name in names])
 
-    def with_outputs(self, outputs, name: str | None = None) -> "Maneuver":
-        """A copy with other outputs (e.g. a simulation), same time and inputs."""
-        return attrs.evolve(self, outputs=outputs, name=name or self.name)
+    def with_outputs(self, outputs, name: str | None = None,
+                     output_names: tuple[str, ...] | None = None) -> "Maneuver":
+        """A copy with other outputs (e.g. a simulation, ``output_names`` its channels; by
+        default the record's own), same time and inputs."""
+        return attrs.evolve(self, outputs=outputs, name=name or self.name,
+                            output_names=self.output_names if output_names is None
+                            else output_names)
 
     def head(self, duration: float) -> "Maneuver":
         """The first ``duration`` seconds (at least two samples)."""
@@ -218,6 +257,13 @@ class ManeuverSet:
         units = {m.units for m in self.maneuvers}
         if len(units) > 1:
             raise DataError(f"maneuvers mix unit systems {sorted(units)}; convert them first")
+        layouts = {(m.input_names, m.output_names): m.name for m in self.maneuvers}
+        if len(layouts) > 1:
+            (first, one), (second, other) = list(layouts.items())[:2]
+            raise DataError(f"maneuvers {one!r} and {other!r} hold different channels "
+                            f"({' '.join(first[0] + first[1])} against "
+                            f"{' '.join(second[0] + second[1])}); give every record of a set "
+                            f"the same channels")
 
     def __repr__(self) -> str:
         return maneuver_set_summary(self)
@@ -247,6 +293,16 @@ class ManeuverSet:
     @property
     def units(self) -> str:
         return self.maneuvers[0].units
+
+    @property
+    def input_names(self) -> tuple[str, ...]:
+        """The inputs every maneuver of the set holds."""
+        return self.maneuvers[0].input_names
+
+    @property
+    def output_names(self) -> tuple[str, ...]:
+        """The outputs every maneuver of the set holds."""
+        return self.maneuvers[0].output_names
 
     @property
     def n_samples(self) -> int:

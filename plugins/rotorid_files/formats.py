@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import ClassVar
 
 import attrs
-from rotorid.data import HOLDS, OUTPUT_CHANNELS, Maneuver, ManeuverSet
+from rotorid.data import HOLDS, Maneuver, ManeuverSet
 from rotorid.errors import DataError, DataFileError, MissingFileError, RotoridError
 from rotorid.ingestion import Ingestion
 from rotorid.io import atomic_write
@@ -84,7 +84,7 @@ def convert_units(maneuver: Maneuver, units) -> Maneuver:
     if maneuver.initial_state is not None:
         state = maneuver.initial_state * channel_scale(STATES, target, source)
     return attrs.evolve(maneuver, outputs=maneuver.outputs * channel_scale(
-        OUTPUT_CHANNELS, target, source), units=target.name, initial_state=state)
+        maneuver.output_names, target, source), units=target.name, initial_state=state)
 
 
 def _expand(location) -> list[Path]:

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import attrs
 import numpy as np
-from rotorid.data import ALL_CHANNELS, INPUT_CHANNELS, OUTPUT_CHANNELS, Maneuver
+from rotorid.data import ALL_CHANNELS, Maneuver
 from rotorid.errors import DataError, DataFileError, RotoridError
 from rotorid.ingestion import Ingestion
 from rotorid.units import unit_system
@@ -57,8 +57,8 @@ def header_of(maneuver: Maneuver, where: str) -> dict:
 
 
 def columns_of(maneuver: Maneuver) -> dict[str, np.ndarray]:
-    """Channel name → 1-D array, in :data:`rotorid.data.ALL_CHANNELS` order."""
-    return {name: maneuver.channel(name) for name in ALL_CHANNELS}
+    """Channel name → 1-D array: time, the inputs and the outputs the maneuver holds."""
+    return {name: maneuver.channel(name) for name in maneuver.channel_names}
 
 
 def vector(path: Path, channel: str, array) -> np.ndarray:
@@ -79,24 +79,24 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
     """Check columns and header read from ``path`` and build the maneuver.
 
     Args:
-        columns: channel name → 1-D array; exactly the channels of
-            :data:`rotorid.data.ALL_CHANNELS`, all of the same length.
+        columns: channel name → 1-D array, all of the same length: ``time`` and some of the
+            channels of :data:`rotorid.data.ALL_CHANNELS` (at least one input and one
+            output; a model names the ones it uses and lacks).
         header: flat header (see module docstring); ``name`` defaults to the file stem,
             ``units`` to ``"flight-test"``.
         ingestion: what to do to the columns first (:mod:`rotorid.ingestion`); the file's
             ``channel_units`` add to (and override) its ``channel_units``.
         row_note: appended to data errors, to say how rows map to lines of the file.
     """
-    missing = [c for c in ALL_CHANNELS if c not in columns]
-    if missing:
-        raise DataFileError(f"{path}: missing channel(s) {', '.join(missing)}; a maneuver file "
-                            f"needs {','.join(ALL_CHANNELS)}")
     unknown = [c for c in columns if c not in ALL_CHANNELS]
     if unknown:
         raise DataFileError(f"{path}: unknown channel(s) {', '.join(map(repr, unknown))}; "
                             f"channels are {','.join(ALL_CHANNELS)}")
+    if "time" not in columns:
+        raise DataFileError(f"{path}: missing channel(s) time; a maneuver file needs time, "
+                            f"then any of {','.join(ALL_CHANNELS[1:])}")
     rows = columns["time"].size
-    for channel in ALL_CHANNELS:
+    for channel in columns:
         if columns[channel].size != rows:
             raise DataFileError(f"{path}: channel {channel!r} has {columns[channel].size} "
                                 f"samples but 'time' has {rows}; all channels need the same "

@@ -12,7 +12,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from rotorid.data import OUTPUT_CHANNELS, ManeuverSet
+from rotorid.data import ManeuverSet
 from rotorid.errors import DataError
 from rotorid.model.structure import ModelStructure
 from rotorid.units import unit_system
@@ -37,20 +37,19 @@ def is_constant(record: np.ndarray) -> bool:
 def check_fit_data(maneuvers: ManeuverSet, outputs: Sequence[str] | None,
                    model: ModelStructure) -> None:
     """Raise :class:`DataError` naming the channel and the fix when ``maneuvers`` cannot
-    inform a fit of ``model`` (from its initial values) on ``outputs`` (``None``: all
-    eight)."""
+    inform a fit of ``model`` (from its initial values) on ``outputs`` (``None``: all of the
+    model's)."""
     _check_plausible(maneuvers)
     check_delays(model, maneuvers)
     n_parameters = model.n_parameters
-    names = tuple(n for n in (outputs or OUTPUT_CHANNELS) if n in OUTPUT_CHANNELS)
-    columns = [OUTPUT_CHANNELS.index(n) for n in names]
+    names = tuple(n for n in (outputs or model.outputs) if n in model.outputs)
     for maneuver in maneuvers:
-        block = maneuver.outputs[:, columns]
+        block = maneuver.columns(names)
         if np.all(np.ptp(block, axis=0) == 0.0):
             raise DataError(f"maneuver {maneuver.name}: every fitted output is constant (a "
                             f"record without response, or a file of zeros); remove it from "
                             f"the data")
-    records = np.concatenate([m.outputs[:, columns] for m in maneuvers])
+    records = np.concatenate([m.columns(names) for m in maneuvers])
     for name, record in zip(names, records.T):
         if is_constant(record):
             raise DataError(f"output {name!r} is constant in every maneuver (value "
@@ -98,7 +97,7 @@ def _check_plausible(maneuvers: ManeuverSet) -> None:
                                           (("p", "q", "r"), degrees, MAX_RATE_DEG_S, "°/s"),
                                           (("ax", "ay", "az"), 1 / units.g, MAX_ACCELERATION_G,
                                            " g")):
-            for name in names:
+            for name in (n for n in names if n in maneuver.output_names):
                 largest = float(np.max(np.abs(maneuver.channel(name)))) * scale
                 if largest > limit:
                     raise DataError(f"maneuver {maneuver.name}: output {name!r} reaches "

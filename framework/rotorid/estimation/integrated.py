@@ -19,7 +19,7 @@ from collections.abc import Mapping
 import attrs
 import numpy as np
 
-from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS, Maneuver, ManeuverSet
+from rotorid.data import Maneuver, ManeuverSet
 from rotorid.errors import StructureError
 from rotorid.model.nonlinear import NonlinearModel, has_own_jacobians
 from rotorid.model.signals import ChannelMap
@@ -318,6 +318,6 @@ def maneuver_columns(maneuver: Maneuver) -> tuple[dict[str, np.ndarray], dict[st
     unit system knows (the outputs; controls and extra channels carry whatever unit the data
     have)."""
     system = unit_system(maneuver.units)
-    names = ("time",) + INPUT_CHANNELS + OUTPUT_CHANNELS + tuple(maneuver.extra_channels)
+    names = maneuver.channel_names + tuple(maneuver.extra_channels)
     return ({c: maneuver.channel(c) for c in names},
-            {c: system.label(c) for c in OUTPUT_CHANNELS})
+            {c: system.label(c) for c in maneuver.output_names})

@@ -22,7 +22,7 @@ import warnings
 import attrs
 import numpy as np
 
-from rotorid.data import OUTPUT_CHANNELS, ManeuverSet
+from rotorid.data import ManeuverSet
 from rotorid.errors import DataWarning
 from rotorid.model.structure import STATES, FlightCondition, ModelStructure
 from rotorid.units import unit_system
@@ -68,10 +68,11 @@ class KinematicFit:
 
 
 def _states(maneuver) -> np.ndarray:
-    """(N, 8) states where known: measured q θ p φ r, velocities from extra channels, else 0."""
+    """(N, 8) states where known: measured q θ p φ r (those the record holds), velocities from
+    extra channels, else 0."""
     x = np.zeros((maneuver.n_samples, len(STATES)))
     for i, name in enumerate(STATES):
-        if name in OUTPUT_CHANNELS:
+        if name in maneuver.output_names:
             x[:, i] = maneuver.channel(name)
         elif name in maneuver.extra_channels:
             x[:, i] = maneuver.extra_channels[name]
@@ -103,7 +104,8 @@ def kinematic_fits(maneuvers: ManeuverSet,
     moving driver are left out."""
     system = unit_system(maneuvers.units)
     known = ModelStructure(condition or FlightCondition(), (), system).known_state_matrix()
-    channels = ["theta", "phi"] + [v for v in ACCELERATIONS
+    channels = [a for a in ("theta", "phi") if a in maneuvers.output_names]
+    channels += [v for v in ACCELERATIONS
                                    if all(v in m.extra_channels for m in maneuvers)]
     states = [_states(m) for m in maneuvers]
     times = [m.time for m in maneuvers]

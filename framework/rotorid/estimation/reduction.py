@@ -175,7 +175,7 @@ def _empty_estimate(structure: ModelStructure, maneuvers) -> Estimate:
     from rotorid.simulation.simulator import simulate
 
     outputs = simulate(structure, None, maneuvers)
-    residuals = [m.outputs - y for m, y in zip(maneuvers, outputs)]
+    residuals = [m.columns(structure.outputs) - y for m, y in zip(maneuvers, outputs)]
     return Estimate.from_fit(structure, [], np.zeros((0, 0)), residuals, estimator="none",
                              stop_reason="no parameter left", cost_history=(),
                              rmse_history=())

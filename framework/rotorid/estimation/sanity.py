@@ -22,7 +22,7 @@ import warnings
 
 import numpy as np
 
-from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS, ManeuverSet
+from rotorid.data import ManeuverSet
 from rotorid.errors import DataWarning
 from rotorid.estimation.data_checks import is_constant
 from rotorid.estimation.kinematics import check_kinematics
@@ -51,7 +51,7 @@ def _warn(message: str) -> None:
 def unexcited_inputs(maneuvers: ManeuverSet) -> dict[str, float]:
     """Inputs that hold one value in every maneuver: name → that value."""
     inputs = np.concatenate([m.inputs for m in maneuvers])
-    return {name: float(column[0]) for name, column in zip(INPUT_CHANNELS, inputs.T)
+    return {name: float(column[0]) for name, column in zip(maneuvers.input_names, inputs.T)
             if is_constant(column)}
 
 
@@ -85,7 +85,9 @@ def _start(maneuver, column: int) -> tuple[float, float]:
 def _check_gravity(maneuvers: ManeuverSet) -> bool:
     """Warn when ``az`` includes 1 g; return whether it did."""
     system = unit_system(maneuvers.units)
-    az = np.concatenate([m.outputs[:, OUTPUT_CHANNELS.index("az")] for m in maneuvers])
+    if "az" not in maneuvers.output_names:
+        return False
+    az = np.concatenate([m.channel("az") for m in maneuvers])
     median = float(np.median(az))
     if abs(abs(median) - system.g) > ONE_G_TOLERANCE * system.g:
         return False
@@ -98,7 +100,7 @@ def _check_gravity(maneuvers: ManeuverSet) -> bool:
 
 def _check_offsets(maneuvers: ManeuverSet, skip: tuple[str, ...]) -> None:
     system = unit_system(maneuvers.units)
-    for column, name in enumerate(OUTPUT_CHANNELS):
+    for column, name in enumerate(maneuvers.output_names):
         if name in skip:
             continue
         offsets = []
@@ -125,8 +127,10 @@ def _check_rate_scale(maneuvers: ManeuverSet) -> None:
         return
     system = unit_system(maneuvers.units)
     to_deg = math.degrees(1.0) / system.angle_per_radian
-    columns = [OUTPUT_CHANNELS.index(n) for n in RATE_CHANNELS]
-    largest = max(float(np.max(np.abs(m.outputs[:, columns]))) for m in maneuvers) * to_deg
+    rates = [n for n in RATE_CHANNELS if n in maneuvers.output_names]
+    if not rates:
+        return
+    largest = max(float(np.max(np.abs(m.columns(rates)))) for m in maneuvers) * to_deg
     unit = system.label("q")
     value = f"{largest:.3g} deg/s" if unit == "deg/s" else \
         f"{largest / to_deg:.3g} {unit} ({largest:.3g} deg/s)"
@@ -155,7 +159,7 @@ def _check_flat_runs(maneuvers: ManeuverSet) -> None:
     """Outputs that sit on one value: at the record's extreme (clipping) or not (dropout)."""
     system = unit_system(maneuvers.units)
     for m in maneuvers:
-        for column, name in enumerate(OUTPUT_CHANNELS):
+        for column, name in enumerate(m.output_names):
             record = m.outputs[:, column]
             if is_constant(record):
                 continue

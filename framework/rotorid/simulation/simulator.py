@@ -229,6 +229,11 @@ class Simulator:
     def _initial_states(self, initial_states) -> np.ndarray:
         n, n_x = len(self.maneuvers), self.structure.n_states
         if initial_states is None:
+            for m in self.maneuvers:
+                if m.initial_state is not None and m.initial_state.shape != (n_x,):
+                    raise DataError(f"maneuver {m.name!r}: initial_state has "
+                                    f"{m.initial_state.size} values but the structure "
+                                    f"{n_x} states ({' '.join(self.structure.states)})")
             return np.array([np.zeros(n_x) if m.initial_state is None else m.initial_state
                              for m in self.maneuvers])
         states = np.asarray(initial_states, dtype=float)
@@ -585,7 +590,7 @@ def simulated_maneuvers(structure: ModelStructure, values, maneuvers: ManeuverSe
                         suffix: str = "") -> ManeuverSet:
     """The maneuver set with its outputs replaced by the simulation (names + ``suffix``)."""
     outputs = simulate(structure, values, maneuvers)
-    return ManeuverSet([m.with_outputs(y, name=m.name + suffix)
+    return ManeuverSet([m.with_outputs(y, name=m.name + suffix, output_names=structure.outputs)
                         for m, y in zip(maneuvers, outputs)], hold=maneuvers.hold)
 
 

@@ -1,0 +1,103 @@
+"""A longitudinal-only helicopter data set (no lat, ped, v, p, φ, r or ay columns) identifies
+with the ``longitudinal`` structure template through ``rotorid identify``.
+
+The data are the test's own: the longitudinal structure simulated at known derivatives from
+3211 and doublet inputs on long and coll, with white measurement noise, written as CSV files
+holding only time, long, coll, ax, az, q and theta.
+"""
+
+import json
+
+import numpy as np
+import pytest
+from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
+from rotorid.cli.main import main
+from rotorid.simulation.simulator import simulate
+
+CONDITION = FlightCondition(u0=60.0 * 0.3048, w0=4.0 * 0.3048, theta0=np.radians(4.0))
+TRUTH = {"X_u": -0.03, "X_w": 0.02, "X_q": 0.5, "X_long": -0.3, "Z_u": -0.05, "Z_w": -0.6,
+         "Z_q": 0.3, "Z_coll": -2.0, "M_u": 0.004, "M_w": 0.006, "M_q": -1.5, "M_long": 0.8,
+         "M_coll": 0.1}
+COLUMNS = ("time", "long", "coll", "ax", "az", "q", "theta")
+#: Noise standard deviations of ax az q θ (ft/s², ft/s², deg/s, deg).
+NOISE = np.array([0.05, 0.05, 0.05, 0.02])
+MODEL = """units = "flight-test"
+
+[condition]
+u0_fps = 60.0
+w0_fps = 4.0
+theta0_deg = 4.0
+
+[structure]
+template = "longitudinal"
+remove = ["X_coll", "Z_long"]
+"""
+
+
+def _multistep(time: np.ndarray, start: float, step: float, pattern) -> np.ndarray:
+    """A multistep of unit amplitude: ``pattern`` holds the sign and length (in steps) of each
+    pulse, starting at ``start`` s, ``step`` s per unit length."""
+    signal = np.zeros_like(time)
+    t = start
+    for sign, length in pattern:
+        signal[(time >= t) & (time < t + length * step)] = sign
+        t += length * step
+    return signal
+
+
+def _data(tmp_path):
+    structure = ModelStructure.populated(CONDITION, "longitudinal").with_initial(TRUTH)
+    time = np.arange(0.0, 12.0, 0.02)
+    three_two_one_one = [(1, 3), (-1, 2), (1, 1), (-1, 1)]
+    doublet = [(1, 1), (-1, 1)]
+    records = {
+        "long3211": (_multistep(time, 1.0, 0.5, three_two_one_one), 0.0 * time),
+        "coll3211": (0.0 * time, _multistep(time, 1.0, 0.7, three_two_one_one)),
+        "mixed": (_multistep(time, 0.5, 1.0, doublet), -_multistep(time, 3.0, 0.8, doublet)),
+    }
+    maneuvers = ManeuverSet([
+        Maneuver(name, time, np.column_stack([2.0 * long, 3.0 * coll]),
+                 np.zeros((time.size, 4)), input_names=("long", "coll"),
+                 output_names=("ax", "az", "q", "theta"))
+        for name, (long, coll) in records.items()])
+    outputs = simulate(structure, None, maneuvers)
+    rng = np.random.default_rng(7)
+    paths = []
+    for m, y in zip(maneuvers, outputs):
+        noisy = y + rng.standard_normal(y.shape) * NOISE
+        table = np.column_stack([m.time, m.inputs, noisy])
+        path = tmp_path / f"{m.name}.csv"
+        lines = [",".join(COLUMNS)] + [",".join(f"{v:.10g}" for v in row) for row in table]
+        path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+        paths.append(str(path))
+    return paths
+
+
+def test_longitudinal_only_files_identify_with_the_longitudinal_template(tmp_path, capsys):
+    files = _data(tmp_path)
+    assert open(files[0], encoding="utf-8").readline().strip() == ",".join(COLUMNS)
+    model = tmp_path / "model.toml"
+    model.write_text(MODEL, encoding="utf-8")
+    out = tmp_path / "result.json"
+    status = main(["identify", str(model), *files, "--out", str(out), "--quiet"])
+    printed = capsys.readouterr().out
+    assert status == 0, printed
+    result = json.loads(out.read_text(encoding="utf-8"))
+    assert result["outputs"] == ["ax", "az", "q", "theta"]
+    estimated = {name: p["value"] for name, p in result["parameters"].items()}
+    assert set(estimated) == set(TRUTH)
+    for name, truth in TRUTH.items():
+        bound = result["parameters"][name]["cramer_rao"]
+        assert estimated[name] == pytest.approx(truth, abs=max(5 * bound, 1e-3)), name
+
+
+def test_a_channel_the_model_uses_but_the_files_lack_is_named(tmp_path, capsys):
+    files = _data(tmp_path)
+    model = tmp_path / "model.toml"
+    model.write_text(MODEL.replace('template = "longitudinal"\nremove = ["X_coll", "Z_long"]',
+                                   'populate = "all"'), encoding="utf-8")
+    status = main(["identify", str(model), *files, "--out", str(tmp_path / "r.json")])
+    error = capsys.readouterr().err
+    assert status != 0
+    assert "has no channel" in error and "structure template" in error
+    assert len(error.strip().splitlines()) == 1
