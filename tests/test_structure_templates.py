@@ -12,9 +12,11 @@ import tomllib
 import numpy as np
 import pytest
 from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
-from rotorid.errors import StructureError
+from rotorid.errors import EstimationError, StructureError
 from rotorid.model.modelfile import format_model, parse_model
+from rotorid.model.statespace import responding_outputs, state_space
 from rotorid.model.templates import TEMPLATES
+from rotorid.plugin.manager import create
 from rotorid.simulation.simulator import sensitivities
 from rotorid.simulation.transfer import frequency_response, response_sensitivities
 from rotorid.units import FOOT, G_SI
@@ -145,3 +147,20 @@ def test_a_model_file_selects_a_template_and_saves_it_back():
     saved = format_model(structure)
     assert 'template = "lateral"' in saved and 'populate = "all"' in saved
     assert parse_model(tomllib.loads(saved), "saved.toml") == structure
+
+
+def test_a_lateral_structure_exports_with_its_own_signals():
+    lateral = ModelStructure.populated(CONDITION, "lateral").with_initial(
+        {"Y_v": -0.1, "L_v": -0.02, "L_p": -2.0, "L_lat": 1.0, "N_r": -0.4, "N_ped": 0.5})
+    system = state_space(lateral)
+    assert (system.states, system.inputs, system.outputs) == (
+        ("v", "p", "phi", "r"), ("lat", "ped"), ("ay", "p", "phi", "r"))
+    for ours, reference in zip((system.a, system.b, system.c, system.d), lateral.matrices()):
+        np.testing.assert_array_equal(ours, reference)
+    assert responding_outputs(lateral)["ped"] == ("ay", "p", "phi", "r")
+
+
+def test_the_filter_error_estimator_names_the_template_it_cannot_fit():
+    longitudinal, _ = _paired_structures()
+    with pytest.raises(EstimationError, match="six-dof structures only, not the longitudinal"):
+        create("estimators", "filter-error").estimate(longitudinal, _maneuvers(2))

@@ -40,6 +40,7 @@ from rotorid.errors import EstimationError, SimulationDivergedError
 from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.models import LinearModel
 from rotorid.model.structure import OUTPUTS, STATES, ModelStructure
+from rotorid.model.templates import SIX_DOF
 from rotorid.plugin.manager import notify
 from rotorid.simulation.discretisation import COMPLEX_STEP
 from rotorid_output_error.levenberg_marquardt import Settings, run
@@ -205,6 +206,10 @@ class FilterErrorEstimator:
             raise EstimationError("the filter-error estimator identifies linear model "
                                   "structures (ModelStructure); use output error for a model "
                                   "of one's own")
+        if structure.template != SIX_DOF:
+            raise EstimationError(f"the filter-error estimator identifies six-dof structures "
+                                  f"only, not the {structure.template.name} template; use "
+                                  f"--estimator output-error for it")
         with blas.single_threaded():
             settings = Settings(self.max_iterations, self.cost_tolerance, self.step_tolerance)
             problem = FilterErrorProblem(structure, maneuvers, self.process_noise, settings)

@@ -24,7 +24,7 @@ import numpy as np
 from rotorid.errors import StructureError
 from rotorid.frozen import readonly_array
 from rotorid.model.derivatives import delay_parameter
-from rotorid.model.structure import CONTROLS, OUTPUTS, STATES, ModelStructure
+from rotorid.model.structure import ModelStructure
 
 
 def _readonly(value) -> np.ndarray:
@@ -133,39 +133,42 @@ def state_space(structure: ModelStructure, values=None, *, pade_order: int = 0
     delays = tuple(DelayedTerm(d.name, d.equation, d.variable, float(tau))
                    for d, tau in zip(structure.derivatives, table.delay) if tau > 0)
     a, b, c, d, names = _assemble(structure, table, pade_order)
-    columns = [j for j in range(len(CONTROLS)) if np.any(b[:, j]) or np.any(d[:, j])]
+    states, controls, outputs = structure.states, structure.controls, structure.outputs
+    columns = [j for j in range(len(controls)) if np.any(b[:, j]) or np.any(d[:, j])]
     if not columns:
         raise StructureError("no control drives a state or an output of this model; give it "
                              "control derivatives (X_long, M_long …)")
     rows, kept = _produced(a, b, c, d, columns)
-    units = {name: structure.units.label(name) for name in STATES + CONTROLS + OUTPUTS}
-    units.update({name: units[source] for name, source in names[len(STATES):]})
+    units = {name: structure.units.label(name) for name in states + controls + outputs}
+    units.update({name: units[source] for name, source in names[len(states):]})
     return NamedStateSpace(
         a[np.ix_(rows, rows)], b[np.ix_(rows, columns)], c[np.ix_(kept, rows)],
-        d[np.ix_(kept, columns)], [names[i][0] for i in rows], [CONTROLS[j] for j in columns],
-        [OUTPUTS[i] for i in kept], units, structure.units.name, delays, pade_order)
+        d[np.ix_(kept, columns)], [names[i][0] for i in rows], [controls[j] for j in columns],
+        [outputs[i] for i in kept], units, structure.units.name, delays, pade_order)
 
 
 def responding_outputs(structure: ModelStructure, values=None) -> dict[str, tuple[str, ...]]:
     """Control → the outputs that respond to it at all; an output missing from a control's
     list is identically zero in the response to that control (a decoupled model)."""
     a, b, c, d, _ = _assemble(structure, structure.terms(values), 0)
-    return {control: tuple(OUTPUTS[i] for i in _produced(a, b, c, d, [j])[1])
-            for j, control in enumerate(CONTROLS)}
+    return {control: tuple(structure.outputs[i] for i in _produced(a, b, c, d, [j])[1])
+            for j, control in enumerate(structure.controls)}
 
 
 def _produced(a, b, c, d, columns) -> tuple[list[int], list[int]]:
     """The states the input ``columns`` reach and the outputs that depend on them."""
     rows = _reachable(a, b[:, columns])
-    return rows, [i for i in range(len(OUTPUTS)) if np.any(c[i, rows]) or np.any(d[i, columns])]
+    return rows, [i for i in range(c.shape[0]) if np.any(c[i, rows]) or np.any(d[i, columns])]
 
 
 def _assemble(structure: ModelStructure, table, pade_order: int):
-    """Full A, B, C, D (8 states plus the Padé states) and (name, source) of every state."""
+    """Full A, B, C, D (the structure's n states plus the Padé states) and (name, source) of
+    every state."""
+    n_states = structure.n_states
     a = structure.known_state_matrix()
-    b = np.zeros((len(STATES), len(CONTROLS)))
+    b = np.zeros((n_states, structure.n_controls))
     c = structure.known_output_matrix()
-    d = np.zeros((len(OUTPUTS), len(CONTROLS)))
+    d = np.zeros((structure.n_outputs, structure.n_controls))
     groups: dict[tuple[int, float], list] = {}
     for derivative, eq, src, gain, tau, out in zip(
             structure.derivatives, table.equation, table.source, table.gain, table.delay,
@@ -173,9 +176,9 @@ def _assemble(structure: ModelStructure, table, pade_order: int):
         if pade_order and tau > 0:
             groups.setdefault((int(src), float(tau)), []).append((derivative.name, eq, gain, out))
             continue
-        _add(a, b, c, d, eq, src, out, gain, state_gain=None)
-    names = [(s, s) for s in STATES]
-    sources = STATES + CONTROLS
+        _add(a, b, c, d, eq, src, out, gain, n_states, state_gain=None)
+    names = [(s, s) for s in structure.states]
+    sources = structure.states + structure.controls
     for (src, tau), terms in groups.items():
         fa, fb, fc, fd = pade_realisation(tau, pade_order)
         first = a.shape[0]
@@ -187,19 +190,20 @@ def _assemble(structure: ModelStructure, table, pade_order: int):
         c = np.pad(c, ((0, 0), (0, pade_order)))
         block = slice(first, first + pade_order)
         a[block, block] = fa
-        if src < len(STATES):
+        if src < n_states:
             a[block, src] = fb[:, 0]
         else:
-            b[block, src - len(STATES)] = fb[:, 0]
+            b[block, src - n_states] = fb[:, 0]
         for _, eq, gain, out in terms:
-            _add(a, b, c, d, eq, src, out, gain * fd[0, 0], state_gain=(block, gain * fc[0]))
+            _add(a, b, c, d, eq, src, out, gain * fd[0, 0], n_states,
+                 state_gain=(block, gain * fc[0]))
     return a, b, c, d, names
 
 
-def _add(a, b, c, d, eq, src, out, gain, state_gain) -> None:
+def _add(a, b, c, d, eq, src, out, gain, n_states: int, state_gain) -> None:
     """Add a term ``gain·source`` to equation ``eq`` (and to output ``out`` when ≥ 0), plus
-    ``state_gain = (columns, row)`` on the Padé states of a delayed source."""
-    n_states = len(STATES)
+    ``state_gain = (columns, row)`` on the Padé states of a delayed source; sources below
+    ``n_states`` are states, the others controls."""
     targets = [(a, b, eq)] + ([(c, d, out)] if out >= 0 else [])
     for states, controls, row in targets:
         if src < n_states:
