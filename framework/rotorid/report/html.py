@@ -9,7 +9,9 @@ Per case (``<out>/<case>/``):
   verified sweep pair (figs. 4, 5, 9, 10, 12, 14, 16, 18);
 * ``figures/bode_<output>_<input>.{png,svg}``: Bode overlays of truth and model with delays;
 * ``tables/removed.csv``, ``tables/parameters.csv`` (Appendix B), ``tables/key_derivatives.csv``,
-  ``tables/checks.csv`` (the paper's claims, measured);
+  ``tables/checks.csv`` (the paper's claims, measured); with ``[compare] frequency``
+  ``tables/comparison_costs.csv`` and ``tables/comparison_parameters.csv`` (the
+  frequency-domain fit beside the time-domain fit);
 * ``report.html`` linking all of it.
 
 Per study: ``<out>/report.html``, a summary of every case linking the case reports.
@@ -209,6 +211,63 @@ def verification_rows(result) -> list[list[str]]:
     return rows
 
 
+def comparison_cost_rows(result) -> list[list[str]]:
+    """With ``[compare] frequency``: J per pair of the time- and frequency-domain fits of each
+    model, their sum, and both fits' RMSE and worst TIC on the identification multisteps."""
+    rows = [["model", "pair", "time-domain fit", "frequency-domain fit"]]
+    for label, comparison in result.frequency_comparison.items():
+        costs = comparison.pair_costs
+        for pair in costs["time"]:
+            rows.append([label, f"J {pair}", _number(costs["time"][pair], 3),
+                         _number(costs["frequency"][pair], 3)])
+        rows.append([label, "J total", *(_number(sum(costs[m].values()), 4)
+                                         for m in ("time", "frequency"))])
+        metrics = comparison.time_metrics
+        rows.append([label, "multistep RMSE", *(
+            "diverges" if metrics[m] is None else _number(metrics[m].rmse, 3)
+            for m in ("time", "frequency"))])
+        rows.append([label, "multistep TIC, worst output", *(
+            "diverges" if metrics[m] is None else _number(float(np.max(metrics[m].tic)), 3)
+            for m in ("time", "frequency"))])
+    return rows
+
+
+def comparison_parameter_rows(result) -> list[list[str]]:
+    """With ``[compare] frequency``: each model's parameters, time-domain estimate and
+    frequency-domain fit, with their Cramér-Rao bounds."""
+    rows = [["model", "parameter", "time: value", "time: CR", "frequency: value",
+             "frequency: CR"]]
+    for label, comparison in result.frequency_comparison.items():
+        fits = (result.estimates[label], comparison.frequency_estimate)
+        for name in fits[0].parameter_names:
+            row = [label, name]
+            for estimate in fits:
+                i = estimate.index(name)
+                row += [_number(float(estimate.values[i])),
+                        _number(float(estimate.cramer_rao[i]), 3)]
+            rows.append(row)
+    return rows
+
+
+def comparison_html(result) -> str:
+    """The case report's section on the frequency-domain fit beside the time-domain fit
+    (empty unless the case ran it)."""
+    if not result.frequency_comparison:
+        return ""
+    runs = "; ".join(f"{label}: {c.frequency_estimate.iterations} iterations, "
+                     f"{c.frequency_estimate.stop_reason}, {c.seconds:.1f} s"
+                     for label, c in result.frequency_comparison.items())
+    return "\n".join([
+        "<h2>Frequency-domain fit beside the time-domain fit</h2>",
+        "<p>Each model's structure fitted to the verification sweeps' frequency responses by "
+        "the mismatch cost J (frequency-response estimator, from equation-error start values), "
+        "then judged like the time-domain fit: J per pair on the same measured responses, "
+        f"RMSE and TIC on the identification multisteps. Fits: {html.escape(runs)}.</p>",
+        _html_table(comparison_cost_rows(result)),
+        "<h3>Estimates with Cramér-Rao bounds</h3>",
+        _html_table(comparison_parameter_rows(result))])
+
+
 def _csv(rows: Sequence[Sequence[str]]) -> str:
     buffer = io.StringIO()
     csv.writer(buffer, lineterminator="\n").writerows(rows)
@@ -376,6 +435,7 @@ def case_html(result, figures: Mapping[str, list[str]], claims: Sequence[Check])
         "<p>Truth estimated from the sweeps, the model's single-input response (simulated, or "
         "apparent for an unstable model), and its analytic response with exact delays.</p>",
         _images(figures.get("bode", [])),
+        comparison_html(result),
     ]
     return _page(f"rotorid study — case {result.name}", "\n".join(body))
 
@@ -394,6 +454,10 @@ def write_case_outputs(result, directory: str | Path) -> Path:
                        ("key_derivatives", key_derivative_rows(result)),
                        ("verification", verification_rows(result)), ("checks", checks)):
         atomic_write(tables / f"{name}.csv", _csv(rows))
+    if result.frequency_comparison:
+        atomic_write(tables / "comparison_costs.csv", _csv(comparison_cost_rows(result)))
+        atomic_write(tables / "comparison_parameters.csv",
+                     _csv(comparison_parameter_rows(result)))
     return atomic_write(directory / "report.html", case_html(result, figures, claims))
 
 

@@ -44,6 +44,7 @@ _TABLES = {
     "reduction": {"criteria", "continue_to_zero", "rule", "rmse_tolerance", "warm_start"},
     "delays": {"derivatives", "initial", "upper", "threshold", "starts", "seed"},
     "quick": {"duration_scale", "continue_to_zero", "warm_start"},
+    "compare": {"frequency", "pairs", "band_max"},
 }
 _TOP_LEVEL = {"name", "description", *_TABLES}
 #: Case settings by table and key: the :class:`FlightCase` field and its converter.
@@ -60,6 +61,9 @@ _FIELDS = {
     ("delays", "threshold"): ("delay_threshold", float),
     ("delays", "starts"): ("delay_starts", int),
     ("delays", "seed"): ("delay_seed", int),
+    ("compare", "frequency"): ("compare_frequency", bool),
+    ("compare", "pairs"): ("compare_pairs", tuple),
+    ("compare", "band_max"): ("compare_band_max", float),
 }
 
 #: What each converter of :data:`_FIELDS` reads, for the error messages.
@@ -74,6 +78,10 @@ class FlightCase:
     ``data`` is the ``[data]`` table: ``source`` names the data source, the other keys are
     its settings. Delay bounds and the initial delay are in s; ``delay_threshold`` is the
     normalised Cramér-Rao bound (%) above which a delay counts as undetermined and is dropped.
+    With ``compare_frequency`` each identified model is also fitted to the verification
+    sweeps' frequency responses (:mod:`rotorid.study.comparison`) on ``compare_pairs``
+    (default: the verification pairs) up to ``compare_band_max`` rad/s (default: each pair's
+    coherent range).
     """
 
     name: str
@@ -97,6 +105,9 @@ class FlightCase:
     delay_threshold: float = 20.0        # the paper's Cramér-Rao threshold
     delay_starts: int = attrs.field(default=1, validator=attrs.validators.ge(1))
     delay_seed: int = 0
+    compare_frequency: bool = False
+    compare_pairs: tuple[str, ...] = ()
+    compare_band_max: float | None = None
     quick_settings: Mapping = attrs.field(factory=dict, converter=dict)
     is_quick: bool = False
 
@@ -109,6 +120,12 @@ class FlightCase:
     def data_settings(self) -> dict:
         """The data source's settings: ``[data]`` without ``source``."""
         return {k: v for k, v in self.data.items() if k != "source"}
+
+    @property
+    def frequency_pairs(self) -> tuple[str, ...]:
+        """The pairs the frequency-domain comparison fits (``[compare] pairs``, default the
+        verification pairs)."""
+        return self.compare_pairs or self.pairs
 
     # ----------------------------------------------------------------- construction
     @classmethod

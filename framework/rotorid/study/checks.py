@@ -17,6 +17,7 @@ from rotorid.estimation.reduction import RULES
 from rotorid.model.modelfile import parse_model
 from rotorid.model.structure import FlightCondition
 from rotorid.plugin.manager import registry
+from rotorid.study.comparison import FREQUENCY_ESTIMATOR
 from rotorid.verification.pairs import parse_pair
 
 #: A case name is a directory of the results: letters, digits and ``_ . + -``, never a path.
@@ -57,6 +58,20 @@ def check_case(case, where: str) -> None:
     if not (math.isfinite(case.rmse_tolerance) and case.rmse_tolerance >= 0):
         raise DataFileError(f"{where}: [reduction] rmse_tolerance must be a fraction ≥ 0 "
                             f"(e.g. 0.01), got {case.rmse_tolerance!r}")
+    _check_compare(case, where)
+
+
+def _check_compare(case, where: str) -> None:
+    """The ``[compare]`` settings: the frequency-domain estimator, the pairs and the band."""
+    if case.compare_frequency:
+        check_registered("estimators", FREQUENCY_ESTIMATOR, where, "[compare] frequency needs "
+                         "the estimator")
+    for pair in case.compare_pairs:
+        _wrapped(lambda: parse_pair(pair), where, "[compare] pairs")
+    band_max = case.compare_band_max
+    if band_max is not None and not (math.isfinite(band_max) and band_max > 0):
+        raise DataFileError(f"{where}: [compare] band_max must be a positive frequency in "
+                            f"rad/s (e.g. 10.0), got {band_max!r}")
 
 
 def _check_name(name: str, where: str) -> None:

@@ -6,6 +6,7 @@ For every :class:`~rotorid.study.case.FlightCase`::
     fully populated structure ─► reduction loop (criteria plugins) ─► selected structure
     + delays on the surviving rotor-affected derivatives ─► re-estimation
     verification: time-domain metrics and sweep frequency responses of both models
+    (+ with [compare] frequency: each model's structure fitted to the sweeps' responses)
     ─► CaseResult ─► result.json, figures, report
 
 Results live in ``<out>/<case>/``: ``data/`` (what the data source stores), ``steps/`` (one
@@ -41,6 +42,7 @@ from rotorid.plugin.manager import create, notify, using
 from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase
 from rotorid.study.checks import check_case, check_cases
+from rotorid.study.comparison import compare_frequency_fit
 from rotorid.study.delays import with_delays
 from rotorid.study.persistence import load_steps, prepare_directory, save_result, save_step
 from rotorid.study.result import MODELS, CaseResult
@@ -168,6 +170,29 @@ def _verify(case: FlightCase, structures, estimates, ident: ManeuverSet,
     return metrics, verification
 
 
+def _compare(case: FlightCase, structures, estimates, metrics, ident: ManeuverSet,
+             verif: ManeuverSet | None, report: Progress) -> dict:
+    """The frequency-domain fit of each model beside its time-domain fit, by model label
+    (``{}`` unless the case asks for it with ``[compare] frequency``)."""
+    if not case.compare_frequency:
+        return {}
+    if verif is None:
+        raise DataError(f"case {case.name}: [compare] frequency fits the verification sweeps, "
+                        f"but the case has none; add sweeps to [data] verification or drop "
+                        f"[compare] frequency")
+    band_max = math.inf if case.compare_band_max is None else case.compare_band_max
+    comparisons = {}
+    for label in MODELS:
+        comparison = compare_frequency_fit(structures[label], estimates[label], metrics[label],
+                                           verif, ident, case.frequency_pairs, band_max)
+        comparisons[label] = comparison
+        costs = {m: sum(c.values()) for m, c in comparison.pair_costs.items()}
+        iterations = comparison.frequency_estimate.iterations
+        report(case.name, f"frequency-domain fit ({label}): {iterations} iter, J "
+                          f"{costs['frequency']:.1f} (time-domain fit's {costs['time']:.1f})")
+    return comparisons
+
+
 def _durations(clock: dict) -> dict:
     keys = list(clock)
     return {k: clock[k] - clock[p] for p, k in zip(keys, keys[1:])}
@@ -216,12 +241,16 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     estimates = {"no delays": selected.estimate, "with delays": delayed_estimate}
     metrics, verification = _verify(case, structures, estimates, ident, verif, report)
     clock["verification"] = time.perf_counter()
+    comparison = _compare(case, structures, estimates, metrics, ident, verif, report)
+    if comparison:
+        clock["frequency comparison"] = time.perf_counter()
     truth = data.truth
     result = CaseResult(
         case, condition, ident, verif, path, structures, estimates, metrics, verification,
         None if truth is None else truth_derivatives(truth, condition, structure),
         _durations(clock), dropped, resumed,
-        None if truth is None else truth_equivalent_delays(truth, condition, delayed))
+        None if truth is None else truth_equivalent_delays(truth, condition, delayed),
+        comparison)
     save_result(directory, result)
     if report_writer is not None:
         report(case.name, "figures and report")

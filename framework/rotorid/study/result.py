@@ -14,6 +14,7 @@ from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.notebook import case_result_html, case_result_summary
 from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase
+from rotorid.study.comparison import FrequencyComparison
 from rotorid.verification.compare import VerificationResult
 from rotorid.verification.equivalent_delays import EquivalentDelays
 from rotorid.verification.metrics import TimeDomainMetrics
@@ -42,6 +43,8 @@ class CaseResult:
     dropped_delays: tuple[str, ...] = ()
     resumed_steps: int = 0           # finished reduction steps reused from an earlier run
     truth_delays: EquivalentDelays | None = None   # the truth model's equivalent delays
+    # by model label, with [compare] frequency: the frequency-domain fit beside the model's
+    frequency_comparison: Mapping[str, FrequencyComparison] = attrs.field(factory=dict)
 
     @property
     def name(self) -> str:
@@ -85,6 +88,8 @@ class CaseResult:
                                        for label, v in self.verification.items()},
             "key_derivatives": self.key_derivatives(),
             "dropped_delays": list(self.dropped_delays),
+            "frequency_comparison": {label: c.summary()
+                                     for label, c in self.frequency_comparison.items()},
             "truth_equivalent_delays": (None if self.truth_delays is None
                                         else self.truth_delays.as_dict()),
             # What differs between an uninterrupted and a resumed run of the same case, and

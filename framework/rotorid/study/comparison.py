@@ -1,0 +1,87 @@
+"""The frequency-domain fit beside the time-domain fit of a case (``[compare] frequency``).
+
+For each identified model (no delays, with delays) the ``frequency-response`` estimator fits
+the same structure to the verification sweeps' frequency responses from zero (equation-error
+start values on the sweeps), the reverse of the paper. Both estimates are then judged on the
+same measures: Tischler's mismatch cost J per pair on the sweeps' measured responses, and the
+time-domain metrics (RMSE, TIC) on the identification multisteps.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from collections.abc import Mapping
+
+import attrs
+
+from rotorid.data import ManeuverSet
+from rotorid.errors import IdentifiabilityWarning, SimulationDivergedError
+from rotorid.estimation.equation_error import equation_error_start
+from rotorid.estimation.estimate import Estimate
+from rotorid.model.structure import ModelStructure
+from rotorid.plugin.manager import create
+from rotorid.simulation.simulator import simulate
+from rotorid.verification.metrics import TimeDomainMetrics, time_domain_metrics
+
+#: The estimator the comparison fits with.
+FREQUENCY_ESTIMATOR = "frequency-response"
+#: The two estimates compared, by method.
+METHODS = ("time", "frequency")
+
+
+@attrs.frozen(eq=False)
+class FrequencyComparison:
+    """One model's time-domain estimate beside its frequency-domain fit.
+
+    ``pair_costs`` is J per pair (dimensionless) by method; ``time_metrics`` the metrics on
+    the identification multisteps by method, ``None`` where the model's simulation diverges;
+    ``seconds`` the frequency-domain fit's wall time in s.
+    """
+
+    frequency_estimate: Estimate
+    pair_costs: Mapping[str, Mapping[str, float]]
+    time_metrics: Mapping[str, TimeDomainMetrics | None]
+    seconds: float
+
+    def summary(self) -> dict:
+        """The ``result.json`` record: the frequency-domain estimate, J per pair and the
+        multistep metrics of both methods (``null`` for a diverging simulation)."""
+        return {"frequency_estimate": self.frequency_estimate.as_dict(),
+                "pair_costs": {m: dict(c) for m, c in self.pair_costs.items()},
+                "time_metrics": {m: None if v is None else v.summary()
+                                 for m, v in self.time_metrics.items()},
+                "seconds": self.seconds}
+
+
+def _metrics(structure: ModelStructure, values, multisteps: ManeuverSet
+             ) -> TimeDomainMetrics | None:
+    """Multistep metrics of ``structure`` at ``values``; ``None`` when it diverges."""
+    try:
+        return time_domain_metrics(multisteps, simulate(structure, values, multisteps))
+    except SimulationDivergedError:
+        return None
+
+
+def compare_frequency_fit(structure: ModelStructure, time_estimate: Estimate,
+                          time_metrics: TimeDomainMetrics, sweeps: ManeuverSet,
+                          multisteps: ManeuverSet, pairs, band_max: float
+                          ) -> FrequencyComparison:
+    """Fit ``structure`` to the ``pairs`` of ``sweeps`` (J points up to ``band_max`` rad/s)
+    from zero and compare it with ``time_estimate`` (whose multistep ``time_metrics`` are
+    known)."""
+    estimator = create("estimators", FREQUENCY_ESTIMATOR, pairs=pairs, band=(0.0, band_max))
+    clock = time.perf_counter()
+    fit_data = estimator.fit_data(sweeps)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
+        fitted = estimator.estimate(structure, fit_data,
+                                    start=equation_error_start(structure, sweeps))
+    seconds = time.perf_counter() - clock
+    estimates = {"time": time_estimate.as_mapping(), "frequency": fitted.values}
+    return FrequencyComparison(
+        fitted,
+        {m: estimator.pair_costs(structure, estimates[m], fit_data) for m in METHODS},
+        {"time": time_metrics,
+         "frequency": _metrics(structure, fitted.values, multisteps)},
+        seconds)
