@@ -1,16 +1,16 @@
 """The frequency-domain fit beside the time-domain one, on a study's data (docs/study.md).
 
-Reads the output directory of ``rotorid study hover --quick --no-figures --out DIR``: its data
-(multisteps and sweeps) and ``result.json`` (the selected structure and the time-domain
-estimates). Fits the selected structure, with the delays the study kept, to the sweeps'
+Reads a case directory of ``rotorid study hover --quick --no-figures --out DIR`` (``DIR/hover``;
+likewise ``DIR/forward``): its data (multisteps and sweeps) and ``result.json`` (the selected
+structure and the time-domain estimates). Fits the selected structure, with the delays the study kept, to the sweeps'
 frequency responses from zero (equation-error start values on the sweeps), then prints for
 both estimates the mismatch cost J per pair on the same measured responses and the
 time-domain RMSE (the paper's eq. 18) on the multisteps.
 
 Run from the repository root::
 
-    python docs/examples/frequency_vs_time.py DIR/hover [--pairs q/long,...] [--band-max 10]
-        [--paper-delays]
+    python docs/examples/frequency_vs_time.py DIR/hover|DIR/forward [--pairs q/long,...]
+        [--band-max 10] [--paper-delays]
 """
 
 from __future__ import annotations
