@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -22,12 +23,16 @@ import numpy as np
 import pytest
 import rotorid
 from rotorid.cli.main import MESSAGE_LIMIT, main, one_line
-from rotorid.errors import DataFileError, ExitStatus
+from rotorid.data import OUTPUT_CHANNELS
+from rotorid.errors import DataFileError, ExitStatus, SimulationDivergedError
+from rotorid.estimation.models import LinearModel
 from rotorid.io import parse_number
+from rotorid.model.modelfile import load_model
 from rotorid.study.case import FlightCase
 from rotorid.study.persistence import load_delays, load_steps, prepare_directory
 from rotorid_files.formats import write_maneuver
 from rotorid_helisim import store
+from rotorid_output_error.levenberg_marquardt import Problem, Settings, run
 from test_cli_simulate import MODEL, VALUES
 
 HEADER = "time,long,lat,coll,ped,ax,az,q,theta,ay,p,phi,r"
@@ -133,11 +138,15 @@ DATA_FILES = [
     *[(f"number-{text}", _csv_with(text), ["bad.csv", "'long'", f"{text!r} is not a number"])
       for text in ("1e", "--1", "+-1", "1.2.3", "½", "١", "0b1", "1j", "true", "e3", "1__0",
                    "0o7", "Infinity5", "1 000")],
+    *[(f"number-{text}", _csv_with(text), ["bad.csv", "'long'", f"{text!r} is not a number"])
+      for text in ("1e+", ".", "-", "+", "1e1.5", "0x1p3", "1d3", "1.0f", "5%", "∞")],
     *[(f"non-finite-{text}", _csv_with(text), ["bad.csv", "'long'", "NaN or infinite"])
-      for text in ("nan", "NaN", "inf", "-inf", "1e999", "-1e400")],
+      for text in ("nan", "NaN", "inf", "-inf", "1e999", "-1e400", "+inf", "INF", "-nan",
+                   "infinity", "1e309")],
     *[(f"cut-{suffix[1:]}-{keep}", _cut(suffix, keep), [f"cut{suffix}"])
       for suffix in (".npz", ".mat") for keep in (1, 12, 126, 127, 300, 0.5, 0.9)],
-    *[(f"cut-csv-{keep}", _cut(".csv", keep), ["cut.csv"]) for keep in (1, 40, 0.5, 0.93)],
+    *[(f"cut-csv-{keep}", _cut(".csv", keep), ["cut.csv"])
+      for keep in (1, 2, 40, 100, 0.5, 0.93)],
     ("time-jump-at-row-20", _csv_text(_csv_rows(times=_times(_jump_at_row_20))),
      ["bad.csv", "not uniformly sampled at row 20"]),
     ("time-back-at-row-7", _csv_text(_csv_rows(times=_times(_back_at_row_7))),
@@ -155,8 +164,9 @@ DATA_FILES = [
     ("zero-npz", _bytes("zero.npz", b"\0" * 64), ["zero.npz"]),
     ("unknown-suffix", _bytes("data.xlsx", b"PK"), ["data.xlsx", "unknown maneuver file format"]),
     ("fifo", _fifo, ["pipe.csv", "neither a regular file nor a directory"]),
-    ("dev-null", lambda tmp_path: Path("/dev/null"),
-     ["/dev/null", "neither a regular file nor a directory"]),
+    *[(f"device-{device}", lambda tmp_path, device=device: Path(f"/dev/{device}"),
+       [f"/dev/{device}", "neither a regular file nor a directory"])
+      for device in ("null", "zero")],
     ("empty-directory", _empty_directory, ["nothing", "no maneuver files"]),
     ("directory-named-csv", _directory_named_csv, ["folder.csv", "no maneuver files"]),
     ("missing", lambda tmp_path: tmp_path / "absent.csv", ["absent.csv", "no such file"]),
@@ -210,6 +220,10 @@ def _copy_column(source, target):
     return change
 
 
+def _model_with(old, new):
+    return _simulate_inputs(_good_csv, model_text=MODEL.replace(old, new))
+
+
 NO_FREE_PARAMETER = MODEL.split("[structure]")[0] + '[structure]\npopulate = "none"\n'
 TEN_SECOND_DELAY = MODEL.replace("delay = 0.0", "delay = { initial = 10.0, fixed = true }")
 
@@ -244,8 +258,28 @@ COMMANDS = [
      ["maneuver m0", "every fitted output is constant"]),
     ("identify-duplicated-output", _identify(_copy_column(2, 5)), ExitStatus.ERROR,
      ["outputs 'q' and 'p' hold the same record"]),
-    ("identify-too-few-samples", _identify(samples=3), ExitStatus.ERROR,
+    ("identify-too-few-samples", _identify(samples=3, dt=0.5), ExitStatus.ERROR,
      ["48 output samples cannot determine"]),
+    *[(f"identify-{n}-sample-records", _identify(samples=n), ExitStatus.ERROR,
+       ["maneuver m0", f"({n} samples)", "shorter than the 1 s"]) for n in (2, 5, 20)],
+    ("identify-time-in-minutes", _identify(dt=0.02 / 60, samples=300), ExitStatus.ERROR,
+     ["maneuver m0", "lasts 0.09967 s", "in minutes"]),
+    ("identify-time-in-ms-at-5-khz", _identify(dt=0.2, samples=20000), ExitStatus.ERROR,
+     ["maneuver m0", "lasts 4000 s", "longer than any identification maneuver", "in ms"]),
+    ("identify-unknown-output", lambda tmp_path: [*_identify()(tmp_path), "--outputs", "q,zz"],
+     ExitStatus.ERROR, ["unknown output(s) 'zz' to fit", "ax, az"]),
+    *[(f"identify-zero-{name}", _identify(_set_column(k, 0.0)), ExitStatus.ERROR,
+       [f"output {name!r} is constant", "--outputs"])
+      for k, name in enumerate(OUTPUT_CHANNELS) if name != "q"],
+    *[(f"identify-{first}-equals-{second}", _identify(_copy_column(i, j)), ExitStatus.ERROR,
+       [f"outputs {first!r} and {second!r} hold the same record"])
+      for i, j, first, second in ((0, 4, "ax", "ay"), (3, 6, "theta", "phi"),
+                                  (5, 7, "p", "r"))],
+    ("identify-unknown-estimator", lambda tmp_path: [*_identify()(tmp_path), "--estimator",
+                                                     "magic"],
+     ExitStatus.ERROR, ["no estimator named 'magic'", "rotorid plugins"]),
+    ("identify-unknown-noise", lambda tmp_path: [*_identify()(tmp_path), "--noise", "pink"],
+     ExitStatus.USAGE, ["argument --noise", "'pink'"]),
     ("identify-fixed-delay-longer-than-records", _identify(model=TEN_SECOND_DELAY),
      ExitStatus.ERROR, ["delay tau_L_lat = 10 s", "record m0 (3.98 s)"]),
     ("simulate-delay-longer-than-records", _simulate_inputs(_good_csv, {"tau_L_lat": 100.0}),
@@ -255,6 +289,31 @@ COMMANDS = [
        ExitStatus.ERROR, ["model.toml", words])
       for text, words in (("1e6", "1e+06 kt is beyond any rotorcraft"),
                           ("-5.0", "≥ 0 kt"), ("nan", "finite"), ('"70"', "airspeed_kt"))],
+    ("model-not-toml", _model_with("[structure]", "[[[structure"), ExitStatus.ERROR,
+     ["model.toml", "not a valid TOML file", "line"]),
+    ("model-unknown-derivative", _simulate_inputs(
+        _good_csv, model_text=MODEL + "\n[derivatives.X_zz]\ninitial = 1.0\n"),
+     ExitStatus.ERROR, ["model.toml", "'X_zz'", "unknown variable 'zz'"]),
+    ("model-unknown-template", _model_with('populate = "all"', 'template = "tandem"'),
+     ExitStatus.ERROR, ["model.toml", "template = 'tandem'", "'six-dof'"]),
+    ("model-negative-delay", _model_with("delay = 0.0", "delay = -0.1"), ExitStatus.ERROR,
+     ["model.toml", "negative", "-0.1 s"]),
+    ("model-unknown-units", _model_with('units = "flight-test"', 'units = "imperial"'),
+     ExitStatus.ERROR, ["model.toml", "'imperial'", "'flight-test'"]),
+    ("model-unknown-condition-key", _model_with("theta0_deg", "pitch_deg"), ExitStatus.ERROR,
+     ["model.toml", "'pitch_deg'"]),
+    *[(f"model-{key}-{value}", _model_with("theta0_deg = 2.0", f"{key}_deg = {value}"),
+       ExitStatus.ERROR, ["model.toml", f"{key} = {value:g}°", "not within ±90°", "unit"])
+      for key, value in (("theta0", 400.0), ("theta0", -90.0), ("phi0", 180.0))],
+    ("model-missing", lambda tmp_path: ["simulate", str(tmp_path / "none.toml"),
+                                        str(_good_csv(tmp_path)), "--out", str(tmp_path / "out")],
+     ExitStatus.ERROR, ["none.toml", "does not exist"]),
+    ("values-unknown-parameter", _simulate_inputs(_good_csv, {"X_zz": 1.0}), ExitStatus.ERROR,
+     ["unknown or non-free parameter(s) ['X_zz']"]),
+    ("values-not-a-number", _simulate_inputs(_good_csv, {"X_u": "fast"}), ExitStatus.ERROR,
+     ["values.json", "X_u must be numbers"]),
+    ("values-not-an-object", _simulate_inputs(_good_csv, [1, 2]), ExitStatus.ERROR,
+     ["values.json", "must hold a JSON object"]),
     ("model-body-velocity-in-wrong-unit", _simulate_inputs(
         _good_csv, model_text=MODEL.replace("airspeed_kt = 60.0", "u0_fps = 5000.0")),
      ExitStatus.ERROR, ["model.toml", "beyond any rotorcraft"]),
@@ -297,6 +356,27 @@ COMMANDS = [
      ExitStatus.USAGE, ["--seed", "'x'"]),
     ("montecarlo-negative-seed", _plain("montecarlo", "hover", "--runs", "3", "--seed", "-1",
                                         "--out", "{tmp}/out"), ExitStatus.USAGE, ["--seed"]),
+    *[(f"montecarlo-runs-{runs}", _plain("montecarlo", "hover", "--runs", runs, "--out",
+                                         "{tmp}/out"), ExitStatus.USAGE,
+       ["argument --runs", "≥ 2", repr(runs)]) for runs in ("1", "0", "-3", "x", "1.5")],
+    *[(f"{command}-seed-{text}", _plain(command, "hover", "--seed", text, "--out", "{tmp}/out"),
+       ExitStatus.USAGE, ["--seed", repr(text)])
+      for command, text in (("generate", "1e3"), ("study", " "), ("generate", "0x1"))],
+    # executors
+    ("generate-unknown-case", _plain("generate", "cruise", "--out", "{tmp}/out"),
+     ExitStatus.USAGE, ["invalid choice: 'cruise'"]),
+    ("study-unknown-executor", _plain("study", "hover", "--executor", "gpu", "--out",
+                                      "{tmp}/out"), ExitStatus.USAGE, ["--executor", "'gpu'"]),
+    ("study-scheduler-without-dask", _plain("study", "hover", "--scheduler", "tcp://x:1",
+                                            "--out", "{tmp}/out"), ExitStatus.ERROR,
+     ["--scheduler only applies to --executor dask"]),
+    ("study-dask-without-scheduler", _plain("study", "hover", "--executor", "dask", "--out",
+                                            "{tmp}/out"), ExitStatus.ERROR,
+     ["--executor dask needs --scheduler"]),
+    ("verify-without-result", _plain("verify", "model.toml", "--out", "{tmp}/out"),
+     ExitStatus.USAGE, ["RESULT.json"]),
+    ("verify-missing-result", _plain("verify", "{tmp}/r.json", "{tmp}/sweeps", "--out",
+                                     "{tmp}/out"), ExitStatus.ERROR, ["r.json", "does not exist"]),
     # --out of the wrong kind
     *[(f"{command[0]}-out-is-a-file", _with_out(command, _regular_file), ExitStatus.USAGE,
        ["--out", "taken", "not a directory"])
@@ -326,6 +406,9 @@ COMMANDS = [
      ["airspeed_kt", "≥ 0"]),
     ("trim-nan-airspeed", _plain("trim", "--airspeed-kt", "nan"), ExitStatus.ERROR,
      ["airspeed_kt", "finite"]),
+    *[(f"trim-airspeed-{text}", _plain("trim", f"--airspeed-kt={text}"), ExitStatus.ERROR,
+       ["airspeed_kt", words]) for text, words in (("inf", "finite"), ("-inf", "finite"),
+                                                   ("200.5", "200 kt"), ("1e400", "finite"))],
     ("trim-word-airspeed", _plain("trim", "--airspeed-kt", "fast"), ExitStatus.USAGE,
      ["--airspeed-kt", "'fast'"]),
     ("speeds-too-many", _plain("study", "speed-sweep", "--speeds", "0:200:0.001", "--out",
@@ -388,6 +471,86 @@ def test_an_unwritable_out_is_refused_before_any_work(tmp_path, capsys):
     locked.mkdir(mode=0o500)
     assert _run(["generate", "hover", "--out", str(locked / "data")]) == ExitStatus.USAGE
     assert "cannot write into" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------- numerics
+def _doublets(tmp_path, count=4, n=300, scale=1.0):
+    """The model file's structure and ``count`` maneuvers of doublets, one axis each."""
+    (tmp_path / "model.toml").write_text(MODEL)
+    t = np.arange(n) * 0.02
+    maneuvers = []
+    for i in range(count):
+        u = np.zeros((n, 4))
+        u[(t > 0.5) & (t < 1.5), i] = 2.0 * scale
+        u[(t >= 1.5) & (t < 2.5), i] = -2.0 * scale
+        maneuvers.append(rotorid.Maneuver(f"m{i}", t, u, np.zeros((n, 8))))
+    return load_model(tmp_path / "model.toml"), rotorid.ManeuverSet(maneuvers)
+
+
+UNSTABLE_ROLL = {**VALUES, "L_p": 40.0}
+
+
+def test_a_divergence_names_the_maneuver_the_state_and_when(tmp_path):
+    structure, maneuvers = _doublets(tmp_path)
+    with pytest.raises(SimulationDivergedError) as caught:
+        rotorid.simulate(structure, UNSTABLE_ROLL, maneuvers)
+    message = str(caught.value)
+    found = re.fullmatch(r"simulation diverged: maneuver (m\d), state (\w+) reaches (\S+) "
+                         r"\(beyond 1e\+07\) at t = (\S+) s; .*", message)
+    assert found, message
+    name, state, size, when = found.groups()
+    assert (name, state) == ("m1", "p") and float(size) > 1e7     # the roll doublet, roll rate
+    # when: the record up to the sample before stays below the limit, one sample more does not
+    maneuver = maneuvers[1]
+    rotorid.simulate(structure, UNSTABLE_ROLL, rotorid.ManeuverSet([maneuver.head(
+        float(when) - maneuver.dt)]))
+    with pytest.raises(SimulationDivergedError):
+        rotorid.simulate(structure, UNSTABLE_ROLL, rotorid.ManeuverSet([maneuver.head(
+            float(when))]))
+
+
+def _problem(structure, maneuvers, measured):
+    model = LinearModel(structure)
+    return model, Problem(model, maneuvers, measured, np.ones(8), Settings())
+
+
+def test_a_start_without_finite_cost_says_what_diverged_before_suggesting_a_start(tmp_path):
+    structure, maneuvers = _doublets(tmp_path)
+    measured = rotorid.simulate(structure, VALUES, maneuvers)
+    model, problem = _problem(structure, maneuvers, measured)
+    start = structure.as_vector(UNSTABLE_ROLL)
+    with pytest.raises(SimulationDivergedError) as caught:
+        run(problem, start, model.bounds())
+    message = str(caught.value)
+    assert message.startswith("the start values give no finite cost: simulation diverged: "
+                              "maneuver m1, state p reaches"), message
+    assert message.index("at t = ") < message.index("start closer to a stable model")
+
+
+def test_a_start_whose_noise_covariance_is_singular_names_the_exact_outputs(tmp_path):
+    structure, maneuvers = _doublets(tmp_path, scale=1e-60)      # outputs of about 1e-60
+    measured = rotorid.simulate(structure, VALUES, maneuvers)
+    model, problem = _problem(structure, maneuvers, measured)
+    with pytest.raises(SimulationDivergedError) as caught:
+        run(problem, structure.as_vector(VALUES), model.bounds())
+    assert ("the noise covariance R is singular: the outputs ax, az, q, theta, ay, p, phi, r "
+            "are reproduced exactly (noise-free data?); use --noise diagonal") in str(caught.value)
+
+
+def test_noise_free_outputs_are_a_warning_naming_them(tmp_path, capsys):
+    structure, maneuvers = _doublets(tmp_path)
+    data = tmp_path / "flight"
+    data.mkdir()
+    for maneuver, y in zip(maneuvers, rotorid.simulate(structure, VALUES, maneuvers)):
+        write_maneuver(maneuver.with_outputs(y), data / f"{maneuver.name}.csv")
+    assert _run(["identify", str(tmp_path / "model.toml"), str(data), "--quiet",
+                 "--out", str(tmp_path / "result.json")]) == ExitStatus.OK
+    warnings = [line for line in capsys.readouterr().err.splitlines() if "exactly" in line]
+    assert len(warnings) == 1, warnings
+    assert warnings[0].startswith("rotorid identify: warning: the fit reproduces the outputs "
+                                  "'ax', 'az', 'q', 'theta', 'ay', 'p', 'phi', 'r' exactly "
+                                  "(residual RMS at most ")
+    assert "use --noise diagonal or leave them out with --outputs" in warnings[0]
 
 
 # ----------------------------------------------------------------- strict numbers, short errors

@@ -130,6 +130,19 @@ def test_verify_skips_the_pairs_a_decoupled_model_cannot_produce(flight, capsys)
     assert summary["average_cost"] is not None
 
 
+def test_verify_of_only_pairs_a_decoupled_model_cannot_produce_is_one_line(flight, capsys):
+    root, result = flight
+    out = root / "verification-none"
+    status = main(["verify", str(result), str(root / "sweeps"), "--pairs", "p/long",
+                   "--out", str(out), "--no-figures"])
+    lines = capsys.readouterr().err.splitlines()
+    assert status == ExitStatus.ERROR
+    assert lines == ["rotorid verify: error: no pair can be verified: p/long: the model's p "
+                     "does not respond to long (no derivative couples them): its response is "
+                     "identically zero"]
+    assert not (out / "verification.json").exists()
+
+
 def test_verification_json_carries_the_responses_it_judged(flight):
     root, result = flight
     out = root / "verification-arrays"

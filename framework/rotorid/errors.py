@@ -92,7 +92,7 @@ class DataWarning(RotoridWarning):
     """Maneuver data look wrong before a fit (an input that never moves, outputs that are not
     perturbations, an implausible unit, a clipped or dropped-out sensor, rates that do not
     integrate to the attitudes); the message gives the numbers and the fix
-    (:mod:`rotorid.estimation.sanity`)."""
+    (:mod:`rotorid.estimation.sanity`), or a fit reproduces them exactly (noise-free data)."""
 
 
 class TrimError(RotoridError, ValueError):

@@ -11,13 +11,14 @@ unstable hover dynamics bounded, so the iteration neither stalls nor diverges. `
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 
 import attrs
 import numpy as np
 from rotorid import blas
 from rotorid.data import ManeuverSet
-from rotorid.errors import EstimationError, SimulationDivergedError
+from rotorid.errors import DataWarning, EstimationError, SimulationDivergedError
 from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.models import (
     LinearModel,
@@ -33,6 +34,9 @@ from .augment import WithInitialStates, WithOutputBiases
 from .levenberg_marquardt import Problem, Settings, run
 
 NAME = "output-error"
+#: An output whose residual RMS after the fit is below this fraction of its own RMS is
+#: reproduced exactly: noise-free data, whose R rests on the floor.
+EXACT_FRACTION = 1e-6
 START_STRATEGIES = ("auto", "initial", "equation-error")
 
 
@@ -116,6 +120,8 @@ class OutputErrorEstimator:
         elif result.iterations == 0:
             result = attrs.evolve(result, converged=True, stop_reason=(
                 "the earlier stages already reached the minimum of the full records"))
+        _warn_exact_outputs(result, [z[:, columns] for z in measured_outputs(fitted, maneuvers)],
+                            weights, [fitted.output_names[c] for c in columns])
         return self._estimate(fitted, base, result, start_values, notes,
                               sum(m.n_samples for m in maneuvers), columns)
 
@@ -254,6 +260,21 @@ class OutputErrorEstimator:
             fixed=getattr(base, "fixed", {}), signs=getattr(base, "signs", {}),
             units=structure.units.name if structure is not None else "model",
             notes=tuple(notes))
+
+
+def _warn_exact_outputs(result, measured, weights, names) -> None:
+    """A :class:`DataWarning` naming the outputs the fit reproduces exactly (residual RMS
+    below :data:`EXACT_FRACTION` of the output's RMS) and the largest such ratio."""
+    n = sum(z.shape[0] for z in measured)
+    signal = np.sqrt(sum(np.sum((z * weights) ** 2, axis=0) for z in measured) / n)
+    ratio = np.sqrt(np.diag(result.noise_covariance)) / np.maximum(signal, 1e-300)
+    exact = np.flatnonzero(ratio < EXACT_FRACTION)
+    if exact.size:
+        warnings.warn(f"the fit reproduces the outputs {', '.join(repr(names[k]) for k in exact)} "
+                      f"exactly (residual RMS at most {ratio[exact].max():.2g} of the output's "
+                      f"RMS): noise-free data? Their R is held at its floor, so the Cramér-Rao "
+                      f"bounds mean nothing; use --noise diagonal or leave them out with "
+                      f"--outputs", DataWarning, stacklevel=3)
 
 
 class _SelectedOutputs:

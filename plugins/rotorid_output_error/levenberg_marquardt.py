@@ -123,6 +123,29 @@ class Problem:
         stacked_rmse = float(np.sqrt(np.mean(np.diag(r - self.noise_floor))))
         return (cost if np.isfinite(cost) else np.inf), r, residuals, stacked_rmse
 
+    def failure(self, values) -> str:
+        """Why the cost at ``values`` is infinite: the maneuver and state or output that
+        diverged and when, or the outputs that make R singular."""
+        try:
+            outputs = self.model.simulate(values, self.maneuvers)
+        except SimulationDivergedError as error:
+            return str(error)
+        names = self.model.output_names
+        for maneuver, y in zip(self.maneuvers, outputs):
+            with np.errstate(invalid="ignore"):
+                beyond = np.argwhere(~(np.abs(y) <= self.output_limit))
+            if beyond.size:
+                k, c = beyond[0]
+                return (f"the simulated output {names[c]!r} of maneuver {maneuver.name} "
+                        f"reaches {abs(y[k, c]):.3g} at t = {maneuver.time[k]:.3f} s, "
+                        f"{DIVERGENCE_FACTOR:g} times beyond the largest measured")
+        residuals = [z - y for z, y in zip(self.measured, outputs)]
+        spread = np.diag(self.noise(residuals) - self.noise_floor)
+        exact = [names[c] for c in np.flatnonzero(spread <= np.diag(self.noise_floor))]
+        return (f"the noise covariance R is singular: the outputs {', '.join(exact) or 'all'} "
+                f"are reproduced exactly (noise-free data?); use --noise diagonal or leave "
+                f"them out with --outputs")
+
     def gauss_newton(self, values, r: np.ndarray, residuals):
         """F (P×P) and G (P,) at ``values`` with R held fixed; ``residuals`` z − y there.
 
@@ -153,8 +176,9 @@ def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | Non
     cost, r, residuals, current_rmse = problem.evaluate(values)
     if not np.isfinite(cost):
         raise SimulationDivergedError(
-            "the start values give a diverging simulation; start closer to a stable model "
-            "(the equation-error start or a shorter horizon)")
+            f"the start values give no finite cost: {problem.failure(values)}; if the data "
+            f"are sound, start closer to a stable model (the equation-error start or a "
+            f"shorter horizon)")
     costs, rmses = [cost], [current_rmse]
     lam = settings.initial_lambda
     reason, converged, iteration = "iteration limit reached", False, 0

@@ -24,6 +24,18 @@ def seed(text: str) -> int:
     return value
 
 
+def run_count(text: str) -> int:
+    """The number of Monte Carlo runs: a whole number ≥ 2 (one run has no spread)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"a Monte Carlo needs a whole number ≥ 2 of runs to "
+                                         f"estimate a spread, got {text!r}")
+    return value
+
+
 def output_directory(text: str) -> str:
     """A directory to write into (returned as given): an existing writable directory, or a new
     one whose nearest existing parent is a writable directory."""

@@ -2,8 +2,9 @@
 output-error cost meaningless (a fitted output that never varies, two fitted outputs that are
 the same record, fewer samples than parameters, a delay as long as a record) is named with the
 channel and the cause instead of surfacing as a diverging, singular or all-zero result; so
-are records no rotorcraft gives (a sample interval of seconds, attitudes beyond 90°, rates
-beyond 1000 °/s, specific forces beyond 30 g), whose usual cause is a unit or a scale error."""
+are records no rotorcraft gives (a sample interval of seconds, a record shorter than 1 s or
+longer than 1000 s, attitudes beyond 90°, rates beyond 1000 °/s, specific forces beyond 30 g),
+whose usual cause is a unit or a scale error."""
 
 from __future__ import annotations
 
@@ -22,6 +23,14 @@ from rotorid.units import unit_system
 CONSTANT_FRACTION = 1e-9
 #: Longest sample interval that still resolves rotorcraft dynamics, s.
 MAX_SAMPLE_INTERVAL = 0.5
+#: Shortest record that shows a rotorcraft's response, s: its slowest body modes (the
+#: speed and heave subsidences, phugoid) need seconds, its fastest (roll subsidence, about
+#: 0.1–0.3 s) several time constants. Shorter records (a few samples, or time in minutes)
+#: leave the derivatives undetermined.
+MIN_RECORD_SECONDS = 1.0
+#: Longest record an identification maneuver has, s (multisteps last 5–30 s, sweeps up to
+#: about 120 s): a record of thousands of seconds is a time in ms.
+MAX_RECORD_SECONDS = 1000.0
 #: Largest attitude perturbation from trim a small-perturbation model describes, deg.
 MAX_ATTITUDE_DEG = 90.0
 #: Largest angular rate and specific force a rotorcraft record can hold, deg/s and g.
@@ -41,8 +50,12 @@ def check_fit_data(maneuvers: ManeuverSet, outputs: Sequence[str] | None,
     model's)."""
     _check_plausible(maneuvers)
     check_delays(model, maneuvers)
+    unknown = [n for n in outputs or () if n not in model.outputs]
+    if unknown:
+        raise DataError(f"unknown output(s) {', '.join(map(repr, unknown))} to fit; choose from "
+                        f"{', '.join(model.outputs)}")
     n_parameters = model.n_parameters
-    names = tuple(n for n in (outputs or model.outputs) if n in model.outputs)
+    names = tuple(outputs or model.outputs)
     for maneuver in maneuvers:
         block = maneuver.columns(names)
         if np.all(np.ptp(block, axis=0) == 0.0):
@@ -91,6 +104,17 @@ def _check_plausible(maneuvers: ManeuverSet) -> None:
             raise DataError(f"maneuver {maneuver.name}: sample interval {maneuver.dt:g} s is "
                             f"longer than {MAX_SAMPLE_INTERVAL:g} s; is the time in ms? give "
                             f"it in s")
+        duration = float(maneuver.time[-1] - maneuver.time[0])
+        if duration > MAX_RECORD_SECONDS:
+            raise DataError(f"maneuver {maneuver.name}: the record lasts {duration:.4g} s "
+                            f"({maneuver.n_samples} samples), longer than any identification "
+                            f"maneuver ({MAX_RECORD_SECONDS:g} s); is the time in ms? give it "
+                            f"in s")
+        if duration < MIN_RECORD_SECONDS:
+            raise DataError(f"maneuver {maneuver.name}: the record lasts {duration:.4g} s "
+                            f"({maneuver.n_samples} samples), shorter than the "
+                            f"{MIN_RECORD_SECONDS:g} s a rotorcraft response needs; give "
+                            f"longer records (or the time in s, if it is in minutes)")
         units = unit_system(maneuver.units)
         degrees = math.degrees(units.radian_per_angle)
         for names, scale, limit, unit in ((("theta", "phi"), degrees, MAX_ATTITUDE_DEG, "°"),

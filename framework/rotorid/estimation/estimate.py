@@ -420,4 +420,7 @@ def _residual_facts(residuals) -> dict:
 
 
 def _pct(value: float) -> str:
-    return "inf" if not math.isfinite(value) else f"{value:.1f}"
+    """A percentage for an 8-character column (an exponent from 1e5 %)."""
+    if not math.isfinite(value):
+        return "inf"
+    return f"{value:.1f}" if abs(value) < 1e5 else f"{value:.2e}"

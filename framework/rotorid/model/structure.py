@@ -88,11 +88,12 @@ class FlightCondition:
                 f"velocities in m/s (u0_mps) or ft/s (u0_fps)"
             )
         for name in ("theta0", "phi0"):
-            if abs(getattr(self, name)) >= math.pi / 2:
+            angle = getattr(self, name)
+            if abs(angle) >= math.pi / 2:
                 raise StructureError(
-                    f"flight condition: |{name}| must be below 90° (given in rad: "
-                    f"{getattr(self, name)}); did you pass degrees? use from_airspeed(theta0_deg=...)"
-                )
+                    f"flight condition: {name} = {math.degrees(angle):.4g}° ({angle:.4g} rad) "
+                    f"is not within ±90°; check its unit: FlightCondition takes rad, a model "
+                    f"file's {name}_deg and from_airspeed({name}_deg=...) take deg")
 
     @classmethod
     def from_airspeed(cls, airspeed_kt: float = 0.0, theta0_deg: float = 0.0,

@@ -21,7 +21,7 @@ should start in trim (as flight-test maneuvers do).
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -153,8 +153,9 @@ class _Companion:
                 self.output[:, slot] = maps.Cs[lag][:, c]
 
 
-def _propagate(companion: _Companion, start: np.ndarray, forcing, n: int, emit, where: str,
-               dt: float, limit: float = DIVERGENCE_LIMIT) -> None:
+def _propagate(companion: _Companion, start: np.ndarray, forcing, n: int, emit,
+               where: Callable[[int, int], str], dt: float,
+               limit: float = DIVERGENCE_LIMIT) -> None:
     """Run z_k+1 = transition·z_k + forcing_k for k < n − 1, one time block at a time.
 
     Args:
@@ -164,7 +165,9 @@ def _propagate(companion: _Companion, start: np.ndarray, forcing, n: int, emit, 
         n: number of samples; a block holds at most :data:`_BLOCK_SAMPLES` samples and
             :data:`_BLOCK_BYTES` of states.
         emit: ``emit(first, stop, z)`` receives z_first … z_stop−1 as (stop − first, R, S).
-        where, dt: named in the divergence error; dt in s.
+        where: ``where(row, column)`` names the maneuver and state of entry [row, column]
+            of z in the divergence error.
+        dt: sample interval, s.
         limit: magnitude counted as divergence (sensitivities of a bounded but unstable
             response may legitimately be large: they pass ``inf``, so only overflow counts).
     Raises:
@@ -189,12 +192,21 @@ def _propagate(companion: _Companion, start: np.ndarray, forcing, n: int, emit, 
                 buffer[k + 1] += product
             peak = np.abs(buffer[steps]).max()
             if not np.isfinite(peak) or peak > limit:
-                raise SimulationDivergedError(
-                    f"simulation diverged ({where}) by t = {(first + steps) * dt:.3f} s: "
-                    f"state magnitude {peak:.3g} exceeds {limit:g}; "
-                    f"the model is unstable for these parameter values")
+                raise SimulationDivergedError(_divergence(buffer[:steps + 1], first, dt,
+                                                          where, limit))
             emit(first, stop, buffer[:length])
             buffer[0] = buffer[length]
+
+
+def _divergence(block: np.ndarray, first: int, dt: float, where, limit: float) -> str:
+    """What diverged first in ``block`` (L, R, S), the companion states of samples first …
+    first + L − 1: the entry, its magnitude and the time."""
+    with np.errstate(invalid="ignore"):
+        beyond = ~(np.abs(block) <= limit)
+    k, row, column = np.argwhere(beyond)[0]
+    return (f"simulation diverged: {where(row, column)} reaches {abs(block[k, row, column]):.3g} "
+            f"(beyond {limit:g}) at t = {(first + k) * dt:.3f} s; the model is unstable for "
+            f"these parameter values")
 
 
 class Simulator:
@@ -342,8 +354,13 @@ class Simulator:
         def emit(first, stop, z):
             states[first:stop] = z
 
-        _propagate(companion, start, forcing, n, emit,
-                   f"maneuvers {', '.join(group.names)}", maps.dt)
+        states_named = self.structure.states
+
+        def where(row, column):
+            state = states_named[column] if column < n_x else "a delayed term's history"
+            return f"maneuver {group.names[row]}, state {state}"
+
+        _propagate(companion, start, forcing, n, emit, where, maps.dt)
         return states
 
     def _outputs(self, maps: DiscreteMaps, companion: _Companion, group: _Group,
@@ -392,7 +409,8 @@ class Simulator:
 
         try:
             _propagate(companion, np.zeros((b * p, size)), forcing, len(states), emit,
-                       "sensitivities", maps.dt, limit=np.inf)
+                       lambda row, column: f"a sensitivity (maneuvers "
+                       f"{', '.join(group.names)})", maps.dt, limit=np.inf)
         finally:
             sink.close(direct.order)
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rotorid.cli.arguments import output_directory, seed
+from rotorid.cli.arguments import output_directory, run_count, seed
 
 NAME = "montecarlo"
 HELP = ("check the Cramér-Rao bounds: repeat a case's final estimation on data with "
@@ -17,7 +17,7 @@ def add_arguments(parser) -> None:
 
     parser.add_argument("case", metavar="CASE", help="hover, forward or a case TOML file "
                                                      "(generated data)")
-    parser.add_argument("--runs", type=int, required=True, help="number of runs (≥ 2)")
+    parser.add_argument("--runs", type=run_count, required=True, help="number of runs (≥ 2)")
     parser.add_argument("--out", required=True, type=output_directory,
                         help="results directory; a finished study of the case there is reused "
                              "(else it is run first); montecarlo.json and the figure go to "
