@@ -232,6 +232,18 @@ def _good_csv(tmp_path):
     return write_maneuver(_maneuver("m0", 200), tmp_path / "m0.csv")
 
 
+def _study_case(text):
+    """``rotorid study`` of a case file holding ``text``."""
+    def command(tmp_path):
+        (tmp_path / "case.toml").write_text(text)
+        return ["study", str(tmp_path / "case.toml"), "--out", str(tmp_path / "out")]
+    return command
+
+
+def _files_case(name="own", data='source = "files"\nidentification = "f.csv"', extra=""):
+    return _study_case(f'name = "{name}"\n[data]\n{data}\n{extra}')
+
+
 def _plain(*args):
     return lambda tmp_path: [a.format(tmp=tmp_path) for a in args]
 
@@ -425,6 +437,16 @@ COMMANDS = [
                                    "{tmp}/out"), ExitStatus.ERROR, ["0–200 kt", "250"]),
     ("speeds-without-sweep", _plain("study", "hover", "--speeds", "0,10", "--out", "{tmp}/out"),
      ExitStatus.USAGE, ["--speeds", "speed-sweep"]),
+    # case files
+    *[(f"case-name-{label}", _files_case(name), ExitStatus.ERROR,
+       ["case.toml", repr(name), "cannot name a results directory"])
+      for label, name in (("up-twice", "../../X"), ("absolute", "/tmp/abs"), ("nested", "a/b"),
+                          ("parent", ".."), ("hidden", ".hidden"), ("empty", ""))],
+    ("case-unknown-source", _files_case(data='source = "renamed-csv"'), ExitStatus.ERROR,
+     ["case.toml", "'renamed-csv'"]),
+    ("case-not-toml", _study_case("name = \n"), ExitStatus.ERROR, ["case.toml", "TOML"]),
+    ("case-unknown-table", _files_case(extra="[flight]\nx = 1\n"), ExitStatus.ERROR,
+     ["case.toml", "flight"]),
     ("unknown-command", _plain("fly"), ExitStatus.USAGE, ["invalid choice: 'fly'"]),
     ("unknown-case", _plain("study", "cruise", "--out", "{tmp}/out"), ExitStatus.ERROR,
      ["cruise"]),

@@ -136,7 +136,7 @@ class OutputErrorEstimator:
         except SimulationDivergedError:
             if np.array_equal(np.clip(start_values, *fitted.bounds()), fallback):
                 raise
-            notes.append("the start values gave a diverging simulation; restarted from the "
+            notes.append("the start values gave no finite cost; restarted from the "
                          "initial values")
             return (self._run_stages(fitted, maneuvers, columns, weights, fallback, notes),
                     fallback)
