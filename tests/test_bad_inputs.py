@@ -244,6 +244,20 @@ def _files_case(name="own", data='source = "files"\nidentification = "f.csv"', e
     return _study_case(f'name = "{name}"\n[data]\n{data}\n{extra}')
 
 
+#: Paths that are not regular files: (label, maker of the path in tmp_path).
+NOT_FILES = [("directory", lambda tmp_path: _empty_directory(tmp_path)),
+             ("fifo", _fifo), ("dev-null", lambda tmp_path: Path("/dev/null"))]
+
+
+def _not_a_file(what, command):
+    """``command(tmp_path, path)`` with a path of each kind in :data:`NOT_FILES`, expecting
+    ``what`` named as not a regular file."""
+    return [(f"{what.replace(' ', '-')}-is-{label}",
+             lambda tmp_path, make=make: command(tmp_path, str(make(tmp_path))),
+             ExitStatus.ERROR, [what, "is not a regular file (a directory, device or pipe)"])
+            for label, make in NOT_FILES]
+
+
 def _plain(*args):
     return lambda tmp_path: [a.format(tmp=tmp_path) for a in args]
 
@@ -447,6 +461,16 @@ COMMANDS = [
     ("case-not-toml", _study_case("name = \n"), ExitStatus.ERROR, ["case.toml", "TOML"]),
     ("case-unknown-table", _files_case(extra="[flight]\nx = 1\n"), ExitStatus.ERROR,
      ["case.toml", "flight"]),
+    # paths that are not regular files
+    *_not_a_file("model file", lambda tmp_path, path: [
+        "simulate", path, str(_good_csv(tmp_path)), "--out", str(tmp_path / "out")]),
+    *_not_a_file("values file", lambda tmp_path, path: [
+        "simulate", str(_simulate_inputs(_good_csv)(tmp_path)[1]), str(_good_csv(tmp_path)),
+        "--values", path, "--out", str(tmp_path / "out")]),
+    *_not_a_file("result file", lambda tmp_path, path: [
+        "export", path, "--format", "json", "--out", str(tmp_path / "out")]),
+    *_not_a_file("case file", lambda tmp_path, path: [
+        "study", path, "--out", str(tmp_path / "out")]),
     ("unknown-command", _plain("fly"), ExitStatus.USAGE, ["invalid choice: 'fly'"]),
     ("unknown-case", _plain("study", "cruise", "--out", "{tmp}/out"), ExitStatus.ERROR,
      ["cruise"]),

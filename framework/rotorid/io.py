@@ -67,12 +67,23 @@ def jsonable(value):
     return value
 
 
+def require_file(path: str | os.PathLike, what: str) -> Path:
+    """``path`` as a Path when it is a regular file; otherwise :class:`MissingFileError`
+    (nothing there) or :class:`DataFileError` (a directory, device or pipe), naming
+    ``what`` (e.g. ``"model file"``)."""
+    path = Path(path)
+    if path.is_file():
+        return path
+    if path.exists():
+        raise DataFileError(f"{what} {path} is not a regular file (a directory, device or "
+                            f"pipe); name a {what}")
+    raise MissingFileError(f"{what} {path} does not exist")
+
+
 def read_json_object(path: str | os.PathLike, what: str, content: str = "") -> dict:
     """The JSON object stored in ``path``; errors name ``what`` (e.g. ``"result file"``), the
     path and, when given, the expected ``content`` (e.g. ``"name → value"``)."""
-    path = Path(path)
-    if not path.is_file():
-        raise MissingFileError(f"{what} {path} does not exist")
+    path = require_file(path, what)
     try:
         record = json.loads(path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as error:

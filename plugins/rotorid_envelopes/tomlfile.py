@@ -6,16 +6,15 @@ import json
 import tomllib
 from pathlib import Path
 
-from rotorid.errors import MissingFileError, VerificationError
+from rotorid.errors import VerificationError
+from rotorid.io import require_file
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 
 
 def load_definition(path) -> dict:
     """The table in ``path`` (``.toml`` or ``.json``) as a dict."""
-    path = Path(path)
-    if not path.is_file():
-        raise MissingFileError(f"envelope file {path} does not exist")
+    path = require_file(path, "envelope file")
     try:
         if path.suffix.lower() == ".json":
             return json.loads(path.read_text(encoding="utf-8"))

@@ -24,7 +24,7 @@ import attrs
 from rotorid.data import HOLDS, Maneuver, ManeuverSet
 from rotorid.errors import DataError, DataFileError, MissingFileError, RotoridError
 from rotorid.ingestion import Ingestion
-from rotorid.io import atomic_write
+from rotorid.io import atomic_write, require_file
 from rotorid.model.structure import STATES
 from rotorid.plugin.contracts import CaseData
 from rotorid.units import channel_scale, unit_system
@@ -53,11 +53,7 @@ def read_maneuver(path: str | os.PathLike, ingestion: Ingestion | None = None) -
     ``ingestion`` says (default: as recorded)."""
     path = Path(path)
     reader = _format(path)[0]
-    if not path.is_file():
-        if path.exists():
-            raise DataFileError(f"maneuver file {path} is not a regular file (a directory, "
-                                f"device or pipe); name a maneuver file")
-        raise MissingFileError(f"maneuver file {path} does not exist")
+    require_file(path, "maneuver file")
     try:
         return reader(path, ingestion or Ingestion())
     except RotoridError:

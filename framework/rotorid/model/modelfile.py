@@ -36,8 +36,8 @@ import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 
-from rotorid.errors import DataFileError, MissingFileError, RotoridError
-from rotorid.io import atomic_write
+from rotorid.errors import DataFileError, RotoridError
+from rotorid.io import atomic_write, require_file
 from rotorid.model.derivatives import Derivative
 from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.model.templates import SIX_DOF, TEMPLATES
@@ -154,9 +154,7 @@ def parse_model(mapping: Mapping, source: str = "<string>") -> ModelStructure:
 
 def load_model(path: str | os.PathLike) -> ModelStructure:
     """The structure declared by the TOML model file ``path``."""
-    path = Path(path)
-    if not path.is_file():
-        raise MissingFileError(f"model file {path} does not exist")
+    path = require_file(path, "model file")
     try:
         mapping = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:

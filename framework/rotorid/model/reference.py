@@ -16,7 +16,8 @@ import re
 import sys
 from pathlib import Path
 
-from rotorid.errors import MissingFileError, StructureError
+from rotorid.errors import StructureError
+from rotorid.io import require_file
 
 _REFERENCE = re.compile(r"^(?P<where>.+):(?P<name>[A-Za-z_]\w*)$")
 
@@ -63,8 +64,7 @@ def _module(dotted: str):
 
 
 def _module_from_file(path: Path):
-    if not path.is_file():
-        raise MissingFileError(f"model file {path} does not exist")
+    require_file(path, "model file")
     module_name = f"_rotorid_model_{abs(hash(path.resolve()))}"
     spec = importlib.util.spec_from_file_location(module_name, path)
     module = importlib.util.module_from_spec(spec)

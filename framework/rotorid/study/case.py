@@ -30,6 +30,7 @@ from pathlib import Path
 import attrs
 
 from rotorid.errors import DataFileError, MissingFileError
+from rotorid.io import require_file
 from rotorid.model.structure import PAPER_DELAYED
 from rotorid.plugin.manager import create
 from rotorid.study.checks import check_case, check_registered
@@ -158,9 +159,10 @@ class FlightCase:
                 f"{name_or_path}.toml").read_text()
             return cls.from_mapping(tomllib.loads(text), f"built-in case {name_or_path}")
         path = Path(name_or_path)
-        if not path.is_file():
+        if not path.exists():
             raise MissingFileError(f"no built-in case or case file {str(name_or_path)!r}; "
                                    f"built-in cases: {', '.join(BUILTIN)}")
+        require_file(path, "case file")
         try:
             mapping = tomllib.loads(path.read_text(encoding="utf-8"))
         except tomllib.TOMLDecodeError as error:
