@@ -137,10 +137,10 @@ def _scale_advice(fit: KinematicFit) -> str:
     ratio = math.degrees(1.0)
     if abs(fit.scale / ratio - 1) < 0.15:
         return (f"{fit.channel} is in deg and its driver ({fit.driver}) in rad: declare the "
-                f"driver's unit")
+                f"driver's unit (channel_units, e.g. {{\"q\": \"rad/s\"}})")
     if abs(fit.scale * ratio - 1) < 0.15:
         return (f"{fit.channel} is in rad and its driver ({fit.driver}) in deg: declare the "
-                f"channel's unit")
+                f"channel's unit (channel_units {{\"{fit.channel}\": \"rad\"}})")
     return "check the calibration (scale factor) of these sensors"
 
 

@@ -93,8 +93,8 @@ def _check_gravity(maneuvers: ManeuverSet) -> bool:
         return False
     unit = system.label("az")
     _warn(f"output 'az' holds 1 g (median {median:.4g} {unit}, g = {system.g:.4g} {unit}): "
-          f"outputs are perturbations from trim; remove the trim value (rotorid identify "
-          f"--trim first-second, or subtract {median:.4g} {unit})")
+          f"outputs are perturbations from trim; remove the trim (rotorid identify --trim "
+          f"first-second, or --trim az={median:.4g})")
     return True
 
 
@@ -118,8 +118,8 @@ def _check_offsets(maneuvers: ManeuverSet, skip: tuple[str, ...]) -> None:
         _warn(f"output {name!r} starts away from zero in {len(offsets)} of {len(maneuvers)} "
               f"maneuvers{kind}: {level:.4g} {unit} (mean of the first {START_WINDOW:g} s of "
               f"{where}) against a swing of {swing:.4g} {unit}; outputs are perturbations "
-              f"from trim: remove the trim (rotorid identify --trim first-second, or the "
-              f"trim values) or estimate output biases (--output-biases)")
+              f"from trim: remove the trim (rotorid identify --trim first-second, or "
+              f"--trim {name}=VALUE) or estimate output biases (--output-biases)")
 
 
 def _check_rate_scale(maneuvers: ManeuverSet) -> None:
@@ -138,12 +138,12 @@ def _check_rate_scale(maneuvers: ManeuverSet) -> None:
     if largest < low:
         _warn(f"the largest angular rate (p, q, r) in any maneuver is {value} while the inputs "
               f"move: a maneuver for identification moves the aircraft by several deg/s; were "
-              f"the rates recorded in rad/s? Declare the data's units (units: si, or a unit "
-              f"per channel)")
+              f"the rates recorded in rad/s? Declare the data's units (units: si, or "
+              f"channel_units {{\"q\": \"rad/s\", …}})")
     elif largest > high:
         _warn(f"the largest angular rate (p, q, r) in any maneuver is {value}, beyond any "
               f"helicopter maneuver: were the rates recorded in deg/s? Declare the data's "
-              f"units (units: flight-test, or a unit per channel)")
+              f"units (units: flight-test, or channel_units {{\"q\": \"deg/s\", …}})")
 
 
 def _flat_runs(record: np.ndarray):
