@@ -146,6 +146,10 @@ def test_start_values_and_options_are_checked():
         estimator().estimate(structure(), data, start={"F_theta": 1.0})
     with pytest.raises(EstimationError, match="linear model structures"):
         estimator().estimate(object(), data)
+    with pytest.raises(EstimationError, match="no finite likelihood at the start values: the "
+                                              "innovations overflow .*; give other start"):
+        estimator(process_noise=tuple(PROCESS)).estimate(structure(), data,
+                                                         start={"M_q": 1e6})
     coarse = noisy_data(PROCESS, dt=0.04)[0]
     mixed = rotorid.ManeuverSet([data[1], coarse])
     with pytest.raises(DataError, match="one sample time"):

@@ -142,6 +142,16 @@ class FilterErrorProblem:
         rmse = float(np.sqrt(np.sum(innovations**2) / (8 * self.n_samples)))
         return cost, b, self.records.split(innovations), rmse
 
+    def failure(self, values) -> str:
+        """Why the cost at ``values`` is infinite: the filter's own error, or B."""
+        try:
+            innovations, b = self.innovations(values)
+        except (EstimationError, np.linalg.LinAlgError) as error:
+            return f"the Kalman filter does not exist ({error})"
+        if not np.all(np.isfinite(innovations)):
+            return "the innovations overflow (the model diverges at these values)"
+        return f"the innovation covariance B is singular (det B = {np.linalg.det(b):.3g})"
+
     def gauss_newton(self, values, b: np.ndarray, residuals):
         """Fisher information M (P, P) and gradient G (P,) of L at ``values`` (module
         docstring); ``b`` and ``residuals`` are B and the innovations there."""
@@ -226,8 +236,9 @@ class FilterErrorEstimator:
             try:
                 result = run(problem, values, bounds, progress)
             except SimulationDivergedError:
-                raise EstimationError("the Kalman filter does not exist at the start values; "
-                                      "give other start values (derivatives, F or R)") from None
+                raise EstimationError(f"no finite likelihood at the start values: "
+                                      f"{problem.failure(values)}; give other start values "
+                                      f"(derivatives, F or R)") from None
         return self._estimate(problem, result, values, bounds, note)
 
     def _start_values(self, problem, maneuvers, start):

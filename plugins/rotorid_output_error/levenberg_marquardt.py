@@ -166,6 +166,9 @@ def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | Non
         final_information: bool = True) -> RunResult:
     """Levenberg-Marquardt from ``start``; see the module docstring.
 
+    ``problem`` is a :class:`Problem` or any object with its ``settings``, ``n_samples``,
+    ``evaluate``, ``gauss_newton`` and ``failure`` (the filter-error likelihood is one).
+
     ``final_information=False`` skips the information matrix at the final values (the
     result's ``information`` is then the one at the last Gauss-Newton point): for a stage
     whose values only start the next one.
