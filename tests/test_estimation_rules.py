@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import rotorid
 from rotorid import Derivative, FlightCondition, Maneuver, ManeuverSet, ModelStructure
+from rotorid.data import OUTPUT_CHANNELS
 from rotorid.errors import IdentifiabilityWarning
 from rotorid.estimation.estimate import Estimate, statistics
 from rotorid.estimation.reduction import ReductionPath, ReductionStep, reduce
@@ -26,7 +27,7 @@ def estimate_of(information, values, names, rmse=1.0):
                     start=np.zeros(n), cramer_rao=stats.cramer_rao,
                     insensitivity=stats.insensitivity, correlation=stats.correlation,
                     information=information, noise_covariance=np.eye(8),
-                    output_names=ModelStructure.outputs, cost=1.0, rmse=rmse,
+                    output_names=OUTPUT_CHANNELS, cost=1.0, rmse=rmse,
                     cost_history=(1.0,), rmse_history=(rmse,), iterations=1, converged=True,
                     stop_reason="constructed", n_samples=100)
 
