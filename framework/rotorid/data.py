@@ -135,8 +135,8 @@ class Maneuver:
                      units: str = "flight-test", metadata: Mapping | None = None,
                      initial_state=None, ingestion: Ingestion | Mapping | None = None,
                      ) -> "Maneuver":
-        """A maneuver from named columns: ``time`` (s), the four controls, the eight outputs,
-        and any further columns as :attr:`extra_channels`; prepared first as ``ingestion``
+        """A maneuver from named columns: ``time`` (s), the controls and outputs it has (at
+        least one of each), and any further columns as :attr:`extra_channels`; prepared first as ``ingestion``
         says (units per channel, resampling, trim removal; :mod:`rotorid.ingestion`), each
         step stated in the metadata."""
         where = f"maneuver {name!r}"

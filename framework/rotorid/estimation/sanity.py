@@ -155,26 +155,37 @@ def _flat_runs(record: np.ndarray):
             yield int(begin), int(end - begin + 1)
 
 
+def _first_flat_run(maneuver, column: int):
+    """(kind, description) of the first flat run of an output that varies, or None; kind is
+    ``"clipped"`` at the record's extreme, ``"dropout"`` elsewhere."""
+    record = maneuver.outputs[:, column]
+    if is_constant(record):
+        return None
+    for start, length in _flat_runs(record):
+        value = record[start]
+        kind = "clipped" if value in (record.max(), record.min()) else "dropout"
+        unit = unit_system(maneuver.units).label(maneuver.output_names[column])
+        return kind, (f"{value:.6g} {unit} for {length} samples ({length * maneuver.dt:.3g} s) "
+                      f"from t = {maneuver.time[start]:.4g} s in maneuver {maneuver.name!r}")
+    return None
+
+
 def _check_flat_runs(maneuvers: ManeuverSet) -> None:
-    """Outputs that sit on one value: at the record's extreme (clipping) or not (dropout)."""
-    system = unit_system(maneuvers.units)
-    for m in maneuvers:
-        for column, name in enumerate(m.output_names):
-            record = m.outputs[:, column]
-            if is_constant(record):
-                continue
-            for start, length in _flat_runs(record):
-                value = record[start]
-                at = (f"{value:.6g} {system.label(name)} for {length} samples "
-                      f"({length * m.dt:.3g} s) from t = {m.time[start]:.4g} s in maneuver "
-                      f"{m.name!r}")
-                if value in (record.max(), record.min()):
-                    _warn(f"output {name!r} sits at its extreme {at}: a saturated or clipped "
-                          f"sensor; cut the maneuver before it or leave the maneuver out")
-                else:
-                    _warn(f"output {name!r} repeats {at}: a dropout held at the last value; "
-                          f"cut the maneuver before it or leave the maneuver out")
-                break
+    """Outputs that sit on one value: at the record's extreme (clipping) or not (dropout);
+    one warning per output and kind, naming the first case and how many maneuvers have one."""
+    advice = {"clipped": ("sits at its extreme", "a saturated or clipped sensor"),
+              "dropout": ("repeats", "a dropout held at the last value")}
+    for column, name in enumerate(maneuvers.output_names):
+        found: dict[str, list[str]] = {}
+        for m in maneuvers:
+            run = _first_flat_run(m, column)
+            if run is not None:
+                found.setdefault(run[0], []).append(run[1])
+        for kind, cases in found.items():
+            verb, cause = advice[kind]
+            _warn(f"output {name!r} {verb} {cases[0]} ({len(cases)} of {len(maneuvers)} "
+                  f"maneuvers like this): {cause}; cut the maneuver before it or leave the "
+                  f"maneuver out")
 
 
 def check_data(maneuvers: ManeuverSet, condition: FlightCondition | None = None) -> None:
