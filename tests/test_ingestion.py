@@ -13,7 +13,7 @@ from rotorid import Maneuver
 from rotorid.data import ALL_CHANNELS
 from rotorid.errors import DataError, DataFileError, DataWarning
 from rotorid.plugin.manager import create
-from rotorid_files.formats import read_maneuver
+from rotorid_files.formats import read_maneuver, write_maneuver
 
 
 def _columns(time, make=lambda t, k: (k + 1) * np.sin(0.5 * t + k)) -> dict:
@@ -219,3 +219,18 @@ def test_nan_dropouts_are_interpolated_across_only_when_resampling(tmp_path):
     assert np.allclose(m.channel("q")[20:23], q[19] + (q[23] - q[19]) * np.array([1, 2, 3]) / 4)
     assert m.metadata["resampled"] == ("linear interpolation across 3 NaN samples on the "
                                        "recorded 0.02 s grid")
+
+
+def test_body_velocity_columns_are_read_as_extra_channels_and_written_back(tmp_path):
+    time = np.arange(0.0, 2.0, 0.02)
+    columns = {**_columns(time), "u": 10.0 * np.sin(time)}           # u recorded in kt
+    m = Maneuver.from_columns("with_u", columns,
+                              ingestion={"channel_units": {"u": "kt"}})
+    assert np.allclose(m.extra_channels["u"], columns["u"] * 1852.0 / 3600.0 / 0.3048)
+    path = write_maneuver(m, tmp_path / "with_u.csv")
+    header_row = next(line for line in path.read_text(encoding="utf-8").splitlines()
+                      if not line.startswith("#"))
+    assert header_row == ",".join((*ALL_CHANNELS, "u"))
+    again = read_maneuver(path)
+    assert np.array_equal(again.extra_channels["u"], m.extra_channels["u"])
+    assert np.array_equal(again.outputs, m.outputs)

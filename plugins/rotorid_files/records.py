@@ -1,8 +1,8 @@
 """What every file format shares: the flat header and the checks that turn columns into a
 :class:`~rotorid.data.Maneuver`.
 
-A file holds one maneuver as named columns (``time``, the four controls, the eight outputs)
-plus a flat header: ``name``, ``units``, ``initial_state``, ``channel_units`` (channel → the
+A file holds one maneuver as named columns (``time``, controls, outputs and optionally the
+body velocities ``u v w``) plus a flat header: ``name``, ``units``, ``initial_state``, ``channel_units`` (channel → the
 unit it was recorded in, when not its unit system's) and any metadata key (``condition``,
 ``kind``, ``axis``, ``direction`` …). Header values are JSON values.
 """
@@ -21,6 +21,9 @@ from rotorid.errors import DataError, DataFileError, RotoridError
 from rotorid.ingestion import Ingestion
 from rotorid.units import unit_system
 
+#: Optional body-velocity columns, kept as extra channels (the kinematic consistency check
+#: integrates the accelerations against them, :mod:`rotorid.estimation.kinematics`).
+VELOCITIES = ("u", "v", "w")
 #: Header keys that are not metadata.
 RESERVED = ("name", "units", "initial_state", "channel_units")
 #: Allowed metadata keys (also the ``# key: value`` syntax of CSV files).
@@ -57,8 +60,10 @@ def header_of(maneuver: Maneuver, where: str) -> dict:
 
 
 def columns_of(maneuver: Maneuver) -> dict[str, np.ndarray]:
-    """Channel name → 1-D array: time, the inputs and the outputs the maneuver holds."""
-    return {name: maneuver.channel(name) for name in maneuver.channel_names}
+    """Channel name → 1-D array: time, the inputs and the outputs the maneuver holds, and its
+    body velocities if it has them."""
+    velocities = [v for v in VELOCITIES if v in maneuver.extra_channels]
+    return {name: maneuver.channel(name) for name in (*maneuver.channel_names, *velocities)}
 
 
 def vector(path: Path, channel: str, array) -> np.ndarray:
@@ -88,10 +93,10 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
             ``channel_units`` add to (and override) its ``channel_units``.
         row_note: appended to data errors, to say how rows map to lines of the file.
     """
-    unknown = [c for c in columns if c not in ALL_CHANNELS]
+    unknown = [c for c in columns if c not in ALL_CHANNELS + VELOCITIES]
     if unknown:
         raise DataFileError(f"{path}: unknown channel(s) {', '.join(map(repr, unknown))}; "
-                            f"channels are {','.join(ALL_CHANNELS)}")
+                            f"channels are {','.join(ALL_CHANNELS + VELOCITIES)}")
     if "time" not in columns:
         raise DataFileError(f"{path}: missing channel(s) time; a maneuver file needs time, "
                             f"then any of {','.join(ALL_CHANNELS[1:])}")
