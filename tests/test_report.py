@@ -90,14 +90,20 @@ def test_the_quick_hover_study_writes_a_complete_linked_report(quick_study):
     case = out / "hover"
     record = json.loads((case / "result.json").read_text())
 
-    # Every image and link of both reports exists; every SVG is well-formed XML.
+    # Every image, link and anchor of both reports exists; every SVG is well-formed XML.
     for page in (out / "report.html", case / "report.html"):
         text = page.read_text()
         for target in re.findall(r'(?:src|href)="([^"]+)"', text):
-            assert (page.parent / target).is_file(), f"{page.name} links missing {target}"
+            if target.startswith("#"):
+                assert f'id="{target[1:]}"' in text, f"{page.name}: no anchor {target}"
+            else:
+                assert (page.parent / target).is_file(), f"{page.name} links missing {target}"
     figures = sorted(p.name for p in (case / "figures").glob("*.png"))
     assert "rmse.png" in figures
-    assert sum(f.startswith("time_") for f in figures) == 8       # 2311 per control, ± direction
+    # Every identification maneuver: 3211 and 2311 per control, ± direction.
+    assert sorted(f for f in figures if f.startswith("time_")) == sorted(
+        f"time_hover_{kind}_{axis}_{sign}.png" for kind in ("3211", "2311")
+        for axis in ("long", "lat", "coll", "ped") for sign in ("pos", "neg"))
     assert {f"error_{p.replace('/', '_')}.png" for p in
             ("q/long", "p/long", "q/lat", "p/lat", "r/coll", "az/coll", "r/ped", "ay/ped")
             } <= set(figures)
@@ -114,7 +120,10 @@ def test_the_quick_hover_study_writes_a_complete_linked_report(quick_study):
     with_delays = record["estimates"]["with delays"]["parameters"]
     for row in parameters[1:]:
         if row[0] in with_delays:
-            assert float(row[5]) == pytest.approx(with_delays[row[0]]["value"], rel=1e-3)
+            assert float(row[6]) == pytest.approx(with_delays[row[0]]["value"], rel=1e-3)
+    assert parameters[0][:3] == ["parameter", "unit", "no delays: value"]
+    units = {row[0]: row[1] for row in parameters[1:]}
+    assert units["M_q"] == "1/s" and units["tau_M_q"] == "s"
     checks = _read_csv(case / "tables" / "checks.csv")
     rmse_claims = [row for row in checks if row[0].startswith("time-domain RMSE")]
     assert len(rmse_claims) == 2 and all(row[2] == "true" for row in rmse_claims)

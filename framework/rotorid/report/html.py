@@ -2,17 +2,18 @@
 
 Per case (``<out>/<case>/``):
 
-* ``figures/rmse.{png,svg}``: RMSE versus removed parameters (figs. 1, 6);
-* ``figures/time_<maneuver>.{png,svg}``: truth, model without and with delays on each 2311
-  input (figs. 2, 3, 7, 8, 11, 13, 15, 17);
-* ``figures/error_<output>_<input>.{png,svg}``: ε against MUAD/AEE with coherence for each
-  verified sweep pair (figs. 4, 5, 9, 10, 12, 14, 16, 18);
-* ``figures/bode_<output>_<input>.{png,svg}``: Bode overlays of truth and model with delays;
+* ``figures/``: the figures of :mod:`rotorid.report.figures`, each shown with its caption;
 * ``tables/removed.csv``, ``tables/parameters.csv`` (Appendix B), ``tables/key_derivatives.csv``,
-  ``tables/checks.csv`` (the paper's claims, measured); with ``[compare] frequency``
-  ``tables/comparison_costs.csv`` and ``tables/comparison_parameters.csv`` (the
-  frequency-domain fit beside the time-domain fit);
-* ``report.html`` linking all of it.
+  ``tables/verification.csv`` and, for a case with a truth model, ``tables/checks.csv`` (the
+  paper's claims, measured); with ``[compare] frequency`` ``tables/comparison_costs.csv``
+  and ``tables/comparison_parameters.csv`` (the frequency-domain fit beside the time-domain
+  fit); every column states its unit;
+* ``report.html`` linking all of it: a table of contents, a summary (selected structure,
+  verdicts, what fails), captions under every figure and one section (anchor
+  ``pair-<out>-<in>``) per verified pair.
+
+A case about measured data only (``source = "files"``, no truth model) is reported about
+that aircraft alone: no paper claims, no truth or published Bo-105 values.
 
 Per study: ``<out>/report.html``, a summary of every case linking the case reports.
 Every file is written atomically.
@@ -30,17 +31,19 @@ from pathlib import Path
 import attrs
 import numpy as np
 
-from rotorid.data import ManeuverSet
 from rotorid.io import atomic_write
 from rotorid.model.derivatives import delayed_derivative
-from rotorid.report.plots.case import plot_rmse_path, plot_time_histories, save_figure
-from rotorid.report.plots.frequency import plot_bode, plot_error
-from rotorid.study.expectations import check_signs
+from rotorid.report.figures import (
+    ReportFigure,
+    case_figures,
+    file_stem,
+    flight_label,
+    rmse_caption,
+)
+from rotorid.study.expectations import check_signs, derivative_unit
 from rotorid.study.result import KEY_DERIVATIVES, MODELS
-from rotorid.units import unit_system
-from rotorid.verification.compare import COHERENCE_THRESHOLD, envelopes_by_name
+from rotorid.verification.compare import COHERENCE_THRESHOLD
 from rotorid.verification.envelopes import error_db_deg
-from rotorid.verification.pairs import parse_pair
 
 #: The on-axis pairs the paper requires inside the MUAD bounds with delays.
 ON_AXIS_PAIRS = ("q/long", "p/lat", "r/ped", "az/coll")
@@ -144,10 +147,15 @@ def _number(value, digits: int = 4) -> str:
     return f"{value:.{digits}g}"
 
 
+def parameter_unit(name: str, units: str) -> str:
+    """Unit of an estimated parameter: s for a delay, else the derivative's unit."""
+    return "s" if delayed_derivative(name) else derivative_unit(name, units)
+
+
 def removed_rows(result) -> list[list[str]]:
     """Appendix B, removed parameters: step, parameter, criterion, metric, RMSE, iterations."""
-    rows = [["step", "removed", "criterion", "metric %", "parameters", "RMSE", "iterations",
-             "selected"]]
+    rows = [["step", "removed", "criterion", "metric [%]", "parameters [-]",
+             "RMSE [mixed units]", "iterations [-]", "selected"]]
     selected = result.path.selected_index
     for step in result.path.steps:
         removal = step.removal
@@ -161,14 +169,15 @@ def removed_rows(result) -> list[list[str]]:
 
 def parameter_rows(result) -> list[list[str]]:
     """Appendix B, identified parameters of both models: value, CR bound, CR %, insens. %."""
-    header = ["parameter"]
+    header = ["parameter", "unit"]
     for label in MODELS:
-        header += [f"{label}: value", f"{label}: CR", f"{label}: CR %", f"{label}: I %"]
+        header += [f"{label}: value", f"{label}: CR", f"{label}: CR [%]", f"{label}: I [%]"]
     names = list(result.estimates["no delays"].parameter_names)
     names += [n for n in result.estimates["with delays"].parameter_names if n not in names]
     rows = [header]
+    units = result.estimates["with delays"].units
     for name in names:
-        row = [name]
+        row = [name, parameter_unit(name, units)]
         for label in MODELS:
             estimate = result.estimates[label]
             if name not in estimate.parameter_names:
@@ -183,8 +192,18 @@ def parameter_rows(result) -> list[list[str]]:
 
 
 def key_derivative_rows(result) -> list[list[str]]:
+    if not has_truth_model(result):
+        estimate = result.estimates["with delays"]
+        rows = [["derivative", "unit", "identified", "CR bound"]]
+        for name in KEY_DERIVATIVES:
+            if name in estimate.parameter_names:
+                i = estimate.index(name)
+                rows.append([name, derivative_unit(name, estimate.units),
+                             _number(float(estimate.values[i])),
+                             _number(float(estimate.cramer_rao[i]), 3)])
+        return rows
     rows = [["derivative", "unit", "identified", "CR bound", "truth linearisation",
-             "identified / truth", "published reference", "expected sign from", "sign"]]
+             "identified / truth [-]", "published reference", "expected sign from", "sign"]]
     for check in key_derivative_checks(result):
         rows.append([check.name, check.unit, _number(check.identified), _number(check.cramer_rao, 3),
                      _number(check.truth_linearisation), _number(check.ratio_to_truth, 3),
@@ -194,8 +213,8 @@ def key_derivative_rows(result) -> list[list[str]]:
 
 def verification_rows(result) -> list[list[str]]:
     """Per sweep pair and model: coherent points, MUAD/AEE status, worst margins, J."""
-    rows = [["pair", "model", f"points γ² ≥ {COHERENCE_THRESHOLD:g}", "MUAD", "worst margin dB / deg", "AEE",
-             "J (mismatch)", "mean |∠ε| deg"]]
+    rows = [["pair", "model", f"points γ² ≥ {COHERENCE_THRESHOLD:g} [-]", "MUAD",
+             "worst margin [dB / deg]", "AEE", "J (mismatch) [-]", "mean |∠ε| [deg]"]]
     for label in MODELS:
         verification = result.verification.get(label)
         for item in () if verification is None else verification.pairs:
@@ -258,7 +277,7 @@ def comparison_html(result) -> str:
                      f"{c.frequency_estimate.stop_reason}, {c.seconds:.1f} s"
                      for label, c in result.frequency_comparison.items())
     return "\n".join([
-        "<h2>Frequency-domain fit beside the time-domain fit</h2>",
+        '<h2 id="comparison">Frequency-domain fit beside the time-domain fit</h2>',
         "<p>Each model's structure fitted to the verification sweeps' frequency responses by "
         "the mismatch cost J (frequency-response estimator, from equation-error start values), "
         "then judged like the time-domain fit: J per pair on the same measured responses, "
@@ -285,65 +304,39 @@ def _html_table(rows: Sequence[Sequence[str]], highlight: int | None = None) -> 
     return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
 
 
-# ----------------------------------------------------------------- figures
-def _stem(text: str) -> str:
-    return "".join(c if c.isalnum() or c in "-_" else "_" for c in text)
-
-
-def case_figures(result, figures_dir: Path) -> dict[str, list[str]]:
-    """Write the case's figures; returns section → figure file names (PNG, relative)."""
-    figures_dir.mkdir(parents=True, exist_ok=True)
-    written = {"reduction": [], "time": [], "frequency": [], "bode": []}
-    units = unit_system(result.estimates["with delays"].units)
-    name = result.name
-    figure = plot_rmse_path(result.path, title=f"{name}: RMSE versus removed parameters")
-    save_figure(figure, figures_dir / "rmse")
-    written["reduction"].append("rmse.png")
-    doublets = [m for m in result.identification if m.metadata.get("kind") == "2311"]
-    outputs = ({label: result.simulated(label, ManeuverSet(doublets,
-                                                           hold=result.identification.hold))
-                for label in MODELS} if doublets else {})
-    for index, maneuver in enumerate(doublets):
-        simulated = {label: outputs[label][index] for label in MODELS}
-        figure = plot_time_histories(maneuver, simulated,
-                                     title=f"{name}: 2311 input on {maneuver.metadata.get('axis')}"
-                                           f" ({maneuver.name})")
-        stem = f"time_{_stem(maneuver.name)}"
-        save_figure(figure, figures_dir / stem)
-        written["time"].append(f"{stem}.png")
-    envelopes = [e for e in envelopes_by_name(result.case.envelopes).values()
-                 if e.kind == "bounds"]
-    reference = result.verification.get("with delays")
-    for item in () if reference is None else reference.pairs:
-        output, control = parse_pair(item.pair)
-        errors = {label: result.verification[label][item.pair] for label in MODELS
-                  if label in result.verification}
-        figure = plot_error(errors, envelopes,
-                            title=f"{name}: {item.pair} error ε = H_model/H_truth (sweeps)")
-        stem = f"error_{output}_{control}"
-        save_figure(figure, figures_dir / stem)
-        written["frequency"].append(f"{stem}.png")
-        figure = plot_bode(item, output_unit=units.label(output),
-                           title=f"{name}: {item.pair} frequency responses (model with delays)")
-        stem = f"bode_{output}_{control}"
-        save_figure(figure, figures_dir / stem)
-        written["bode"].append(f"{stem}.png")
-    return written
+def has_truth_model(result) -> bool:
+    """Whether the case's data come from a truth model (a simulated helicopter); a
+    files-source case is about the user's own aircraft, with measured data only."""
+    return result.truth_derivatives is not None
 
 
 # ----------------------------------------------------------------- HTML
-_STYLE = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}
-table{border-collapse:collapse;margin:0.8em 0;font-size:0.85em}
+_STYLE = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222}
+table{border-collapse:collapse;margin:0.8em 0;font-size:0.85em;display:block;max-width:100%;
+overflow-x:auto}
 th,td{border:1px solid #ccc;padding:3px 7px;text-align:right}th{background:#eee}
 td:first-child,th:first-child{text-align:left}tr.mark{background:#fff3c4}
-img{max-width:100%;border:1px solid #ddd;margin:0.4em 0}.pass{color:#176117}.fail{color:#a11}
+figure{margin:1em 0 1.6em}figure img{max-width:100%;border:1px solid #ddd}
+figcaption{font-size:0.88em;color:#333;max-width:62em}
+nav.toc{background:#f7f7f7;border:1px solid #ddd;padding:0.4em 1.2em;margin:1em 0}
+nav.toc ul{margin:0.2em 0;padding-left:1.2em}.pass{color:#176117}.fail{color:#a11}
 .na{color:#777}code{background:#f4f4f4;padding:0 3px}"""
 
 
-def _page(title: str, body: str) -> str:
+def _page(title: str, body: str, contents: Sequence[tuple[str, str]] = ()) -> str:
+    """A self-contained page; ``contents`` lists (anchor, heading) pairs for its table of
+    contents (nested entries start their heading with two spaces)."""
+    toc = ""
+    if contents:
+        items = "".join(
+            f'<li{" style=margin-left:1.2em" if text.startswith("  ") else ""}>'
+            f'<a href="#{anchor}">{html.escape(text.strip())}</a></li>'
+            for anchor, text in contents)
+        toc = f'<nav class="toc"><strong>Contents</strong><ul>{items}</ul></nav>\n'
     return (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+            f"<meta name=\"viewport\" content=\"width=device-width\">"
             f"<title>{html.escape(title)}</title><style>{_STYLE}</style></head>"
-            f"<body>\n<h1>{html.escape(title)}</h1>\n{body}\n</body></html>\n")
+            f"<body>\n<h1>{html.escape(title)}</h1>\n{toc}{body}\n</body></html>\n")
 
 
 def _verdict(passed: bool | None) -> str:
@@ -355,14 +348,21 @@ def _verdict(passed: bool | None) -> str:
 def checks_html(checks: Sequence[Check]) -> str:
     rows = "".join(f"<tr><td>{html.escape(c.claim)}</td><td>{html.escape(c.measured)}</td>"
                    f"<td>{_verdict(c.passed)}</td></tr>" for c in checks)
-    return ("<table><thead><tr><th>claim</th><th>measured</th><th>holds</th></tr></thead>"
-            f"<tbody>{rows}</tbody></table>")
+    return ("<table><thead><tr><th>claim</th><th>measured (units as stated)</th>"
+            f"<th>holds</th></tr></thead><tbody>{rows}</tbody></table>")
 
 
-def _images(files: Sequence[str], prefix: str = "figures/") -> str:
-    return "".join(f'<p><a href="{prefix}{html.escape(f[:-4])}.svg">'
-                   f'<img src="{prefix}{html.escape(f)}" alt="{html.escape(f)}"></a></p>'
-                   for f in files)
+def figures_html(figures: Sequence[ReportFigure], prefix: str = "figures/") -> str:
+    """Each figure linked to its SVG, with its caption under it."""
+    return "".join(
+        f'<figure><a href="{prefix}{html.escape(f.file[:-4])}.svg">'
+        f'<img src="{prefix}{html.escape(f.file)}" alt="{html.escape(f.file)}"></a>'
+        f"<figcaption>{f.caption}</figcaption></figure>" for f in figures)
+
+
+def pair_anchor(pair: str) -> str:
+    """HTML id of a verified pair's section, e.g. ``pair-q-long``."""
+    return "pair-" + file_stem(pair.replace("/", "-"))
 
 
 def _delays_text(result) -> str:
@@ -387,17 +387,55 @@ def _kinds(maneuvers) -> list[str]:
     return list(dict.fromkeys(str(m.metadata.get("kind", "unspecified")) for m in maneuvers))
 
 
-def case_html(result, figures: Mapping[str, list[str]], claims: Sequence[Check]) -> str:
+def _verification_verdicts(result) -> tuple[list[str], list[str]]:
+    """(passed, failed): one line per pair of the model with delays and its MUAD check."""
+    passed, failed = [], []
+    verification = result.verification.get("with delays")
+    for item in () if verification is None else verification.pairs:
+        check = item.checks.get("muad")
+        if check is None or check.passed is None:
+            continue
+        line = (f"{item.pair} {check.n_inside}/{check.n_used} points inside MUAD "
+                f"(worst {check.worst_margin_db:+.1f} dB / {check.worst_margin_deg:+.0f}°)")
+        (passed if check.passed else failed).append(line)
+    return passed, failed
+
+
+def summary_html(result, claims: Sequence[Check]) -> str:
+    """The case in a few lines: selected structure, verdicts, what fails and why."""
+    path, estimates = result.path, result.estimates
+    items = [f"Selected structure: step {path.selected_index} of {len(path.steps) - 1} by rule "
+             f"<code>{html.escape(path.rule)}</code>, {path.selected.n_parameters} parameters; "
+             f"RMSE {estimates['no delays'].rmse:.4f} without delays, "
+             f"{estimates['with delays'].rmse:.4f} with delays "
+             f"({html.escape(_delays_text(result).split('. ')[0])})."]
+    passed, failed = _verification_verdicts(result)
+    items.append(f"Frequency-domain verification, model with delays: {len(passed)} of "
+                 f"{len(passed) + len(failed)} checked pairs inside MUAD"
+                 + (f"; outside: {html.escape('; '.join(failed))}" if failed else "") + ".")
+    if claims:
+        decided, not_holding = claims_tally(claims)
+        items.append(f"The paper's claims: {len(decided) - len(not_holding)} of {len(decided)} "
+                     "hold" + ("; not: " + html.escape("; ".join(
+                         f"{c.claim} ({c.measured})" for c in not_holding))
+                         if not_holding else "") + ".")
+    return "<ul>" + "".join(f"<li>{item}</li>" for item in items) + "</ul>"
+
+
+def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
+              claims: Sequence[Check]) -> str:
     """The case report page (figures referenced relative to the case directory; ``claims``
-    from :func:`paper_checks`)."""
+    from :func:`paper_checks`, empty for a case about measured data only)."""
     case, path = result.case, result.path
     estimates = result.estimates
+    truth = has_truth_model(result)
     notes = sorted({n for v in result.verification.values() for n in v.notes})
     seconds = ", ".join(f"{k} {v:.0f} s" for k, v in result.seconds.items())
     if result.resumed_steps:
         seconds = (f"{seconds} (this run, which resumed after {result.resumed_steps} finished "
                    f"reduction steps)")
     verification_count = 0 if result.verification_data is None else len(result.verification_data)
+    contents = [("summary", "Summary")]
     body = [
         f"<p>{html.escape(case.description)}. Trim: {html.escape(result.condition.describe())}. "
         f"{len(result.identification)} identification maneuvers "
@@ -408,51 +446,70 @@ def case_html(result, figures: Mapping[str, list[str]], claims: Sequence[Check])
         "<p>Machine-readable results: <a href=\"result.json\">result.json</a>; tables: "
         + ", ".join(f'<a href="tables/{t}.csv">{t}.csv</a>'
                     for t in ("removed", "parameters", "key_derivatives", "verification",
-                              "checks")) + ".</p>",
-        "<h2>The paper's claims, measured</h2>", checks_html(claims),
-        "<h2>Model reduction</h2>",
+                              *(("checks",) if claims else ()))) + ".</p>",
+        '<h2 id="summary">Summary</h2>', summary_html(result, claims)]
+    if claims:
+        contents.append(("claims", "The paper's claims, measured"))
+        body += ['<h2 id="claims">The paper\'s claims, measured</h2>', checks_html(claims)]
+    contents += [("reduction", "Model reduction"), ("delays", "Time delays"),
+                 ("parameters", "Identified parameters"), ("key-derivatives", "Key derivatives"),
+                 ("time-histories", "Time histories"), ("verification", "Frequency-domain "
+                                                                       "verification")]
+    key_text = ("Identified (model with delays) beside the truth model's residualised 6-DoF "
+                "linearisation and the published Helisim Bo-105 values (Padfield 2007)."
+                if truth else "Identified values of the model with delays (measured data: "
+                              "no reference values were given).")
+    body += [
+        '<h2 id="reduction">Model reduction</h2>',
         f"<p>Selected step {path.selected_index} of {len(path.steps) - 1} by rule "
         f"<code>{path.rule}</code> (tolerance {path.rmse_tolerance:.0%}): "
         f"{path.selected.n_parameters} parameters, RMSE {path.selected.rmse:.4f}; "
         f"removed in order: {html.escape(', '.join(path.removed) or 'none')}.</p>",
-        _images(figures.get("reduction", [])),
+        figures_html(figures.get("reduction", [])),
         "<h3>Removed parameters (Appendix B)</h3>", _html_table(removed_rows(result), 7),
-        "<h2>Time delays</h2>", f"<p>{html.escape(_delays_text(result))}. RMSE without delays "
+        '<h2 id="delays">Time delays</h2>',
+        f"<p>{html.escape(_delays_text(result))}. RMSE without delays "
         f"{estimates['no delays'].rmse:.4f}, with delays {estimates['with delays'].rmse:.4f}.</p>",
-        "<h2>Identified parameters (Appendix B)</h2>",
-        "<p>CR: Cramér-Rao bound; CR % and I %: Cramér-Rao bound and insensitivity relative to "
-        "the value.</p>", _html_table(parameter_rows(result)),
-        "<h2>Key derivatives: signs and magnitudes</h2>",
-        "<p>Identified (model with delays) beside the truth model's residualised 6-DoF "
-        "linearisation and the published Helisim Bo-105 values (Padfield 2007).</p>",
-        _html_table(key_derivative_rows(result), 8),
-        "<h2>Time histories on the 2311 inputs</h2>", _images(figures.get("time", [])),
-        "<h2>Frequency-domain verification on the sweeps</h2>",
-        "".join(f"<p class=\"na\">note: {html.escape(n)}</p>" for n in notes),
-        _html_table(verification_rows(result)),
-        _images(figures.get("frequency", [])),
-        "<h3>Bode overlays (model with delays)</h3>",
-        "<p>Truth estimated from the sweeps, the model's single-input response (simulated, or "
-        "apparent for an unstable model), and its analytic response with exact delays.</p>",
-        _images(figures.get("bode", [])),
-        comparison_html(result),
-    ]
-    return _page(f"rotorid study — case {result.name}", "\n".join(body))
+        '<h2 id="parameters">Identified parameters (Appendix B)</h2>',
+        "<p>CR: Cramér-Rao bound (in the parameter's unit); CR % and I %: Cramér-Rao bound and "
+        "insensitivity relative to the value.</p>", _html_table(parameter_rows(result)),
+        '<h2 id="key-derivatives">Key derivatives</h2>', f"<p>{key_text}</p>",
+        _html_table(key_derivative_rows(result), None if not truth else 8),
+        '<h2 id="time-histories">Time histories of the identification maneuvers</h2>',
+        figures_html(figures.get("time", [])),
+        '<h2 id="verification">Frequency-domain verification on the sweeps</h2>',
+        _html_table(verification_rows(result))]
+    if notes:
+        body += ["<h3>Verification notes</h3>",
+                 "<ul>" + "".join(f"<li>{html.escape(n)}</li>" for n in notes) + "</ul>"]
+    bode = {f.pair: f for f in figures.get("bode", [])}
+    for error in figures.get("frequency", []):
+        anchor = pair_anchor(error.pair)
+        contents.append((anchor, f"  {error.pair}"))
+        shown = [error] + ([bode[error.pair]] if error.pair in bode else [])
+        body += [f'<h3 id="{anchor}">{html.escape(error.pair)}</h3>', figures_html(shown)]
+    if result.frequency_comparison:
+        contents.append(("comparison", "Frequency-domain fit"))
+        body.append(comparison_html(result))
+    return _page(f"rotorid study — case {result.name}", "\n".join(body), contents)
 
 
 def write_case_outputs(result, directory: str | Path) -> Path:
-    """Write the figures, tables and ``report.html`` of one case; returns the report path."""
+    """Write the figures, tables and ``report.html`` of one case; returns the report path.
+    A case about measured data only (no truth model) gets no claims table."""
     directory = Path(directory)
     figures = case_figures(result, directory / "figures")
     tables = directory / "tables"
     tables.mkdir(exist_ok=True)
-    claims = paper_checks(result)
-    checks = [["claim", "measured", "holds"]] + [
-        [c.claim, c.measured, "" if c.passed is None else str(c.passed).lower()]
-        for c in claims]
-    for name, rows in (("removed", removed_rows(result)), ("parameters", parameter_rows(result)),
-                       ("key_derivatives", key_derivative_rows(result)),
-                       ("verification", verification_rows(result)), ("checks", checks)):
+    claims = paper_checks(result) if has_truth_model(result) else []
+    written = [("removed", removed_rows(result)), ("parameters", parameter_rows(result)),
+               ("key_derivatives", key_derivative_rows(result)),
+               ("verification", verification_rows(result))]
+    if claims:
+        written.append(("checks", [["claim", "measured", "holds"]] + [
+            [c.claim, c.measured, "" if c.passed is None else str(c.passed).lower()]
+            for c in claims]))
+    for name, rows in written:
         atomic_write(tables / f"{name}.csv", _csv(rows))
     if result.frequency_comparison:
         atomic_write(tables / "comparison_costs.csv", _csv(comparison_cost_rows(result)))
@@ -464,25 +521,29 @@ def write_case_outputs(result, directory: str | Path) -> Path:
 def write_study_report(results: Mapping[str, object], out_dir: str | Path) -> Path:
     """Write ``<out>/report.html``: one summary per case, linking each case report."""
     out_dir = Path(out_dir)
-    rows = [["case", "trim", "parameters (removed)", "RMSE no delays", "RMSE with delays",
-             "delays", "claims holding"]]
-    sections = []
+    rows = [["case", "trim", "parameters (removed) [-]", "RMSE no delays [mixed units]",
+             "RMSE with delays [mixed units]", "delays [s]", "claims holding [-]"]]
+    sections, contents = [], [("overview", "Overview")]
     for name, result in results.items():
-        checks = paper_checks(result)
+        checks = paper_checks(result) if has_truth_model(result) else []
         decided, failed = claims_tally(checks)
         rows.append([name, result.condition.describe(),
                      f"{result.path.selected.n_parameters} ({len(result.path.removed)})",
                      f"{result.estimates['no delays'].rmse:.4f}",
                      f"{result.estimates['with delays'].rmse:.4f}", _delays_text(result),
-                     f"{len(decided) - len(failed)}/{len(decided)}"])
+                     f"{len(decided) - len(failed)}/{len(decided)}" if checks else "–"])
         link = f"{html.escape(name)}/report.html"
-        sections.append(f"<h2><a href=\"{link}\">Case {html.escape(name)}</a></h2>"
-                        + _images(["rmse.png"], prefix=f"{html.escape(name)}/figures/")
-                        + checks_html(checks))
-    body = ("<p>Each case links to its full report: reduction path, Appendix-B tables, time "
-            "histories, frequency-domain verification.</p>" + _html_table(rows)
-            + "\n".join(sections))
-    return atomic_write(out_dir / "report.html", _page("rotorid study report", body))
+        anchor = "case-" + file_stem(name)
+        contents.append((anchor, f"Case {name} ({flight_label(result.condition)})"))
+        rmse = ReportFigure("rmse.png", rmse_caption(result.path))
+        sections.append(f'<h2 id="{anchor}"><a href="{link}">Case {html.escape(name)}</a></h2>'
+                        + summary_html(result, checks)
+                        + figures_html([rmse], prefix=f"{html.escape(name)}/figures/")
+                        + (checks_html(checks) if checks else ""))
+    body = ('<h2 id="overview">Overview</h2><p>Each case links to its full report: reduction '
+            "path, Appendix-B tables, time histories, frequency-domain verification.</p>"
+            + _html_table(rows) + "\n".join(sections))
+    return atomic_write(out_dir / "report.html", _page("rotorid study report", body, contents))
 
 
 class StudyReport:

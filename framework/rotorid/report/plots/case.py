@@ -1,10 +1,14 @@
 """Figures of a study (matplotlib; safe under the Agg backend; each function returns its figure).
 
-* :func:`plot_rmse_path`: RMSE against the number of removed parameters, the selected structure
-  marked (the paper's figs. 1 and 6);
-* :func:`plot_time_histories`: one maneuver's recorded (truth) outputs beside the outputs of
-  one or several identified models, with the recorded inputs (figs. 2, 3, 7, 8, …);
+* :func:`plot_rmse_path`: RMSE against the number of removed parameters, zoomed on the region
+  the selection rules look at, with the tolerance band and where each rule lands (the paper's
+  figs. 1 and 6);
+* :func:`plot_time_histories`: one maneuver's measured outputs (thin, grey) behind the outputs
+  of one or several identified models, the recorded inputs, and a zoom on the input window
+  (figs. 2, 3, 7, 8, …);
 * :func:`save_figure`: PNG and SVG files of a figure, written atomically.
+
+Legends sit outside the axes, so they never cover data.
 """
 
 from __future__ import annotations
@@ -22,7 +26,15 @@ from rotorid.units import unit_system
 #: Output names as engineers write them.
 OUTPUT_TITLES = {"ax": "a_x", "az": "a_z", "q": "q", "theta": "θ", "ay": "a_y", "p": "p",
                  "phi": "φ", "r": "r"}
+#: Outputs shown in the zoom panels, by the control axis a maneuver excites: the on-axis
+#: response and the coupled one the delays act on (the roll-rate lag after a longitudinal
+#: input, the paper's point).
+ZOOM_OUTPUTS = {"long": ("q", "p"), "lat": ("p", "q"), "coll": ("az", "r"), "ped": ("r", "p")}
+#: Colour and width of measured data, drawn behind the models.
+MEASURED_STYLE = {"color": "0.6", "linewidth": 0.7, "zorder": 1}
 _STYLES = ("-", "--", "-.", ":")
+#: Headroom of the RMSE axis above the lowest RMSE, relative (the region selection looks at).
+RMSE_VIEW = 0.15
 
 
 def save_figure(figure, stem: str | Path, formats: tuple[str, ...] = ("png", "svg"),
@@ -42,76 +54,157 @@ def _save(figure, handle, fmt: str, dpi: int) -> None:
                        metadata={"Date": None} if fmt == "svg" else None)
 
 
+def rule_marks(path: ReductionPath) -> dict[str, int]:
+    """Step index where each selection rule lands: the lowest RMSE (the paper's rule) and
+    the rule the path selected with (label → step index)."""
+    rmse = np.array([s.rmse for s in path.steps], dtype=float)
+    marks = {"lowest RMSE": int(np.nanargmin(rmse))}
+    marks[f"selected ({path.rule}, tolerance {path.rmse_tolerance:.0%})"] = path.selected_index
+    return marks
+
+
 def plot_rmse_path(path: ReductionPath, title: str = "Model reduction"):
     """RMSE (the paper's eq. 18) against the number of removed parameters.
 
-    Each point is labelled with the parameter removed to reach it; the structure the
-    selection rule picked is marked, and the tolerance band of the rule is shaded.
+    The y-axis spans the lowest RMSE to ``RMSE_VIEW`` above it (steps beyond are drawn at the
+    top edge as open triangles), the tolerance band above the lowest RMSE is shaded, and the
+    step each rule of :func:`rule_marks` picks is marked. The parameter removed to reach each
+    step labels the top axis.
     """
     from matplotlib.figure import Figure
 
     removed, rmse = path.rmse_curve()
-    figure = Figure(figsize=(9.0, 4.6), layout="constrained")
+    figure = Figure(figsize=(10.0, 5.2), layout="constrained")
     axis = figure.subplots()
-    axis.plot(removed, rmse, "o-", color="C0", markersize=3.5, label="converged fit")
-    selected = path.selected_index
-    axis.plot(removed[selected], rmse[selected], "*", color="C3", markersize=14,
-              label=f"selected: {path.selected.n_parameters} parameters "
-                    f"({path.rule}, tolerance {path.rmse_tolerance:.0%})")
-    if path.rule == "lowest-rmse":
-        axis.axhspan(rmse.min(), rmse.min() * (1 + path.rmse_tolerance), color="C3",
-                     alpha=0.12, label="lowest RMSE + tolerance")
-    for step in path.steps[1:]:
-        axis.annotate(step.removal.parameter, (step.index, step.rmse), textcoords="offset points",
-                      xytext=(0, 6), rotation=90, fontsize=6, ha="center", va="bottom",
-                      color="0.35")
+    lowest = float(np.nanmin(rmse))
+    top = lowest * (1.0 + max(RMSE_VIEW, 3.0 * path.rmse_tolerance))
+    bottom = lowest * (1.0 - 0.25 * max(RMSE_VIEW, 3.0 * path.rmse_tolerance))
+    axis.axhspan(lowest, lowest * (1.0 + path.rmse_tolerance), facecolor="C1", alpha=0.3,
+                 edgecolor="C1", linewidth=1.0,
+                 label=f"lowest RMSE + tolerance ({path.rmse_tolerance:.0%})")
+    axis.plot(removed, np.where(rmse <= top, rmse, np.nan), "o-", color="C0", markersize=4,
+              label="converged fit")
+    above = rmse > top
+    if above.any():
+        axis.plot(removed[above], np.full(int(above.sum()), top), "^", color="C0",
+                  markerfacecolor="none", markersize=6, clip_on=False,
+                  label="RMSE above the axis (off scale)")
+    for (label, index), (marker, color) in zip(rule_marks(path).items(),
+                                                (("*", "C3"), ("D", "C2"), ("s", "C4"))):
+        step = path.steps[index]
+        axis.plot(index, min(rmse[index], top), marker, color=color, markersize=13,
+                  markerfacecolor="none" if marker != "*" else color, markeredgewidth=1.8,
+                  label=f"{label}: step {index}, {step.n_parameters} parameters, "
+                        f"RMSE {rmse[index]:.4f}", zorder=4)
+    axis.set_ylim(bottom, top)
+    axis.set_xlim(-0.5, removed[-1] + 0.5)
     axis.set_xlabel("number of removed parameters [-]")
     axis.set_ylabel("RMSE (eq. 18) [mixed units]")
-    axis.set_title(title)
-    finite = rmse[np.isfinite(rmse)]
-    if finite.size:
-        axis.set_ylim(0.0, finite.max() * 1.6)   # headroom: labels and legend
+    names = axis.secondary_xaxis("top")
+    names.set_xticks(removed[1:], [s.removal.parameter for s in path.steps[1:]], rotation=90,
+                     fontsize=7 if len(removed) < 45 else 6)
+    names.set_xlabel("parameter removed at that step")
     axis.grid(True, alpha=0.3)
-    axis.legend(loc="upper left", fontsize="small")
+    figure.suptitle(title)
+    figure.legend(loc="outside lower center", ncols=2, fontsize="small")
     return figure
+
+
+def input_window(maneuver: Maneuver, margin: float = 1.5) -> tuple[float, float]:
+    """Start and end (s) of the input window: from ``margin``/3 s before the first to
+    ``margin`` s after the last step of the primary input (a sample-to-sample change above
+    20 % of its excursion); for inputs without steps, the span where it deviates from its
+    first value by more than 5 % of its excursion."""
+    time = maneuver.time
+    control = maneuver.inputs[:, INPUT_CHANNELS.index(_primary_axis(maneuver))]
+    excursion = float(np.ptp(control))
+    if excursion == 0.0:
+        return float(time[0]), float(time[-1])
+    changing = np.abs(np.diff(control)) > 0.2 * excursion
+    if changing.any():
+        first, last = np.flatnonzero(changing)[[0, -1]] + (0, 1)
+    else:
+        first, last = np.flatnonzero(np.abs(control - control[0]) > 0.05 * excursion)[[0, -1]]
+    return (float(max(time[0], time[first] - margin / 3)),
+            float(min(time[-1], time[last] + margin)))
+
+
+def _primary_axis(maneuver: Maneuver) -> str:
+    axis = maneuver.metadata.get("axis")
+    if axis in ZOOM_OUTPUTS:
+        return axis
+    excursion = np.ptp(maneuver.inputs, axis=0)
+    return INPUT_CHANNELS[int(np.argmax(excursion))]
+
+
+def _outputs_panel(axis, time: np.ndarray, measured: np.ndarray,
+                   simulated: Mapping[str, np.ndarray], ylabel: str) -> None:
+    """One output: measured (N,) behind each model's simulation (N,) over ``time`` (N,)."""
+    axis.plot(time, measured, label="measured", **MEASURED_STYLE)
+    for index, (label, values) in enumerate(simulated.items()):
+        axis.plot(time, values, _STYLES[index % len(_STYLES)], color=f"C{index}",
+                  linewidth=1.4, label=label, zorder=3)
+    axis.set_ylabel(ylabel)
+    axis.grid(True, alpha=0.3)
 
 
 def plot_time_histories(maneuver: Maneuver, simulated: Mapping[str, np.ndarray],
                         title: str | None = None):
-    """Recorded outputs of ``maneuver`` against the simulated outputs of each model.
+    """Measured outputs of ``maneuver`` against the simulated outputs of each model.
+
+    Rows 1–4: the eight outputs (measured thin and grey behind the models; the input window
+    shaded); row 5: the inputs; row 6: the on-axis and the main coupled output zoomed on the
+    input window (:data:`ZOOM_OUTPUTS`).
 
     Args:
-        maneuver: the record (its outputs are drawn as "truth").
+        maneuver: the record (its outputs are drawn as "measured").
         simulated: label → simulated outputs, shape (N, 8) in ``OUTPUT_CHANNELS`` order.
     """
     from matplotlib.figure import Figure
 
     units = unit_system(maneuver.units)
-    figure = Figure(figsize=(10.0, 10.5), layout="constrained")
-    axes = figure.subplots(5, 2, sharex=True).ravel()
+    simulated = {label: np.asarray(outputs) for label, outputs in simulated.items()}
+    for label, outputs in simulated.items():
+        if outputs.shape != maneuver.outputs.shape:
+            raise ValueError(f"{label}: simulated outputs have shape {outputs.shape}, the "
+                             f"maneuver {maneuver.outputs.shape}")
+    figure = Figure(figsize=(10.0, 13.0), layout="constrained")
+    grid = figure.add_gridspec(6, 2, height_ratios=(1, 1, 1, 1, 0.9, 1.3))
+    first = figure.add_subplot(grid[0, 0])
+    axes = [first] + [figure.add_subplot(grid[k // 2, k % 2], sharex=first)
+                      for k in range(1, 10)]
+    start, end = input_window(maneuver)
     time = maneuver.time
     for column, name in enumerate(OUTPUT_CHANNELS):
-        axis = axes[column]
-        axis.plot(time, maneuver.outputs[:, column], color="k", linewidth=1.3, label="truth")
-        for index, (label, outputs) in enumerate(simulated.items()):
-            outputs = np.asarray(outputs)
-            if outputs.shape != maneuver.outputs.shape:
-                raise ValueError(f"{label}: simulated outputs have shape {outputs.shape}, the "
-                                 f"maneuver {maneuver.outputs.shape}")
-            axis.plot(time, outputs[:, column], _STYLES[index % len(_STYLES)],
-                      color=f"C{index + 1}", linewidth=1.1, label=label)
-        axis.set_ylabel(f"{OUTPUT_TITLES[name]} [{units.label(name)}]")
-        axis.grid(True, alpha=0.3)
+        _outputs_panel(axes[column], time, maneuver.outputs[:, column],
+                       {label: values[:, column] for label, values in simulated.items()},
+                       f"{OUTPUT_TITLES[name]} [{units.label(name)}]")
+        axes[column].axvspan(start, end, color="C8", alpha=0.08, zorder=0)
     for offset, (axis, pair) in enumerate(zip(axes[8:], (INPUT_CHANNELS[:2],
                                                           INPUT_CHANNELS[2:]))):
         for k, name in enumerate(pair):
             column = INPUT_CHANNELS.index(name)
-            axis.plot(time, maneuver.inputs[:, column], color=f"C{5 + 2 * offset + k}",
-                      label=f"δ_{name}")
+            axis.plot(time, maneuver.inputs[:, column], _STYLES[k], color=f"C{4 + 2 * offset + k}",
+                      label=f"δ_{name} [%]")
         axis.set_ylabel("control [% of travel]")
         axis.set_xlabel("time t [s]")
-        axis.legend(fontsize="small", loc="upper right")
+        axis.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.0, 1.0))
         axis.grid(True, alpha=0.3)
-    axes[0].legend(fontsize="small", loc="best")
-    figure.suptitle(title or f"{maneuver.name}: truth and identified models")
+    for axis in axes[:8]:
+        axis.tick_params(labelbottom=False)
+    mask = (time >= start) & (time <= end)
+    for k, name in enumerate(ZOOM_OUTPUTS[_primary_axis(maneuver)]):
+        zoom = figure.add_subplot(grid[5, k])
+        column = OUTPUT_CHANNELS.index(name)
+        _outputs_panel(zoom, time[mask], maneuver.outputs[mask, column],
+                       {label: values[mask, column] for label, values in simulated.items()},
+                       f"{OUTPUT_TITLES[name]} [{units.label(name)}]")
+        zoom.set_title(f"zoom: {OUTPUT_TITLES[name]} over the input window "
+                       f"{start:.1f}–{end:.1f} s", fontsize="medium")
+        zoom.set_xlabel("time t [s]")
+        zoom.set_facecolor((0.97, 0.97, 1.0))
+    handles, labels = axes[0].get_legend_handles_labels()
+    figure.legend(handles, labels, loc="outside lower center", ncols=len(labels),
+                  fontsize="small")
+    figure.suptitle(title or f"{maneuver.name}: measured and identified models")
     return figure

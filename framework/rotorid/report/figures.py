@@ -1,0 +1,146 @@
+"""The figures of a case report, each with the caption the report shows under it.
+
+:func:`case_figures` writes into ``<case>/figures/``: ``rmse``, ``time_<maneuver>`` for every
+identification maneuver, and ``error_<out>_<in>`` and ``bode_<out>_<in>`` for every verified
+pair (PNG and SVG each); titles name the flight condition ("hover", "70 kt").
+"""
+
+from __future__ import annotations
+
+import html
+from collections.abc import Sequence
+from pathlib import Path
+
+import attrs
+
+from rotorid.report.plots.case import plot_rmse_path, plot_time_histories, save_figure
+from rotorid.report.plots.frequency import plot_bode, plot_error
+from rotorid.study.result import MODELS
+from rotorid.units import unit_system
+from rotorid.verification.compare import envelopes_by_name
+from rotorid.verification.pairs import parse_pair
+
+
+@attrs.frozen
+class ReportFigure:
+    """One figure of a report: its PNG file name (relative to ``figures/``), the caption
+    under it, and the pair it belongs to ("" for figures of the whole case)."""
+
+    file: str
+    caption: str
+    pair: str = ""
+
+
+def file_stem(text: str) -> str:
+    return "".join(c if c.isalnum() or c in "-_" else "_" for c in text)
+
+
+def flight_label(condition) -> str:
+    """``"hover"`` or the airspeed, e.g. ``"70 kt"``: how titles name a flight condition."""
+    return "hover" if abs(condition.airspeed_kt) < 0.5 else f"{condition.airspeed_kt:g} kt"
+
+
+def rmse_caption(path) -> str:
+    return ("RMSE (eq. 18) of each converged structure against the number of removed "
+            "parameters; the name on the top axis is the parameter removed at that step. The "
+            f"shaded band spans the lowest RMSE to {path.rmse_tolerance:.0%} above it; the star "
+            "marks the lowest RMSE (the paper's rule), the diamond the structure selected by "
+            f"rule <code>{html.escape(path.rule)}</code>. The y-axis shows the region the rules "
+            "look at; steps whose RMSE lies above it are drawn as open triangles at the top.")
+
+
+def _time_caption(maneuver, models: Sequence[str]) -> str:
+    kind = maneuver.metadata.get("kind", "maneuver")
+    axis = maneuver.metadata.get("axis")
+    on = f" on {axis}" if axis else ""
+    return (f"{html.escape(str(kind))} input{html.escape(on)} "
+            f"(<code>{html.escape(maneuver.name)}</code>, identification data): measured "
+            f"outputs (thin grey) behind the simulated outputs of the models "
+            f"{html.escape(' and '.join(models))}, fed the recorded inputs; row 5 the inputs "
+            "(% of travel), row 6 the on-axis and the main coupled output zoomed on the input "
+            "window (shaded above).")
+
+
+def _error_caption(pair: str, muad_range: str) -> str:
+    return (f"{html.escape(pair)}: error ε = H_model/H_measured of each model's response on "
+            "the sweeps (magnitude in dB, phase as principal value in deg) against the MUAD "
+            f"bounds (dashed over {muad_range}, where points are checked; dotted where "
+            "extrapolated, not checked). Filled markers: γ² ≥ 0.8 (checked); open: 0.6 ≤ γ² < "
+            "0.8 (shown, not checked); lower coherence hidden. The legend counts each model's "
+            "checked points inside and outside the bounds; the bottom panel is the coherence of "
+            "the measured response.")
+
+
+def _bode_caption(pair: str, item) -> str:
+    model = ("the model's response estimated from its simulation of the recorded sweep "
+             "inputs, processed exactly like the measured one (simulated)"
+             if item.model_source == "simulated" else
+             "the model's apparent response: its analytic response to the pair's input plus "
+             "the effect of the other recorded inputs, formed as in the measured estimate "
+             "(used for a model that cannot be simulated over the whole sweep)")
+    text = (f"{html.escape(pair)}, model with delays. Blue: the measured response estimated "
+            f"from the sweeps (single input); orange: {model}")
+    if item.conditioned is not None and item.conditioned.conditioned_on:
+        text += (f"; red: the measured response conditioned on "
+                 f"{html.escape(', '.join(item.conditioned.conditioned_on))} (the other inputs "
+                 "that moved, removed by partial spectra; its partial coherence below)")
+    if item.analytic is not None:
+        text += ("; green line: the model's analytic response with exact delays, which the "
+                 "conditioned response is compared with")
+    return text + (". Phases share one 360° branch; markers as in the error plots.")
+
+
+def _muad_range(result) -> str:
+    envelopes = envelopes_by_name(result.case.envelopes)
+    muad = envelopes.get("muad")
+    if muad is None or getattr(muad, "omega_range", None) is None:
+        return "the envelope's range"
+    low, high = muad.omega_range
+    return f"{low:g}–{high:g} rad/s"
+
+
+def case_figures(result, figures_dir: Path) -> dict[str, list[ReportFigure]]:
+    """Write the case's figures; returns section → figures (PNG file name and caption).
+
+    Every identification maneuver gets a time-history figure, whatever its kind."""
+    figures_dir.mkdir(parents=True, exist_ok=True)
+    written = {"reduction": [], "time": [], "frequency": [], "bode": []}
+    units = unit_system(result.estimates["with delays"].units)
+    flight = flight_label(result.condition)
+    figure = plot_rmse_path(result.path, title=f"{flight}: RMSE versus removed parameters")
+    save_figure(figure, figures_dir / "rmse")
+    written["reduction"].append(ReportFigure("rmse.png", rmse_caption(result.path)))
+    maneuvers = list(result.identification)
+    outputs = {label: result.simulated(label) for label in MODELS}
+    for index, maneuver in enumerate(maneuvers):
+        simulated = {label: outputs[label][index] for label in MODELS}
+        kind, axis = maneuver.metadata.get("kind"), maneuver.metadata.get("axis")
+        what = " ".join(str(v) for v in (kind, "input on" if axis else None, axis) if v)
+        figure = plot_time_histories(maneuver, simulated,
+                                     title=f"{flight}: {what or 'maneuver'} ({maneuver.name})")
+        name = f"time_{file_stem(maneuver.name)}"
+        save_figure(figure, figures_dir / name)
+        written["time"].append(ReportFigure(f"{name}.png", _time_caption(maneuver, MODELS)))
+    envelopes = [e for e in envelopes_by_name(result.case.envelopes).values()
+                 if e.kind == "bounds"]
+    reference = result.verification.get("with delays")
+    muad_range = _muad_range(result)
+    for item in () if reference is None else reference.pairs:
+        output, control = parse_pair(item.pair)
+        errors = {label: result.verification[label][item.pair] for label in MODELS
+                  if label in result.verification}
+        figure = plot_error(errors, envelopes,
+                            title=f"{flight}: {item.pair} error ε = H_model/H_measured")
+        stem = f"error_{output}_{control}"
+        save_figure(figure, figures_dir / stem)
+        written["frequency"].append(ReportFigure(f"{stem}.png",
+                                                 _error_caption(item.pair, muad_range),
+                                                 item.pair))
+        figure = plot_bode(item, output_unit=units.label(output),
+                           title=f"{flight}: {item.pair} frequency responses "
+                                 f"(model with delays)")
+        stem = f"bode_{output}_{control}"
+        save_figure(figure, figures_dir / stem)
+        written["bode"].append(ReportFigure(f"{stem}.png", _bode_caption(item.pair, item),
+                                            item.pair))
+    return written

@@ -1,0 +1,195 @@
+"""Each figure type of the study report, checked on the figure object: axis limits from the
+coherent points, labels with units, legends outside the axes, no duplicate lines; and the
+report of a case about measured data only (no truth model)."""
+
+import re
+import shutil
+
+import attrs
+import matplotlib
+import numpy as np
+import pytest
+
+matplotlib.use("Agg")
+
+from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
+from rotorid.report.html import write_case_outputs  # noqa: E402
+from rotorid.report.plots.case import input_window, plot_rmse_path, plot_time_histories  # noqa: E402
+from rotorid.report.plots.frequency import (  # noqa: E402
+    common_branch_phase_deg,
+    plot_bode,
+    plot_error,
+)
+from rotorid.study.case import FlightCase  # noqa: E402
+from rotorid.study.pipeline import run_case  # noqa: E402
+from rotorid.study.result import MODELS  # noqa: E402
+from rotorid.verification.compare import envelopes_by_name  # noqa: E402
+from rotorid.verification.envelopes import error_db_deg  # noqa: E402
+
+UNIT = re.compile(r"\[[^\]]+\]")
+
+
+@pytest.fixture(scope="module")
+def hover(quick_study, tmp_path_factory):
+    """The quick study's hover case as a CaseResult, resumed from a copy of its files."""
+    out = tmp_path_factory.mktemp("figures")
+    shutil.copytree(quick_study.out / "hover", out / "hover")
+    return run_case(FlightCase.load("hover").quick(), out, resume=True, progress=None)
+
+
+def _legend_outside(figure) -> None:
+    """The figure's legends sit outside every axes' box (in display coordinates)."""
+    canvas = FigureCanvasAgg(figure)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    legends = figure.legends
+    assert legends, "the figure has no figure-level legend"
+    for legend in legends:
+        box = legend.get_window_extent(renderer)
+        for axis in figure.axes:
+            assert not box.overlaps(axis.get_window_extent(renderer)), axis.get_ylabel()
+
+
+def _no_duplicate_lines(axis) -> None:
+    seen = []
+    for line in axis.get_lines():
+        x, y = (np.asarray(v, float) for v in line.get_data())
+        for other in seen:
+            assert not (x.shape == other[0].shape and np.array_equal(x, other[0], equal_nan=True)
+                        and np.array_equal(y, other[1], equal_nan=True) and x.size), (
+                f"{axis.get_ylabel()}: line {line.get_label()!r} drawn twice")
+        seen.append((x, y))
+
+
+def test_rmse_curve(hover):
+    path = hover.path
+    figure = plot_rmse_path(path, title="hover: RMSE")
+    (axis, *_) = figure.axes
+    rmse = np.array([s.rmse for s in path.steps])
+    low, high = axis.get_ylim()
+    # The region the rules look at: the lowest RMSE near the bottom, the band well visible.
+    assert low < rmse.min() and high <= rmse.min() * 1.2
+    band_height = rmse.min() * path.rmse_tolerance / (high - low)
+    assert band_height > 0.05
+    labels = [t.get_text() for t in figure.legends[0].get_texts()]
+    assert any(label.startswith("lowest RMSE: step") for label in labels)
+    assert any(label.startswith(f"selected ({path.rule}") for label in labels)
+    assert UNIT.search(axis.get_xlabel()) and UNIT.search(axis.get_ylabel())
+    _legend_outside(figure)
+    _no_duplicate_lines(axis)
+
+
+def test_time_histories_draw_measured_thin_and_grey_behind_the_models(hover):
+    maneuver = next(m for m in hover.identification if m.metadata["kind"] == "3211")
+    index = list(hover.identification).index(maneuver)
+    simulated = {label: hover.simulated(label)[index] for label in MODELS}
+    figure = plot_time_histories(maneuver, simulated, title="t")
+    outputs = figure.axes[:8]
+    for axis in outputs:
+        measured, *models = axis.get_lines()
+        assert measured.get_label() == "measured"
+        assert measured.get_linewidth() < min(m.get_linewidth() for m in models)
+        assert measured.get_zorder() < min(m.get_zorder() for m in models)
+        assert matplotlib.colors.to_rgb(measured.get_color()) == (0.6, 0.6, 0.6)   # grey
+        assert UNIT.search(axis.get_ylabel())
+        _no_duplicate_lines(axis)
+    zooms = figure.axes[10:]
+    start, end = input_window(maneuver)
+    # A 3211 of 0.4 s steps starting at 2 s: the window spans it and not the whole record.
+    assert start < 2.0 < 2.0 + 7 * 0.4 < end < maneuver.time[-1]
+    assert len(zooms) == 2 and all(z.get_xlim()[1] <= end + 0.5 for z in zooms)
+    assert {z.get_ylabel().split()[0] for z in zooms} == {"q", "p"}
+    assert [t.get_text() for t in figure.legends[0].get_texts()] == ["measured", *MODELS]
+    _legend_outside(figure)
+
+
+def test_error_plot_limits_counts_and_legend(hover):
+    pair = "p/long"
+    errors = {label: hover.verification[label][pair] for label in MODELS}
+    envelopes = [e for e in envelopes_by_name(hover.case.envelopes).values()
+                 if e.kind == "bounds"]
+    figure = plot_error(errors, envelopes, title="e")
+    mag, phase, coherence = figure.axes[:3]
+    for axis, part in ((mag, 0), (phase, 1)):
+        values = np.concatenate([
+            error_db_deg(item.error)[part][item.coherence >= 0.8] for item in errors.values()])
+        low, high = axis.get_ylim()
+        span = values.max() - values.min()
+        # From the coherent points: they all show, with little more than a margin around.
+        assert low <= values.min() and high >= values.max()
+        assert (high - low) < max(span, 10.0) * 1.6 + 1.0
+    labels = [t.get_text() for t in figure.legends[0].get_texts()]
+    assert not any("not available" in label for label in labels)
+    for label, item in errors.items():
+        check = item.checks["muad"]
+        assert f"{label}: MUAD {check.n_inside}/{check.n_used} inside, {check.n_outside} " \
+               "outside" in labels
+    assert any(label.startswith("filled: γ² ≥ 0.8") for label in labels)
+    assert any(label.startswith("open: 0.6 ≤ γ² < 0.8") for label in labels)
+    assert len(coherence.get_lines()) == 2          # the truth's coherence once, the threshold
+    # MUAD drawn over the points' range: checked part dashed, extrapolated part dotted.
+    muad = [line for line in mag.get_lines() if line.get_label().startswith("MUAD")]
+    drawn = np.concatenate([line.get_xdata()[np.isfinite(line.get_ydata())] for line in muad])
+    omega = errors["with delays"].omega
+    assert drawn.min() <= omega.min() * 1.01 and drawn.max() >= omega.max() * 0.99
+    ticks = [t.get_text() for t in coherence.get_xticklabels() if t.get_text()]
+    assert {"1", "2", "5", "10"} <= set(ticks)
+    for axis in (mag, phase, coherence):
+        assert UNIT.search(axis.get_ylabel())
+        _no_duplicate_lines(axis)
+    assert UNIT.search(coherence.get_xlabel())
+    _legend_outside(figure)
+
+
+def test_bode_phases_share_one_branch(hover):
+    item = hover.verification["with delays"]["q/long"]
+    figure = plot_bode(item, "deg/s")
+    mag, phase, coherence = figure.axes[:3]
+    analytic = next(line for line in phase.get_lines() if line.get_color() == "C2")
+    reference = np.interp(item.omega, analytic.get_xdata(), analytic.get_ydata())
+    for line in phase.get_lines():
+        x, y = line.get_xdata(), line.get_ydata()
+        if len(x) == 0:
+            continue
+        # Every curve within half a turn of the analytic response, point by point.
+        gap = np.abs(y - np.interp(x, item.omega, reference))
+        assert np.all(gap[np.isfinite(gap)] <= 180.0), line.get_label()
+    low, high = phase.get_ylim()
+    assert high - low < 540.0
+    assert "[dB, deg/s/%]" in mag.get_ylabel() and UNIT.search(phase.get_ylabel())
+    for axis in (mag, phase, coherence):
+        _no_duplicate_lines(axis)
+    _legend_outside(figure)
+
+
+def test_common_branch_removes_whole_turns():
+    omega = np.geomspace(1, 10, 50)
+    reference = -100.0 * np.log10(omega) * 4 - 10.0          # down to -410 deg
+    response = np.exp(1j * np.radians(reference + 5.0))       # principal values wrap
+    phase = common_branch_phase_deg(response, reference)
+    np.testing.assert_allclose(phase, reference + 5.0, atol=1e-9)
+
+
+def test_a_report_about_measured_data_only(hover, tmp_path):
+    """A files-source case (no truth model): no paper claims, no truth or Bo-105 values,
+    every identification maneuver drawn, data called measured, units in every table."""
+    maneuvers = [next(m for m in hover.identification if m.metadata["kind"] == kind)
+                 for kind in ("3211", "2311")]
+    identification = attrs.evolve(hover.identification, maneuvers=maneuvers)
+    verification = {label: attrs.evolve(v, pairs=v.pairs[:1])
+                    for label, v in hover.verification.items()}
+    case = attrs.evolve(hover.case, data={"source": "files", "identification": "f/*.csv"},
+                        description="Own aircraft, flight test")
+    result = attrs.evolve(hover, case=case, identification=identification,
+                          verification=verification, truth_derivatives=None,
+                          truth_delays=None)
+    page = write_case_outputs(result, tmp_path / "own").read_text(encoding="utf-8")
+    for word in ("paper's claims", "Bo-105", "Helisim", "Padfield", "truth"):
+        assert word not in page, word
+    assert "measured" in page
+    figures = sorted(p.name for p in (tmp_path / "own" / "figures").glob("time_*.png"))
+    assert figures == sorted(f"time_{m.name}.png" for m in maneuvers)
+    assert not (tmp_path / "own" / "tables" / "checks.csv").exists()
+    for table in re.findall(r"<table>.*?</table>", page, flags=re.DOTALL):
+        header = re.search(r"<thead>(.*?)</thead>", table)[1]
+        assert "[" in header or ">unit<" in header, header
