@@ -1,5 +1,7 @@
 """A longitudinal-only helicopter data set (no lat, ped, v, p, φ, r or ay columns) identifies
-with the ``longitudinal`` structure template through ``rotorid identify``.
+with the ``longitudinal`` structure template through ``rotorid identify``, also when the files
+name and scale their columns as a test range does and the model file's ``[channels]`` table
+maps them.
 
 The data are the test's own: the longitudinal structure simulated at known derivatives from
 3211 and doublet inputs on long and coll, with white measurement noise, written as CSV files
@@ -7,6 +9,7 @@ holding only time, long, coll, ax, az, q and theta.
 """
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -45,7 +48,7 @@ def _multistep(time: np.ndarray, start: float, step: float, pattern) -> np.ndarr
     return signal
 
 
-def _data(tmp_path):
+def _data(tmp_path, columns=COLUMNS, transform=lambda table: table):
     structure = ModelStructure.populated(CONDITION, "longitudinal").with_initial(TRUTH)
     time = np.arange(0.0, 12.0, 0.02)
     three_two_one_one = [(1, 3), (-1, 2), (1, 1), (-1, 1)]
@@ -65,9 +68,9 @@ def _data(tmp_path):
     paths = []
     for m, y in zip(maneuvers, outputs):
         noisy = y + rng.standard_normal(y.shape) * NOISE
-        table = np.column_stack([m.time, m.inputs, noisy])
+        table = transform(np.column_stack([m.time, m.inputs, noisy]))
         path = tmp_path / f"{m.name}.csv"
-        lines = [",".join(COLUMNS)] + [",".join(f"{v:.10g}" for v in row) for row in table]
+        lines = [",".join(columns)] + [",".join(f"{v:.10g}" for v in row) for row in table]
         path.write_text("\n".join(lines) + "\n", encoding="utf-8")
         paths.append(str(path))
     return paths
@@ -101,3 +104,63 @@ def test_a_channel_the_model_uses_but_the_files_lack_is_named(tmp_path, capsys):
     assert status != 0
     assert "has no channel" in error and "structure template" in error
     assert len(error.strip().splitlines()) == 1
+
+
+#: The test range's names and units: stick in % with the opposite sign, accelerations in g,
+#: rate and attitude in rad.
+RANGE_COLUMNS = ("time", "DELE", "DCOL", "NX_g", "NZ_g", "Q_radps", "THETA_rad")
+CHANNELS = """
+[channels]
+DELE = { signal = "long", unit = "%", scale = -1.0 }
+DCOL = { signal = "coll", unit = "%" }
+NX_g = { signal = "ax", unit = "g" }
+NZ_g = { signal = "az", unit = "g" }
+Q_radps = { signal = "q", unit = "rad/s" }
+THETA_rad = { signal = "theta", unit = "rad" }
+"""
+
+
+def _range_units(table: np.ndarray) -> np.ndarray:
+    g_ft = 9.80665 / 0.3048
+    return table * np.array([1.0, -1.0, 1.0, 1 / g_ft, 1 / g_ft, np.pi / 180, np.pi / 180])
+
+
+def test_a_channel_map_reads_the_test_range_names_and_units(tmp_path, capsys):
+    plain, mapped = tmp_path / "plain", tmp_path / "mapped"
+    plain.mkdir()
+    mapped.mkdir()
+    results = []
+    for folder, columns, transform, text in (
+            (plain, COLUMNS, lambda table: table, MODEL),
+            (mapped, RANGE_COLUMNS, _range_units, MODEL + CHANNELS)):
+        files = _data(folder, columns, transform)
+        model = folder / "model.toml"
+        model.write_text(text, encoding="utf-8")
+        out = folder / "result.json"
+        assert main(["identify", str(model), *files, "--out", str(out), "--quiet"]) == 0
+        results.append(json.loads(out.read_text(encoding="utf-8"))["parameters"])
+    assert RANGE_COLUMNS[1] in open(files[0], encoding="utf-8").readline()
+    for name, parameter in results[0].items():
+        assert results[1][name]["value"] == pytest.approx(parameter["value"], rel=1e-5,
+                                                          abs=1e-7), name
+
+
+@pytest.mark.parametrize("channels, fragment", [
+    ('DELX = { signal = "long", unit = "%" }', "has no column 'DELX' .linked to 'long'"),
+    ('Q_radps = { signal = "q", unit = "g" }', "unit g, which does not fit 'q' .rate."),
+    ('Q_radps = { signal = "q" }', "channel 'Q_radps' needs a table with 'signal' and 'unit'"),
+    ('Q_radps = { signal = "q", unit = "rad/s" }\nTHETA_rad = { signal = "q", unit = "rad" }',
+     "signal 'q' is linked to several columns"),
+])
+def test_bad_channel_maps_are_one_line_errors_naming_the_file(tmp_path, capsys, channels,
+                                                             fragment):
+    files = _data(tmp_path, RANGE_COLUMNS, _range_units)
+    model = tmp_path / "model.toml"
+    model.write_text(MODEL + CHANNELS.split("[channels]")[0] + "[channels]\n" + channels
+                     + "\n", encoding="utf-8")
+    status = main(["identify", str(model), *files, "--out", str(tmp_path / "r.json")])
+    error = capsys.readouterr().err
+    assert status != 0
+    assert len(error.strip().splitlines()) == 1, error
+    assert re.search(fragment, error), error
+    assert "model.toml" in error or ".csv" in error

@@ -140,6 +140,7 @@ class Maneuver:
         says (units per channel, resampling, trim removal; :mod:`rotorid.ingestion`), each
         step stated in the metadata."""
         where = f"maneuver {name!r}"
+        columns, ingestion = Ingestion.coerce(ingestion).mapped(columns, where)
         inputs = tuple(c for c in INPUT_CHANNELS if c in columns)
         outputs = tuple(c for c in OUTPUT_CHANNELS if c in columns)
         missing = [label for label, present in (("time", "time" in columns),

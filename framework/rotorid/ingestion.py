@@ -29,7 +29,15 @@ import attrs
 import numpy as np
 
 from rotorid.errors import DataError, DataWarning, SignalError
-from rotorid.units import CHANNEL_KINDS, canonical_unit, conversion_factor, unit_system
+from rotorid.model.signals import ChannelMap
+from rotorid.units import (
+    CHANNEL_KINDS,
+    canonical_unit,
+    conversion_factor,
+    unit_fits_kind,
+    unit_system,
+    units_of_kind,
+)
 
 RESAMPLE_METHODS = ("linear", "decimate")
 #: A step longer than this many median steps is a time gap.
@@ -69,6 +77,15 @@ def _units(value) -> dict[str, str]:
     return {str(k): canonical_unit(v) for k, v in value.items()}
 
 
+def _channel_map(value) -> ChannelMap:
+    if isinstance(value, ChannelMap):
+        return value
+    if not isinstance(value, Mapping):
+        raise DataError(f"channels must be a table COLUMN = {{ signal = ..., unit = ... }}, "
+                        f"got {value!r}")
+    return ChannelMap.from_mapping(value)
+
+
 @attrs.frozen
 class Ingestion:
     """What to do to recorded columns before they become a maneuver.
@@ -81,17 +98,54 @@ class Ingestion:
             needs one longer than the record's step.
         channel_units: channel → the unit it was recorded in, when that differs from its unit
             system's (outputs and extra channels only; controls keep their unit).
+        channels: a :class:`~rotorid.model.signals.ChannelMap` (or a ``[channels]`` table)
+            linking the record's own column names to channels, with unit, scale and offset;
+            applied first, by :meth:`mapped`.
     """
 
     trim: str | Mapping[str, float] | None = attrs.field(default=None, validator=_check_trim)
     resample: str | None = attrs.field(default=None, validator=_check_resample)
     sample_time: float | None = attrs.field(default=None, converter=_optional_positive)
     channel_units: Mapping[str, str] = attrs.field(factory=dict, converter=_units)
+    channels: ChannelMap = attrs.field(factory=ChannelMap, converter=_channel_map)
 
     def __attrs_post_init__(self):
         if self.resample == "decimate" and self.sample_time is None:
             raise DataError("resample = 'decimate' needs a sample_time (the interval after "
                             "decimation, s)")
+
+    def mapped(self, columns: Mapping[str, np.ndarray], where: str
+               ) -> tuple[dict[str, np.ndarray], "Ingestion"]:
+        """``columns`` with each column the map links read as its channel (``scale · column
+        + offset`` under the channel's name), and this ingestion without the map and with
+        the linked outputs' units added to ``channel_units`` (controls keep the data's
+        unit). ``where`` names the record in errors."""
+        links = self.channels.links
+        if not links:
+            return dict(columns), self
+        source = self.channels.source
+        linked = {link.column for link in links}
+        result = {k: v for k, v in columns.items() if k not in linked}
+        units = dict(self.channel_units)
+        for link in links:
+            if link.column not in columns:
+                raise DataError(f"{where} has no column {link.column!r} (linked to "
+                                f"{link.signal!r} in {source}); columns: "
+                                f"{', '.join(columns)}; correct the column name in {source}")
+            if link.signal in result:
+                raise DataError(f"{where}: column {link.signal!r} and column {link.column!r} "
+                                f"(linked to it in {source}) both give {link.signal!r}; keep "
+                                f"one")
+            kind = CHANNEL_KINDS.get(link.signal)
+            if kind is not None and not unit_fits_kind(link.unit, kind):
+                raise DataError(f"{source}: column {link.column!r} has unit {link.unit}, which "
+                                f"does not fit {link.signal!r} ({kind}); give one of "
+                                f"{', '.join(units_of_kind(kind))}")
+            result[link.signal] = (link.scale * np.asarray(columns[link.column], dtype=float)
+                                   + link.offset)
+            if kind not in (None, "control"):
+                units[link.signal] = link.unit
+        return result, attrs.evolve(self, channels=ChannelMap(), channel_units=units)
 
     @classmethod
     def coerce(cls, value) -> "Ingestion":

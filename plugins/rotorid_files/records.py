@@ -93,6 +93,10 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
             ``channel_units`` add to (and override) its ``channel_units``.
         row_note: appended to data errors, to say how rows map to lines of the file.
     """
+    try:
+        columns, ingestion = ingestion.mapped(columns, str(path))
+    except DataError as error:
+        raise DataFileError(str(error)) from None
     unknown = [c for c in columns if c not in ALL_CHANNELS + VELOCITIES]
     if unknown:
         raise DataFileError(f"{path}: unknown channel(s) {', '.join(map(repr, unknown))}; "

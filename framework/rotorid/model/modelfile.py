@@ -23,7 +23,12 @@ Example (flight-test units; derivative values in the structure's units)::
     [derivatives.M_w]
     fixed = 0.0                      # a known value, not estimated
 
+    [channels]                       # the data's own column names (optional)
+    Q_degps = { signal = "q", unit = "deg/s" }
+    DELE = { signal = "long", unit = "%", scale = -1.0, offset = 0.0 }
+
 :func:`load_model` reads a file, :func:`parse_model` an already parsed mapping,
+:func:`load_channel_map` the file's ``[channels]`` table (for the data files' readers),
 :func:`save_model` writes a structure back (atomically) so that loading it gives an equal
 structure.
 """
@@ -39,11 +44,12 @@ from pathlib import Path
 from rotorid.errors import DataFileError, RotoridError
 from rotorid.io import atomic_write, require_file
 from rotorid.model.derivatives import Derivative
+from rotorid.model.signals import ChannelMap
 from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.model.templates import SIX_DOF, TEMPLATES
 
 POPULATE = ("all", "none")
-_TOP_KEYS = ("units", "condition", "structure", "derivatives")
+_TOP_KEYS = ("units", "condition", "structure", "derivatives", "channels")
 _STRUCTURE_KEYS = ("template", "populate", "remove")
 _DERIVATIVE_KEYS = ("initial", "sign", "delay", "fixed")
 _DELAY_KEYS = {"initial": "number", "upper": "number", "fixed": "boolean"}
@@ -122,6 +128,7 @@ def _structure(mapping: Mapping, source: str) -> ModelStructure:
     declared = _require("table", mapping.get("derivatives", {}), f"{source}: [derivatives]")
     derivatives = [_derivative(name, value, f"{source}: [derivatives.{name}]")
                    for name, value in declared.items()]
+    _channel_map(mapping, source)
     condition = FlightCondition.from_mapping(condition)
     if populate == "none":
         if remove:
@@ -138,6 +145,11 @@ def _structure(mapping: Mapping, source: str) -> ModelStructure:
     return structure
 
 
+def _channel_map(mapping: Mapping, source: str) -> ChannelMap:
+    table = _require("table", mapping.get("channels", {}), f"{source}: [channels]")
+    return ChannelMap.from_mapping(table, source)
+
+
 def parse_model(mapping: Mapping, source: str = "<string>") -> ModelStructure:
     """The structure declared by a parsed model file (see the module docstring).
 
@@ -152,14 +164,28 @@ def parse_model(mapping: Mapping, source: str = "<string>") -> ModelStructure:
         raise DataFileError(f"{source}: {error}") from None
 
 
-def load_model(path: str | os.PathLike) -> ModelStructure:
-    """The structure declared by the TOML model file ``path``."""
+def _read(path: str | os.PathLike) -> Mapping:
     path = require_file(path, "model file")
     try:
-        mapping = tomllib.loads(path.read_text(encoding="utf-8"))
+        return tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
         raise DataFileError(f"{path}: not a valid TOML file: {error}") from None
-    return parse_model(mapping, source=str(path))
+
+
+def load_model(path: str | os.PathLike) -> ModelStructure:
+    """The structure declared by the TOML model file ``path``."""
+    return parse_model(_read(path), source=str(Path(path)))
+
+
+def load_channel_map(path: str | os.PathLike) -> ChannelMap:
+    """The ``[channels]`` table of the model file ``path`` (empty without one): data column →
+    channel, unit, scale and offset, as :class:`~rotorid.model.signals.ChannelMap`."""
+    try:
+        return _channel_map(_read(path), str(Path(path)))
+    except DataFileError:
+        raise
+    except RotoridError as error:
+        raise DataFileError(f"{path}: {error}") from None
 
 
 # ----------------------------------------------------------------- writing

@@ -185,7 +185,7 @@ def run(args) -> int:
     from rotorid.estimation.data_checks import check_fit_data
     from rotorid.estimation.sanity import check_before_fit
     from rotorid.io import atomic_write
-    from rotorid.model.modelfile import load_model
+    from rotorid.model.modelfile import load_channel_map, load_model
     from rotorid.model.reference import is_model_reference, load_model_reference
     from rotorid.plugin.manager import new_plugin_manager, using
 
@@ -204,9 +204,11 @@ def run(args) -> int:
         estimator = _estimator(args.estimator, options)
         with warnings.catch_warnings(record=True) as found, _checks_log(args.quiet):
             warnings.simplefilter("always", RotoridWarning)
+            ingestion = _ingestion(args)
+            if not by_reference:
+                ingestion["channels"] = load_channel_map(args.model)
             maneuvers = _load_inputs(args.data, args.hold,
-                                     None if by_reference else model.units.name,
-                                     _ingestion(args))
+                                     None if by_reference else model.units.name, ingestion)
             if not by_reference:
                 check_fit_data(maneuvers, options.get("outputs"), model)
             checked = check_before_fit(maneuvers, None if by_reference else model)
