@@ -175,7 +175,7 @@ class Maneuver:
         return maneuver_summary(self)
 
     def _repr_html_(self) -> str:
-        return maneuver_html(self, ALL_CHANNELS)
+        return maneuver_html(self, self.channel_names)
 
     @property
     def dt(self) -> float:
