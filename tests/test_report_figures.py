@@ -156,6 +156,16 @@ def test_bode_phases_share_one_branch(hover):
         assert np.all(gap[np.isfinite(gap)] <= 180.0), line.get_label()
     low, high = phase.get_ylim()
     assert high - low < 540.0
+    # Magnitude limits from the coherent points and the analytic response only.
+    coherent = np.concatenate([
+        20 * np.log10(np.abs(r[c >= 0.8])) for r, c in (
+            (item.truth.response, item.truth.coherence),
+            (item.model.response, item.truth.coherence),
+            (item.conditioned.response, item.conditioned.coherence))]
+        + [20 * np.log10(np.abs(item.analytic))])
+    low, high = mag.get_ylim()
+    span = coherent.max() - coherent.min()
+    assert low <= coherent.min() and coherent.max() <= high <= coherent.max() + 0.1 * span
     assert "[dB, deg/s/%]" in mag.get_ylabel() and UNIT.search(phase.get_ylabel())
     for axis in (mag, phase, coherence):
         _no_duplicate_lines(axis)

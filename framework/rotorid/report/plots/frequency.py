@@ -10,7 +10,8 @@
 
 Points with γ² ≥ 0.8 are drawn as filled markers (they are checked), 0.6 ≤ γ² < 0.8 as open
 markers (shown, not checked), lower coherence is hidden. The y-limits come from the points
-shown (and the envelope bounds), so outliers of low coherence never squash the plot. The
+with γ² ≥ 0.8 (and the envelope bounds, the analytic response), so outliers of low coherence
+never squash the plot; open markers beyond them are cut off. The
 frequency axis is labelled at 1, 2 and 5 of every decade. Legends sit outside the axes.
 Every function returns its :class:`matplotlib.figure.Figure`.
 """
@@ -227,9 +228,9 @@ def plot_bode(item: PairVerification, output_unit: str = "", input_unit: str = "
         with np.errstate(divide="ignore"):
             magnitude = 20.0 * np.log10(np.abs(response))
         phase = common_branch_phase_deg(response, reference_deg)
-        strong, weak = _shown(coherence)
-        shown_mag.append(magnitude[strong | weak])
-        shown_phase.append(phase[strong | weak])
+        strong, _ = _shown(coherence)
+        shown_mag.append(magnitude[strong])
+        shown_phase.append(phase[strong])
         _scatter(mag_axis, item.omega, magnitude, coherence, color, "o", label)
         _scatter(phase_axis, item.omega, phase, coherence, color, "o", label)
     if item.analytic is not None:
