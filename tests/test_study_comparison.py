@@ -92,8 +92,9 @@ def test_comparison_needs_sweeps(tmp_path):
 
 @pytest.mark.parametrize("compare, message", [
     ({"frequency": "yes"}, "frequency must be true or false"),
-    ({"pairs": ["q/nothing"]}, r"\[compare\] pairs"),
-    ({"band_max": -1.0}, "band_max must be a positive frequency"),
+    ({"frequency": True, "pairs": ["q/nothing"]}, r"\[compare\] pairs"),
+    ({"frequency": True, "band_max": -1.0}, "band_max must be a positive frequency"),
+    ({"band_max": 10.0}, "add frequency = true or drop them"),
     ({"bands": 3}, "unknown key"),
 ])
 def test_compare_settings_are_checked(compare, message):

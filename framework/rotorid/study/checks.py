@@ -66,6 +66,9 @@ def _check_compare(case, where: str) -> None:
     if case.compare_frequency:
         check_registered("estimators", FREQUENCY_ESTIMATOR, where, "[compare] frequency needs "
                          "the estimator")
+    elif case.compare_pairs or case.compare_band_max is not None:
+        raise DataFileError(f"{where}: [compare] pairs and band_max apply to the "
+                            f"frequency-domain fit only; add frequency = true or drop them")
     for pair in case.compare_pairs:
         _wrapped(lambda: parse_pair(pair), where, "[compare] pairs")
     band_max = case.compare_band_max

@@ -36,7 +36,7 @@ class FrequencyComparison:
 
     ``pair_costs`` is J per pair (dimensionless) by method; ``time_metrics`` the metrics on
     the identification multisteps by method, ``None`` where the model's simulation diverges;
-    ``seconds`` the frequency-domain fit's wall time in s.
+    ``seconds`` the frequency-domain fit's wall time in s, computing the responses included.
     """
 
     frequency_estimate: Estimate
@@ -68,8 +68,8 @@ def compare_frequency_fit(structure: ModelStructure, time_estimate: Estimate,
                           multisteps: ManeuverSet, pairs, band_max: float
                           ) -> FrequencyComparison:
     """Fit ``structure`` to the ``pairs`` of ``sweeps`` (J points up to ``band_max`` rad/s)
-    from zero and compare it with ``time_estimate`` (whose multistep ``time_metrics`` are
-    known)."""
+    from equation-error start values on the sweeps, and compare it with ``time_estimate``
+    (whose metrics on the ``multisteps`` are ``time_metrics``)."""
     estimator = create("estimators", FREQUENCY_ESTIMATOR, pairs=pairs, band=(0.0, band_max))
     clock = time.perf_counter()
     fit_data = estimator.fit_data(sweeps)
