@@ -446,7 +446,9 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         "<p>Machine-readable results: <a href=\"result.json\">result.json</a>; tables: "
         + ", ".join(f'<a href="tables/{t}.csv">{t}.csv</a>'
                     for t in ("removed", "parameters", "key_derivatives", "verification",
-                              *(("checks",) if claims else ()))) + ".</p>",
+                              *(("checks",) if claims else ()),
+                              *(("comparison_costs", "comparison_parameters")
+                                if result.frequency_comparison else ()))) + ".</p>",
         '<h2 id="summary">Summary</h2>', summary_html(result, claims)]
     if claims:
         contents.append(("claims", "The paper's claims, measured"))
