@@ -293,3 +293,19 @@ def test_paper_story_on_the_truth_model(envelopes):
     assert with_delays.average_cost() < 0.5 * without.average_cost()
     assert without["q/long"].checks["muad"].passed is False
     assert with_delays["q/long"].checks["muad"].passed is True
+
+
+def test_the_analytic_comparison_leaves_out_points_with_correlated_inputs():
+    from rotorid.verification.compare import INPUT_COHERENCE_LIMIT, _reliable
+    from rotorid.verification.frequency import FrequencyResponse
+
+    omega = np.array([1.0, 2.0, 3.0, 4.0])
+    conditioned = FrequencyResponse(
+        "ped", "r", omega, np.ones(4), coherence=[0.9, 0.9, 0.95, 0.85],
+        random_error=np.zeros(4), conditioned_on=("lat",),
+        input_coherence=[0.2, INPUT_COHERENCE_LIMIT, 0.93, np.nan])
+    # Inputs more than 0.5 coherent (or of unknown coherence) with the conditioning ones.
+    assert _reliable(conditioned).coherence.tolist() == [0.9, 0.9, 0.0, 0.0]
+    single = FrequencyResponse("ped", "r", omega, np.ones(4), coherence=np.full(4, 0.9),
+                               random_error=np.zeros(4))
+    assert _reliable(single) is single
