@@ -158,14 +158,18 @@ def test_each_reduced_structure_restarts_from_the_initial_values():
     assert warm.starts == [None, {"M_u": 1.0, "L_p": 1.0}, {"M_u": 1.0}]
 
 
-def test_lowest_rmse_rule_selects_the_most_reduced_structure_within_tolerance():
+def test_selection_rules_on_a_constructed_rmse_curve():
     structure = ModelStructure(HOVER, [Derivative(n) for n in NAMES])
     steps = [ReductionStep(k, None, estimate_of(np.eye(1), [1.0], ("L_p",), rmse=rmse),
-                           structure) for k, rmse in enumerate((1.0, 1.009, 1.3, 1.005))]
-    # Within 1 % of the lowest RMSE: steps 0, 1 and 3; the most reduced is 3.
-    assert ReductionPath(steps, "lowest-rmse", 0.01).selected_index == 3
-    # First rise by more than 1 %: step 2, so step 1 is selected.
-    assert ReductionPath(steps, "first-rise", 0.01).selected_index == 1
+                           structure) for k, rmse in enumerate((1.0, 1.009, 0.998, 1.3, 1.005))]
+    # The lowest RMSE (the paper's rule): step 2.
+    assert ReductionPath(steps, "lowest-rmse", 0.01).selected_index == 2
+    # Within 1 % of the lowest (0.998 → 1.00798): steps 0, 2 and 4; the most reduced is 4.
+    assert ReductionPath(steps, "parsimonious", 0.01).selected_index == 4
+    # First rise by more than 1 % over the step before: step 3, so step 2 is selected.
+    assert ReductionPath(steps, "first-rise", 0.01).selected_index == 2
+    assert ReductionPath(steps, "first-rise", 0.01).selections() == {
+        "lowest-rmse": 2, "parsimonious": 4, "first-rise": 2}
 
 
 # ----------------------------------------------------------------- Levenberg-Marquardt

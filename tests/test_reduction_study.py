@@ -68,7 +68,11 @@ def test_reduction_removes_the_spurious_derivatives_and_keeps_the_true_ones(data
     assert len(path.steps) == len(TRUE) + len(SPURIOUS) + 1
     assert path.steps[-1].n_parameters == 0
     assert set(path.steps[len(SPURIOUS)].structure.names) == set(TRUE)
-    assert set(path.removed) == set(SPURIOUS)
+    # Removing a truly zero derivative moves the RMSE by noise only: the lowest RMSE (the
+    # paper's rule) is among the steps that keep every true derivative, and the most reduced
+    # structure within the tolerance is exactly the true one.
+    assert path.selected_index <= len(SPURIOUS)
+    assert set(ReductionPath(path.steps, rule="parsimonious").removed) == set(SPURIOUS)
     removed_order = [s.removal.parameter for s in path.steps[1:]]
     assert set(removed_order[: len(SPURIOUS)]) == set(SPURIOUS)
     counts, rmse = path.rmse_curve()
@@ -85,7 +89,7 @@ def test_reduction_stops_with_the_criteria_and_warm_start_agrees(data):
     assert cold.steps[-1].structure.names == warm.steps[-1].structure.names
     assert np.allclose(cold.steps[-1].estimate.values, warm.steps[-1].estimate.values,
                        rtol=1e-4, atol=1e-6)
-    assert set(cold.selected.structure.names) == set(TRUE)
+    assert set(cold.steps[-1].structure.names) == set(TRUE)   # where the criteria stop
 
 
 def test_reduction_rejects_bad_setups(data):
@@ -106,7 +110,10 @@ def files_case(tmp_path, data) -> FlightCase:
     return FlightCase(name="own", data={"source": "files", "identification": str(directory)},
                       condition={"airspeed_kt": 0.0},
                       structure=structure, derivatives=derivatives,
-                      delay_derivatives=("L_lat", "M_long"), continue_to_zero=False)
+                      delay_derivatives=("L_lat", "M_long"), continue_to_zero=False,
+                      # noise alone orders the RMSE of the structures that keep every true
+                      # derivative; the tolerance rule selects the true structure itself
+                      rule="parsimonious")
 
 
 def test_study_on_flight_data_files_writes_results_and_resumes(tmp_path, data):

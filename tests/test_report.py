@@ -9,7 +9,7 @@ import xml.etree.ElementTree as ElementTree
 
 import numpy as np
 import pytest
-from rotorid.report.html import mean_phase_error
+from rotorid.study.claims import mean_phase_error, paper_claims
 from rotorid.study.expectations import (
     check_signs,
     derivative_scale,
@@ -78,14 +78,16 @@ def test_the_quick_hover_study_writes_a_complete_linked_report(quick_study):
     assert sum("paper's claims:" in line for line in lines) == 2     # hover and forward
     claims = [lines[i + 1] for i, line in enumerate(lines[:-1]) if line.startswith("hover: ")]
     assert len(claims) == 1
-    held, decided = map(int, re.search(r"paper's claims: (\d+)/(\d+) hold", claims[0]).groups())
-    # Two RMSE claims, two off-axis phase claims and four on-axis MUAD claims are decided on
-    # every run, then one claim per delay and per key derivative with a reference sign. The
-    # method's eight hold; a delay just past the paper's range or a weakly identified sign
-    # may not (each failure is listed with its measured value).
+    held, decided, unchecked = map(int, re.search(
+        r"paper's claims: (\d+)/(\d+) hold, (\d+) not checked", claims[0]).groups())
+    # The paper's 14 claims in hover: two RMSE guidelines, four derivative signs, six MUAD
+    # claims, two off-axis phase claims. The RMSE, on-axis MUAD and phase claims hold; the
+    # paper's "M_w removed in hover" does not (the truth model's M_w is not negligible,
+    # docs/study.md), and each failure is listed with its evidence.
     failures = claims[0].partition("; not: ")[2]
-    assert decided >= 8 + 3 and held >= decided - 3 and (held == decided) == (not failures)
-    for claim in ("RMSE", "phase error", "MUAD"):
+    assert decided + unchecked == 14 and (held == decided) == (not failures)
+    for claim in ("RMSE", "phase error", *(f"{p} with delays" for p in
+                                           ("q/long", "p/lat", "r/ped", "az/coll"))):
         assert claim not in failures, failures
     case = out / "hover"
     record = json.loads((case / "result.json").read_text())
@@ -125,10 +127,13 @@ def test_the_quick_hover_study_writes_a_complete_linked_report(quick_study):
     units = {row[0]: row[1] for row in parameters[1:]}
     assert units["M_q"] == "1/s" and units["tau_M_q"] == "s"
     checks = _read_csv(case / "tables" / "checks.csv")
+    assert checks[1:] == [[c["claim"], c["evidence"], c["verdict"], c["reason"]]
+                          for c in record["claims"]]
     rmse_claims = [row for row in checks if row[0].startswith("time-domain RMSE")]
-    assert len(rmse_claims) == 2 and all(row[2] == "true" for row in rmse_claims)
-    delay_claims = [row for row in checks if row[0].startswith("delay on")]
-    assert len(delay_claims) == len(record["estimates"]["with delays"]["delays"]) >= 1
+    assert len(rmse_claims) == 2 and all(row[2] == "holds" for row in rmse_claims)
+    assert not [row for row in checks if row[0].startswith("delay on")]  # the paper gives no range
+    assert record["reduction"]["selections"]["lowest-rmse"] == record["reduction"][
+        "selected_step"]
     signs = {row[0]: row for row in _read_csv(case / "tables" / "key_derivatives.csv")[1:]}
     assert signs["Z_w"][8] == "agrees"      # heave damping: robustly negative in hover
 
@@ -139,23 +144,23 @@ FLAP_TIME_CONSTANT = 0.071
 
 @pytest.mark.slow
 def test_the_full_study_reproduces_the_papers_claims(tmp_path):
-    """`rotorid study all` (full setup, both conditions): every claim of docs/study.md's
-    table holds except M_q's delay, which exceeds 0.15 s (the truth model's slower pitch-flap
-    pole, docs/study.md) but stays below 0.2 s. Every identified rotor delay lies within one
-    flap time constant (τ_f = 16/(γΩ) = 0.071 s, truth-model.md §9, the scale of the lag that
-    equivalent delays stand in for) of the truth model's own equivalent delay, fitted
-    independently in the frequency domain to its full linearisation with the same delays
-    (rotorid.verification.equivalent_delays); M_q's within 0.04 s."""
-    from rotorid.report.html import paper_checks
+    """`rotorid study all` (full setup, both conditions), structures selected by the lowest
+    RMSE: the RMSE guideline, the on-axis MUAD claims and the off-axis phase claims hold; what
+    may fail is what docs/study.md discusses (M_w, whose truth-model value contradicts the
+    paper in both conditions, and the off-axis MUAD bounds at the lowest frequencies). Every
+    identified rotor delay lies within one flap time constant (τ_f = 16/(γΩ) = 0.071 s,
+    truth-model.md §9, the scale of the lag that equivalent delays stand in for) of the truth
+    model's own equivalent delay, fitted independently in the frequency domain to its full
+    linearisation with the same delays (rotorid.verification.equivalent_delays); M_q's within
+    0.04 s."""
     from rotorid.study.pipeline import Study
 
-    results = Study(["hover", "forward"], tmp_path, executor="process", progress=None,
-                    figures=False).run()
+    results = Study(["hover", "forward"], tmp_path, executor="process", progress=None).run()
     for name, result in results.items():
-        failed = [c.claim for c in paper_checks(result) if c.passed is False]
-        assert failed in ([], ["delay on M_q within 0.02–0.15 s"]), (name, failed)
+        failed = [c.claim for c in paper_claims(result) if c.verdict == "does not hold"]
+        assert all(c.startswith(("M_w", "p/long with delays inside", "q/lat with delays inside"))
+                   for c in failed), (name, failed)
         estimate = result.estimates["with delays"]
-        assert 0.15 < estimate.value("tau_M_q") < 0.2
         truth = result.truth_delays.delays
         assert set(truth) == {n[4:] for n in estimate.parameter_names if n.startswith("tau_")}
         for derivative, value in truth.items():
@@ -164,4 +169,5 @@ def test_the_full_study_reproduces_the_papers_claims(tmp_path):
         assert abs(estimate.value("tau_M_q") - truth["M_q"]) < 0.04
         assert result.truth_delays.relative_rms < 0.06
         assert result.path.steps[-1].n_parameters == 0       # reduced down to nothing
-        assert 25 <= len(result.path.removed) <= 35
+        _, rmse = result.path.rmse_curve()
+        assert result.path.selected_index == int(np.argmin(rmse))

@@ -255,6 +255,9 @@ name = "{NAME}"
 
 [reduction]
 continue_to_zero = false
+# A least-squares fit's residual RMSE can only grow as derivatives go, so the lowest RMSE is
+# always the full structure; the tolerance rule selects past the growth that is noise.
+rule = "parsimonious"
 
 [delays]
 derivatives = []    # equation error does not estimate delays

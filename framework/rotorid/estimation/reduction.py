@@ -9,12 +9,16 @@ left: that gives the RMSE-versus-removals curve.
 
 Selection rules:
 
-* ``"lowest-rmse"`` (the paper's): the most reduced structure whose RMSE is within
-  ``rmse_tolerance`` (relative) of the lowest RMSE on the path. With an estimator that reaches
-  the optimum from any start, the RMSE is flat while redundant parameters go and rises once
-  necessary ones do; the tolerance turns "lowest" into "lowest, up to estimation noise".
+* ``"lowest-rmse"`` (the paper's): the structure with the lowest RMSE on the path (the first
+  one, should two be equal).
+* ``"parsimonious"``: the most reduced structure whose RMSE is within ``rmse_tolerance``
+  (relative) of the lowest. With an estimator that reaches the optimum from any start, the
+  RMSE is flat while redundant parameters go and rises once necessary ones do; the tolerance
+  reads "lowest" as "lowest, up to estimation noise" and removes more.
 * ``"first-rise"``: the structure before the first step whose RMSE rises by more than
   ``rmse_tolerance`` over its predecessor.
+
+``ReductionPath.selections()`` gives the step every rule selects, whichever was chosen.
 """
 
 from __future__ import annotations
@@ -29,7 +33,7 @@ from rotorid.estimation.estimate import Estimate
 from rotorid.model.structure import ModelStructure
 from rotorid.plugin.contracts import Removal
 
-RULES = ("lowest-rmse", "first-rise")
+RULES = ("lowest-rmse", "parsimonious", "first-rise")
 
 
 @attrs.frozen(eq=False)
@@ -81,14 +85,26 @@ class ReductionPath:
 
     @property
     def selected_index(self) -> int:
+        return self.index_by_rule(self.rule)
+
+    def index_by_rule(self, rule: str) -> int:
+        """The step ``rule`` (one of :data:`RULES`) selects, with this path's tolerance."""
         rmse = np.array([s.rmse for s in self.steps])
-        if self.rule == "lowest-rmse":
-            ok = np.flatnonzero(rmse <= rmse.min() * (1.0 + self.rmse_tolerance))
-            return int(ok.max())
-        for k in range(1, len(self.steps)):
-            if rmse[k] > rmse[k - 1] * (1.0 + self.rmse_tolerance):
-                return k - 1
-        return len(self.steps) - 1
+        if rule == "lowest-rmse":
+            return int(np.argmin(rmse))
+        if rule == "parsimonious":
+            within = np.flatnonzero(rmse <= rmse.min() * (1.0 + self.rmse_tolerance))
+            return int(within.max())
+        if rule == "first-rise":
+            for k in range(1, len(self.steps)):
+                if rmse[k] > rmse[k - 1] * (1.0 + self.rmse_tolerance):
+                    return k - 1
+            return len(self.steps) - 1
+        raise EstimationError(f"unknown selection rule {rule!r}; use {', '.join(RULES)}")
+
+    def selections(self) -> dict[str, int]:
+        """Rule → the step it selects on this path (every rule of :data:`RULES`)."""
+        return {rule: self.index_by_rule(rule) for rule in RULES}
 
     @property
     def selected(self) -> ReductionStep:
@@ -144,7 +160,7 @@ def reduce(structure: ModelStructure, maneuvers, estimator, criteria: Sequence, 
             on_step(step)
 
     if rule not in RULES:
-        raise EstimationError(f"unknown selection rule {rule!r}; use {' or '.join(RULES)}")
+        raise EstimationError(f"unknown selection rule {rule!r}; use {', '.join(RULES)}")
     if not criteria:
         raise EstimationError("model reduction needs at least one criterion")
     if structure.free_delays:

@@ -28,7 +28,6 @@ import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-import attrs
 import numpy as np
 
 from rotorid.io import atomic_write
@@ -40,96 +39,11 @@ from rotorid.report.figures import (
     flight_label,
     rmse_caption,
 )
+from rotorid.study.claims import PAPER_SOURCES, claims_tally, mean_phase_error, paper_claims
 from rotorid.study.expectations import check_signs, derivative_unit
 from rotorid.study.result import KEY_DERIVATIVES, MODELS
 from rotorid.verification.compare import COHERENCE_THRESHOLD
-from rotorid.verification.envelopes import error_db_deg
-
-#: The on-axis pairs the paper requires inside the MUAD bounds with delays.
-ON_AXIS_PAIRS = ("q/long", "p/lat", "r/ped", "az/coll")
-#: The off-axis pairs whose phase error the delays should reduce.
-OFF_AXIS_PAIRS = ("p/long", "q/lat")
-#: The paper's plausible range of equivalent rotor delays, s.
-DELAY_RANGE = (0.02, 0.15)
-#: The paper's bound on the time-domain RMSE of the selected model.
-RMSE_LIMIT = 2.0
-
-
-@attrs.frozen
-class Check:
-    """One of the paper's claims, measured on a case: ``passed`` None means not applicable."""
-
-    claim: str
-    measured: str
-    passed: bool | None
-
-
-# ----------------------------------------------------------------- measured claims
-def mean_phase_error(item, threshold: float = COHERENCE_THRESHOLD) -> float | None:
-    """Mean |∠ε| in deg over the points where the truth's coherence ≥ ``threshold``."""
-    _, phase = error_db_deg(item.error)
-    with np.errstate(invalid="ignore"):
-        used = (item.coherence >= threshold) & np.isfinite(phase)
-    return float(np.mean(np.abs(phase[used]))) if used.any() else None
-
-
-def _verified_pair(result, label: str, pair: str):
-    verification = result.verification.get(label)
-    return None if verification is None else verification.get(pair)
-
-
-def paper_checks(result) -> list[Check]:
-    """The paper's claims for one case (the study issue's acceptance list), measured."""
-    checks = []
-    for label in MODELS:
-        rmse = result.estimates[label].rmse
-        checks.append(Check(f"time-domain RMSE ≤ {RMSE_LIMIT:g} ({label})", f"{rmse:.3f}",
-                            rmse <= RMSE_LIMIT))
-    for pair in OFF_AXIS_PAIRS:
-        errors = [_verified_pair(result, label, pair) for label in MODELS]
-        phases = [None if e is None else mean_phase_error(e) for e in errors]
-        if None in phases:
-            checks.append(Check(f"{pair}: smaller phase error with delays",
-                                "no coherent points or not verified", None))
-            continue
-        checks.append(Check(f"{pair}: smaller phase error with delays",
-                            f"mean |∠ε| {phases[0]:.1f}° without, {phases[1]:.1f}° with",
-                            phases[1] < phases[0]))
-    for pair in ON_AXIS_PAIRS:
-        item = _verified_pair(result, "with delays", pair)
-        check = None if item is None else item.checks.get("muad")
-        if check is None or check.passed is None:
-            checks.append(Check(f"{pair} with delays inside MUAD (γ² ≥ {COHERENCE_THRESHOLD:g})",
-                                "not verified" if check is None else check.status, None))
-            continue
-        checks.append(Check(f"{pair} with delays inside MUAD (γ² ≥ {COHERENCE_THRESHOLD:g})",
-                            f"{check.n_inside}/{check.n_used} points inside, worst margin "
-                            f"{check.worst_margin_db:+.2f} dB / {check.worst_margin_deg:+.1f}°",
-                            bool(check.passed)))
-    estimate = result.estimates["with delays"]
-    low, high = DELAY_RANGE
-    truth = {} if result.truth_delays is None else result.truth_delays.delays
-    for i, name in enumerate(estimate.parameter_names):
-        derivative = delayed_derivative(name)
-        if derivative is not None:
-            value = float(estimate.values[i])
-            measured = f"{value:.3f} s"
-            if derivative in truth:
-                measured += f"; truth model's equivalent delay {truth[derivative]:.3f} s"
-            checks.append(Check(f"delay on {derivative} within {low:g}–{high:g} s", measured,
-                                low <= value <= high))
-    for sign in key_derivative_checks(result):
-        if sign.verdict in ("agrees", "differs"):
-            checks.append(Check(f"sign of {sign.name} ({sign.basis})",
-                                f"{sign.identified:+.4g} {sign.unit}", sign.verdict == "agrees"))
-    return checks
-
-
-def claims_tally(checks: Sequence[Check]) -> tuple[list[Check], list[Check]]:
-    """(decided, failed): the checks with a verdict, and those that do not hold."""
-    decided = [c for c in checks if c.passed is not None]
-    return decided, [c for c in decided if not c.passed]
-
+from rotorid.verification.envelopes import MISMATCH_COST_GUIDELINE_TEXT
 
 def key_derivative_checks(result):
     """Sign checks of the key derivatives of the model with delays."""
@@ -137,7 +51,8 @@ def key_derivative_checks(result):
     identified = {name: (float(estimate.values[i]), float(estimate.cramer_rao[i]))
                   for i, name in enumerate(estimate.parameter_names)}
     return check_signs(KEY_DERIVATIVES, identified, result.condition.airspeed_kt,
-                       estimate.units, result.truth_derivatives)
+                       estimate.units, result.truth_derivatives,
+                       published=result.case.data_source in PAPER_SOURCES)
 
 
 # ----------------------------------------------------------------- tables
@@ -214,7 +129,7 @@ def key_derivative_rows(result) -> list[list[str]]:
 def verification_rows(result) -> list[list[str]]:
     """Per sweep pair and model: coherent points, MUAD/AEE status, worst margins, J."""
     rows = [["pair", "model", f"points γ² ≥ {COHERENCE_THRESHOLD:g} [-]", "MUAD",
-             "worst margin [dB / deg]", "AEE", "J (mismatch) [-]", "mean |∠ε| [deg]"]]
+             "worst margin [dB / deg]", "AEE", f"J (mismatch; guideline {MISMATCH_COST_GUIDELINE_TEXT}) [-]", "mean |∠ε| [deg]"]]
     for label in MODELS:
         verification = result.verification.get(label)
         for item in () if verification is None else verification.pairs:
@@ -339,17 +254,21 @@ def _page(title: str, body: str, contents: Sequence[tuple[str, str]] = ()) -> st
             f"<body>\n<h1>{html.escape(title)}</h1>\n{toc}{body}\n</body></html>\n")
 
 
-def _verdict(passed: bool | None) -> str:
-    if passed is None:
-        return '<span class="na">n/a</span>'
-    return '<span class="pass">yes</span>' if passed else '<span class="fail">no</span>'
+_VERDICT_CLASS = {"holds": "pass", "does not hold": "fail", "not checked": "na"}
 
 
-def checks_html(checks: Sequence[Check]) -> str:
-    rows = "".join(f"<tr><td>{html.escape(c.claim)}</td><td>{html.escape(c.measured)}</td>"
-                   f"<td>{_verdict(c.passed)}</td></tr>" for c in checks)
-    return ("<table><thead><tr><th>claim</th><th>measured (units as stated)</th>"
-            f"<th>holds</th></tr></thead><tbody>{rows}</tbody></table>")
+def claim_rows(claims) -> list[list[str]]:
+    """The claims table: claim, evidence, verdict, why not checked."""
+    return [["claim (as the paper states it)", "evidence", "verdict", "why not checked"]] + [
+        [c.claim, c.evidence, c.verdict, c.reason] for c in claims]
+
+
+def claims_html(claims) -> str:
+    rows = "".join(f"<tr><td>{html.escape(c.claim)}</td><td>{html.escape(c.evidence)}</td>"
+                   f'<td><span class="{_VERDICT_CLASS[c.verdict]}">{c.verdict}</span></td>'
+                   f"<td>{html.escape(c.reason)}</td></tr>" for c in claims)
+    head = "".join(f"<th>{html.escape(h)}</th>" for h in claim_rows(())[0])
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table>"
 
 
 def figures_html(figures: Sequence[ReportFigure], prefix: str = "figures/") -> str:
@@ -401,7 +320,7 @@ def _verification_verdicts(result) -> tuple[list[str], list[str]]:
     return passed, failed
 
 
-def summary_html(result, claims: Sequence[Check]) -> str:
+def summary_html(result, claims) -> str:
     """The case in a few lines: selected structure, verdicts, what fails and why."""
     path, estimates = result.path, result.estimates
     items = [f"Selected structure: step {path.selected_index} of {len(path.steps) - 1} by rule "
@@ -417,15 +336,15 @@ def summary_html(result, claims: Sequence[Check]) -> str:
         decided, not_holding = claims_tally(claims)
         items.append(f"The paper's claims: {len(decided) - len(not_holding)} of {len(decided)} "
                      "hold" + ("; not: " + html.escape("; ".join(
-                         f"{c.claim} ({c.measured})" for c in not_holding))
+                         f"{c.claim} ({c.evidence})" for c in not_holding))
                          if not_holding else "") + ".")
     return "<ul>" + "".join(f"<li>{item}</li>" for item in items) + "</ul>"
 
 
 def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
-              claims: Sequence[Check]) -> str:
+              claims) -> str:
     """The case report page (figures referenced relative to the case directory; ``claims``
-    from :func:`paper_checks`, empty for a case about measured data only)."""
+    from :func:`rotorid.study.claims.paper_claims`, empty for a case about measured data only)."""
     case, path = result.case, result.path
     estimates = result.estimates
     truth = has_truth_model(result)
@@ -452,7 +371,7 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         '<h2 id="summary">Summary</h2>', summary_html(result, claims)]
     if claims:
         contents.append(("claims", "The paper's claims, measured"))
-        body += ['<h2 id="claims">The paper\'s claims, measured</h2>', checks_html(claims)]
+        body += ['<h2 id="claims">The paper\'s claims, measured</h2>', claims_html(claims)]
     contents += [("reduction", "Model reduction"), ("delays", "Time delays"),
                  ("parameters", "Identified parameters"), ("key-derivatives", "Key derivatives"),
                  ("time-histories", "Time histories"), ("verification", "Frequency-domain "
@@ -503,14 +422,12 @@ def write_case_outputs(result, directory: str | Path) -> Path:
     figures = case_figures(result, directory / "figures")
     tables = directory / "tables"
     tables.mkdir(exist_ok=True)
-    claims = paper_checks(result) if has_truth_model(result) else []
+    claims = paper_claims(result) if has_truth_model(result) else []
     written = [("removed", removed_rows(result)), ("parameters", parameter_rows(result)),
                ("key_derivatives", key_derivative_rows(result)),
                ("verification", verification_rows(result))]
     if claims:
-        written.append(("checks", [["claim", "measured", "holds"]] + [
-            [c.claim, c.measured, "" if c.passed is None else str(c.passed).lower()]
-            for c in claims]))
+        written.append(("checks", claim_rows(claims)))
     for name, rows in written:
         atomic_write(tables / f"{name}.csv", _csv(rows))
     if result.frequency_comparison:
@@ -527,7 +444,7 @@ def write_study_report(results: Mapping[str, object], out_dir: str | Path) -> Pa
              "RMSE with delays [mixed units]", "delays [s]", "claims holding [-]"]]
     sections, contents = [], [("overview", "Overview")]
     for name, result in results.items():
-        checks = paper_checks(result) if has_truth_model(result) else []
+        checks = paper_claims(result) if has_truth_model(result) else []
         decided, failed = claims_tally(checks)
         rows.append([name, result.condition.describe(),
                      f"{result.path.selected.n_parameters} ({len(result.path.removed)})",
@@ -541,7 +458,7 @@ def write_study_report(results: Mapping[str, object], out_dir: str | Path) -> Pa
         sections.append(f'<h2 id="{anchor}"><a href="{link}">Case {html.escape(name)}</a></h2>'
                         + summary_html(result, checks)
                         + figures_html([rmse], prefix=f"{html.escape(name)}/figures/")
-                        + (checks_html(checks) if checks else ""))
+                        + (claims_html(checks) if checks else ""))
     body = ('<h2 id="overview">Overview</h2><p>Each case links to its full report: reduction '
             "path, Appendix-B tables, time histories, frequency-domain verification.</p>"
             + _html_table(rows) + "\n".join(sections))

@@ -43,8 +43,9 @@ _TABLES = {
     "data": None, "condition": None, "structure": None, "derivatives": None, "estimator": None,
     "verification": {"pairs", "envelopes"},
     "reduction": {"criteria", "continue_to_zero", "rule", "rmse_tolerance", "warm_start"},
-    "delays": {"derivatives", "initial", "upper", "threshold", "starts", "seed"},
-    "quick": {"duration_scale", "continue_to_zero", "warm_start"},
+    "delays": {"derivatives", "initial", "upper", "threshold", "starts", "seed",
+               "profile_points"},
+    "quick": {"duration_scale", "continue_to_zero", "warm_start", "delay_profile_points"},
     "compare": {"frequency", "pairs", "band_max"},
 }
 _TOP_LEVEL = {"name", "description", *_TABLES}
@@ -62,6 +63,7 @@ _FIELDS = {
     ("delays", "threshold"): ("delay_threshold", float),
     ("delays", "starts"): ("delay_starts", int),
     ("delays", "seed"): ("delay_seed", int),
+    ("delays", "profile_points"): ("delay_profile_points", int),
     ("compare", "frequency"): ("compare_frequency", bool),
     ("compare", "pairs"): ("compare_pairs", tuple),
     ("compare", "band_max"): ("compare_band_max", float),
@@ -83,6 +85,8 @@ class FlightCase:
     sweeps' frequency responses (:mod:`rotorid.study.comparison`) on ``compare_pairs``
     (default: the verification pairs) up to ``compare_band_max`` rad/s (default: each pair's
     coherent range).
+    ``delay_profile_points`` is the number of grid values in [0, ``delay_upper``] of each kept
+    delay's profile (0: no profiles).
     """
 
     name: str
@@ -106,6 +110,7 @@ class FlightCase:
     delay_threshold: float = 20.0        # the paper's Cramér-Rao threshold
     delay_starts: int = attrs.field(default=1, validator=attrs.validators.ge(1))
     delay_seed: int = 0
+    delay_profile_points: int = attrs.field(default=0, validator=attrs.validators.ge(0))
     compare_frequency: bool = False
     compare_pairs: tuple[str, ...] = ()
     compare_band_max: float | None = None

@@ -54,7 +54,7 @@ def check_case(case, where: str) -> None:
         check_registered("reduction-criteria", criterion, where, "[reduction] criteria")
     if case.rule not in RULES:
         raise DataFileError(f"{where}: [reduction] rule {case.rule!r} is unknown; use "
-                            f"{' or '.join(RULES)}")
+                            f"{', '.join(RULES)}")
     if not (math.isfinite(case.rmse_tolerance) and case.rmse_tolerance >= 0):
         raise DataFileError(f"{where}: [reduction] rmse_tolerance must be a fraction ≥ 0 "
                             f"(e.g. 0.01), got {case.rmse_tolerance!r}")

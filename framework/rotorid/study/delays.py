@@ -8,6 +8,7 @@ an undetermined delay on a weak off-axis derivative otherwise wanders to a bound
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -15,13 +16,14 @@ import attrs
 import numpy as np
 
 from rotorid.data import ManeuverSet
-from rotorid.errors import SimulationDivergedError
+from rotorid.errors import IdentifiabilityWarning, SimulationDivergedError
 from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.reduction import ReductionStep
 from rotorid.model.derivatives import delayed_derivative
 from rotorid.model.structure import ModelStructure
 from rotorid.study.case import FlightCase
-from rotorid.study.persistence import load_delays, save_delays
+from rotorid.estimation.profiles import DelayProfile, delay_profile
+from rotorid.study.persistence import load_delays, load_profiles, save_delays, save_profiles
 
 
 def with_delays(case: FlightCase, selected: ReductionStep, ident: ManeuverSet, estimator,
@@ -100,3 +102,25 @@ def undetermined_delay(estimate: Estimate, threshold: float) -> str | None:
         if metric > worst_metric or (worst is None and metric == np.inf):
             worst, worst_metric = derivative, metric
     return worst
+
+
+def delay_profiles(case: FlightCase, selected_step: int, delayed: ModelStructure,
+                   estimate: Estimate, ident: ManeuverSet, estimator,
+                   directory: Path) -> tuple[DelayProfile, ...]:
+    """The profile of every kept delay on ``case.delay_profile_points`` values in [0,
+    ``delay_upper``] s (:func:`rotorid.estimation.profiles.delay_profile`); reused from
+    ``directory/profiles.json`` when it holds ``selected_step``'s."""
+    if case.delay_profile_points == 0:
+        return ()
+    saved = load_profiles(directory, selected_step)
+    if saved is not None:
+        return saved
+    grid = np.linspace(0.0, case.delay_upper, case.delay_profile_points)
+    with warnings.catch_warnings():
+        # A delay fixed far from its optimum leaves combinations the data cannot separate;
+        # the profile records the cost, not those fits' statistics.
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
+        profiles = tuple(delay_profile(delayed, estimate, ident, estimator, d.delay_name,
+                                       grid) for d in delayed.free_delays)
+    save_profiles(directory, selected_step, profiles)
+    return profiles

@@ -101,15 +101,18 @@ class SignCheck:
 
 
 def check_signs(names, identified: Mapping[str, tuple[float, float]], airspeed_kt: float,
-                units: str, truth: Mapping[str, float] | None = None) -> list[SignCheck]:
+                units: str, truth: Mapping[str, float] | None = None,
+                published: bool = True) -> list[SignCheck]:
     """Sign checks of ``names``.
 
     Args:
         identified: name → (value, Cramér-Rao bound) of the identified model (structure units).
         airspeed_kt: trim airspeed; picks the hover or the 60–80 kt reference.
         truth: name → the truth model's linearised derivative in the same units, or None.
+        published: compare with the published Bo-105 values (False for another aircraft's
+            data: the expected sign then comes from the truth model, if any).
     """
-    regime = regime_of(airspeed_kt)
+    regime = regime_of(airspeed_kt) if published else None
     checks = []
     for name in names:
         reference = None

@@ -2,7 +2,7 @@
 
 ``<out>/<case>/`` holds ``case.json`` (the settings the results belong to), ``steps/`` (one
 ``step_NNN.json`` per finished reduction step), ``delays.json`` (the delayed fit of the
-selected step) and ``result.json``.
+selected step), ``profiles.json`` (its delay profiles) and ``result.json``.
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ import numpy as np
 
 from rotorid.errors import DataFileError, RotoridError
 from rotorid.estimation.estimate import Estimate
+from rotorid.estimation.profiles import DelayProfile
 from rotorid.estimation.reduction import ReductionStep
 from rotorid.plugin.contracts import Removal
 from rotorid.io import atomic_write, jsonable, read_json_object
@@ -37,7 +38,8 @@ def prepare_directory(directory: Path, case: FlightCase, resume: bool) -> None:
                            f"{case.name}; choose another --out directory or run without "
                            f"--resume to start afresh")
     if not resume:
-        for old in list(directory.glob("steps/step_*.json")) + [directory / "delays.json"]:
+        for old in [*directory.glob("steps/step_*.json"), directory / "delays.json",
+                    directory / "profiles.json"]:
             if old.is_file():
                 old.unlink()
     atomic_write(marker, settings)
@@ -103,6 +105,25 @@ def save_delays(directory: Path, selected_step: int, dropped: tuple[str, ...],
     atomic_write(directory / "delays.json",
                  json.dumps(jsonable({"selected_step": selected_step, "dropped": list(dropped),
                                       "estimate": estimate.as_dict()}), indent=1))
+
+
+def load_profiles(directory: Path, selected_step: int) -> tuple[DelayProfile, ...] | None:
+    """The delay profiles saved for ``selected_step``, or ``None``."""
+    saved = directory / "profiles.json"
+    if not saved.is_file():
+        return None
+    with _resume_record(saved) as record:
+        if record.get("selected_step") != selected_step:
+            return None
+        return tuple(DelayProfile.from_dict(p) for p in record["profiles"])
+
+
+def save_profiles(directory: Path, selected_step: int,
+                  profiles: tuple[DelayProfile, ...]) -> None:
+    """Write the delay profiles of ``selected_step``'s delayed fit."""
+    atomic_write(directory / "profiles.json",
+                 json.dumps(jsonable({"selected_step": selected_step,
+                                      "profiles": [p.as_dict() for p in profiles]}), indent=1))
 
 
 def save_result(directory: Path, result: CaseResult) -> None:

@@ -4,7 +4,7 @@ For every :class:`~rotorid.study.case.FlightCase`::
 
     data source ─► identification multisteps + verification sweeps (+ trim, truth model)
     fully populated structure ─► reduction loop (criteria plugins) ─► selected structure
-    + delays on the surviving rotor-affected derivatives ─► re-estimation
+    + delays on the surviving rotor-affected derivatives ─► re-estimation ─► delay profiles
     verification: time-domain metrics and sweep frequency responses of both models
     (+ with [compare] frequency: each model's structure fitted to the sweeps' responses)
     ─► CaseResult ─► result.json, figures, report
@@ -43,7 +43,7 @@ from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase
 from rotorid.study.checks import check_case, check_cases
 from rotorid.study.comparison import compare_frequency_fit
-from rotorid.study.delays import with_delays
+from rotorid.study.delays import delay_profiles, with_delays
 from rotorid.study.persistence import load_steps, prepare_directory, save_result, save_step
 from rotorid.study.result import MODELS, CaseResult
 from rotorid.study.truth import truth_derivatives, truth_equivalent_delays
@@ -147,6 +147,16 @@ def _delays_line(estimate, dropped: tuple[str, ...]) -> str:
     return line + (f"; dropped undetermined delays on {', '.join(dropped)}" if dropped else "")
 
 
+def _profile_line(profile) -> str:
+    """Progress line of one delay profile: where its det R is lowest, the RMSE cost of τ = 0."""
+    lowest = profile.grid[int(profile.cost.argmin())]
+    line = (f"profile of {profile.delay} (free fit {profile.free_value:.3f} s): lowest det R "
+            f"on the grid at {lowest:.3f} s")
+    if profile.grid[0] == 0.0:
+        line += f"; fixed at 0 s the RMSE is {profile.relative_rmse[0]:+.2%}"
+    return line
+
+
 def _verify(case: FlightCase, structures, estimates, ident: ManeuverSet,
             verif: ManeuverSet | None, report: Progress) -> tuple[dict, dict]:
     """Time-domain metrics on the identification data and sweep verification (when there
@@ -237,6 +247,11 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
                                                      directory)
     clock["delays"] = time.perf_counter()
     report(case.name, _delays_line(delayed_estimate, dropped))
+    profiles = delay_profiles(case, selected.index, delayed, delayed_estimate, ident,
+                              estimator, directory)
+    clock["delay profiles"] = time.perf_counter()
+    for profile in profiles:
+        report(case.name, _profile_line(profile))
     structures = {"no delays": selected.structure, "with delays": delayed}
     estimates = {"no delays": selected.estimate, "with delays": delayed_estimate}
     metrics, verification = _verify(case, structures, estimates, ident, verif, report)
@@ -250,7 +265,7 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
         None if truth is None else truth_derivatives(truth, condition, structure),
         _durations(clock), dropped, resumed,
         None if truth is None else truth_equivalent_delays(truth, condition, delayed),
-        comparison)
+        comparison, profiles)
     save_result(directory, result)
     if report_writer is not None:
         report(case.name, "figures and report")

@@ -9,12 +9,14 @@ import numpy as np
 
 from rotorid.data import ManeuverSet
 from rotorid.estimation.estimate import Estimate
+from rotorid.estimation.profiles import DelayProfile
 from rotorid.estimation.reduction import ReductionPath
 from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.notebook import case_result_html, case_result_summary
 from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase
 from rotorid.study.comparison import FrequencyComparison
+from rotorid.study.claims import paper_claims
 from rotorid.verification.compare import VerificationResult
 from rotorid.verification.equivalent_delays import EquivalentDelays
 from rotorid.verification.metrics import TimeDomainMetrics
@@ -45,6 +47,7 @@ class CaseResult:
     truth_delays: EquivalentDelays | None = None   # the truth model's equivalent delays
     # by model label, with [compare] frequency: the frequency-domain fit beside the model's
     frequency_comparison: Mapping[str, FrequencyComparison] = attrs.field(factory=dict)
+    delay_profiles: tuple[DelayProfile, ...] = ()  # of each kept delay (estimation.profiles)
 
     @property
     def name(self) -> str:
@@ -79,6 +82,8 @@ class CaseResult:
             "condition": attrs.asdict(self.condition),
             "reduction": {"rule": path.rule, "rmse_tolerance": path.rmse_tolerance,
                           "selected_step": path.selected_index,
+                          # the step each selection rule picks on this path
+                          "selections": path.selections(),
                           "removed": list(path.removed),
                           "steps": [s.summary() for s in path.steps]},
             "selected_structure": list(self.structures["no delays"].names),
@@ -87,9 +92,11 @@ class CaseResult:
             "frequency_verification": {label: v.summary()
                                        for label, v in self.verification.items()},
             "key_derivatives": self.key_derivatives(),
+            "claims": [claim.as_dict() for claim in paper_claims(self)],
             "dropped_delays": list(self.dropped_delays),
             "frequency_comparison": {label: c.summary()
                                      for label, c in self.frequency_comparison.items()},
+            "delay_profiles": [p.as_dict() for p in self.delay_profiles],
             "truth_equivalent_delays": (None if self.truth_delays is None
                                         else self.truth_delays.as_dict()),
             # What differs between an uninterrupted and a resumed run of the same case, and

@@ -57,6 +57,13 @@ class EnvelopeBounds:
     available: bool = True
 
 
+#: The usual guideline for the mismatch cost J (Tischler & Remple, ch. 12): J ≤ 100 per pair,
+#: or, for a multi-pair model, an average ≤ 100 with a few pairs up to 200.
+MISMATCH_COST_GUIDELINE = {"pair_max": 100.0, "few_pairs_max": 200.0, "average_max": 100.0}
+#: The guideline in words, stated beside every J.
+MISMATCH_COST_GUIDELINE_TEXT = "J ≤ 100 (a few pairs ≤ 200, average ≤ 100)"
+
+
 @attrs.frozen(eq=False)
 class EnvelopeCheck:
     """Result of holding a verification error against one envelope.
@@ -135,6 +142,7 @@ class EnvelopeCheck:
             "worst_margin_db": _finite_or_none(self.worst_margin_db),
             "worst_margin_deg": _finite_or_none(self.worst_margin_deg),
             "cost": self.cost,
+            **({} if self.cost is None else {"cost_guideline": MISMATCH_COST_GUIDELINE}),
         }
 
     def report(self) -> str:
@@ -146,7 +154,7 @@ class EnvelopeCheck:
                 f"(γ² ≥ {self.threshold:g}); worst margin {self.worst_margin_db:+.2f} dB, "
                 f"{self.worst_margin_deg:+.1f}°")
         if self.cost is not None:
-            line += f"; J = {self.cost:.1f}"
+            line += f"; J = {self.cost:.1f} (guideline {MISMATCH_COST_GUIDELINE_TEXT})"
         if self.passed is None and self.status == "no coherent points":
             line += (f" — the truth's coherence never reaches {self.threshold:g}: check that "
                      f"the sweeps excite this input and the output responds, or lower the "

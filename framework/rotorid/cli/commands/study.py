@@ -66,12 +66,14 @@ def expand_cases(names, speeds: str | None = None, template: str = "hover"):
 
 def claims_summary(result) -> str:
     """One line: how many of the paper's claims hold for a case, and which do not."""
-    from rotorid.report.html import claims_tally, paper_checks
+    from rotorid.study.claims import claims_tally, paper_claims
 
-    decided, failed = claims_tally(paper_checks(result))
-    line = f"paper's claims: {len(decided) - len(failed)}/{len(decided)} hold"
+    claims = paper_claims(result)
+    decided, failed = claims_tally(claims)
+    line = (f"paper's claims: {len(decided) - len(failed)}/{len(decided)} hold, "
+            f"{len(claims) - len(decided)} not checked")
     if failed:
-        line += "; not: " + "; ".join(f"{c.claim} ({c.measured})" for c in failed)
+        line += "; not: " + "; ".join(f"{c.claim} ({c.evidence})" for c in failed)
     return line
 
 

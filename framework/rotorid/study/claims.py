@@ -1,0 +1,158 @@
+"""The paper's claims as it states them, measured on a study case.
+
+Each :class:`Claim` carries its evidence and one verdict of :data:`VERDICTS`; a claim that
+cannot be decided says why. The claims (paper sections "Hover" and "Forward flight"):
+
+* the selected model meets the time-domain guideline RMSE ≤ 1.0 to 2.0 (checked against 2.0);
+* the signs of the key stability derivatives: L_v < 0, N_v > 0 and Z_w < 0 in hover and at
+  70 kt, M_w < 0 at 70 kt (horizontal tail), and M_w removed in hover (about zero, high
+  insensitivity); each sign claim shows the truth model's own linearised value beside the
+  identified one, so a claim the truth model itself does not meet reads as such;
+* with delays, the on-axis pairs (q/long, p/lat, r/ped, az/coll) are inside the MUAD bounds
+  where γ² ≥ 0.8, the off-axis cyclic pairs (p/long, q/lat) too, and the delays reduce the
+  off-axis phase error.
+
+The derivative claims are the paper's statements about its helicopter at hover and 70 kt: they
+are checked only on cases whose data come from the truth model (data source ``helisim``) at
+those conditions. Cases on a user's own data get the guidelines (RMSE, MUAD) only.
+"""
+
+from __future__ import annotations
+
+import math
+
+import attrs
+import numpy as np
+
+from rotorid.study.expectations import SIGNIFICANCE, derivative_unit, regime_of
+from rotorid.verification.compare import COHERENCE_THRESHOLD
+from rotorid.verification.envelopes import error_db_deg
+
+#: The three verdicts of a claim.
+VERDICTS = ("holds", "does not hold", "not checked")
+#: The upper end of the paper's time-domain guideline RMSE ≤ 1.0 to 2.0 (its ref. 16).
+RMSE_GUIDELINE = 2.0
+#: The on-axis pairs the paper shows inside the MUAD bounds with delays.
+ON_AXIS_PAIRS = ("q/long", "p/lat", "r/ped", "az/coll")
+#: The off-axis cyclic pairs the delays bring inside the bounds (hover) and whose phase error
+#: they reduce.
+OFF_AXIS_PAIRS = ("p/long", "q/lat")
+#: The paper's sign claims by regime: derivative → expected sign (0: removed, about zero).
+SIGN_CLAIMS = {"hover": {"M_w": 0, "L_v": -1, "N_v": +1, "Z_w": -1},
+               "forward": {"M_w": -1, "L_v": -1, "N_v": +1, "Z_w": -1}}
+#: Data sources whose data are the paper's kind of helicopter (the derivative claims apply).
+PAPER_SOURCES = ("helisim",)
+
+
+@attrs.frozen
+class Claim:
+    """One of the paper's claims measured on a case.
+
+    ``verdict`` is one of :data:`VERDICTS`; ``reason`` says why a claim is not checked.
+    """
+
+    claim: str
+    evidence: str
+    verdict: str = attrs.field(validator=attrs.validators.in_(VERDICTS))
+    reason: str = ""
+
+    def as_dict(self) -> dict:
+        return attrs.asdict(self)
+
+
+def _decided(claim: str, evidence: str, holds: bool) -> Claim:
+    return Claim(claim, evidence, "holds" if holds else "does not hold")
+
+
+def mean_phase_error(item, threshold: float = COHERENCE_THRESHOLD) -> float | None:
+    """Mean |∠ε| in deg (principal values) over the points where the truth's γ² ≥
+    ``threshold``; None without such points."""
+    _, phase = error_db_deg(item.error)
+    with np.errstate(invalid="ignore"):
+        used = (item.coherence >= threshold) & np.isfinite(phase)
+    return float(np.mean(np.abs(phase[used]))) if used.any() else None
+
+
+def _verified(result, label: str, pair: str):
+    verification = result.verification.get(label)
+    return None if verification is None else verification.get(pair)
+
+
+def rmse_claims(result) -> list[Claim]:
+    """The time-domain guideline on both identified models."""
+    return [_decided(f"time-domain RMSE ≤ 1.0 to 2.0 ({label}; checked against "
+                     f"{RMSE_GUIDELINE:g})", f"RMSE {estimate.rmse:.3f}",
+                     estimate.rmse <= RMSE_GUIDELINE)
+            for label, estimate in result.estimates.items()]
+
+
+def muad_claim(result, pair: str) -> Claim:
+    """``pair`` of the model with delays inside the MUAD bounds where γ² ≥ 0.8."""
+    claim = f"{pair} with delays inside MUAD where γ² ≥ {COHERENCE_THRESHOLD:g}"
+    item = _verified(result, "with delays", pair)
+    check = None if item is None else item.checks.get("muad")
+    if check is None or check.passed is None:
+        return Claim(claim, "", "not checked",
+                     "pair not verified" if check is None else check.status)
+    return _decided(claim, f"{check.n_inside}/{check.n_used} coherent points inside, worst "
+                           f"margin {check.worst_margin_db:+.2f} dB / "
+                           f"{check.worst_margin_deg:+.1f}°", bool(check.passed))
+
+
+def phase_claim(result, pair: str) -> Claim:
+    """The delays reduce the mean phase error of off-axis ``pair``."""
+    claim = f"{pair}: delays reduce the phase error (mean |∠ε| where γ² ≥ " \
+            f"{COHERENCE_THRESHOLD:g})"
+    items = {label: _verified(result, label, pair) for label in ("no delays", "with delays")}
+    phases = {label: None if item is None else mean_phase_error(item)
+              for label, item in items.items()}
+    if None in phases.values():
+        return Claim(claim, "", "not checked", "pair not verified or no coherent points")
+    without, with_ = phases["no delays"], phases["with delays"]
+    return _decided(claim, f"{without:.1f}° without delays, {with_:.1f}° with", with_ < without)
+
+
+def sign_claim(result, name: str, sign: int) -> Claim:
+    """The paper's sign of derivative ``name`` (``sign`` 0: removed, about zero) on the model
+    with delays, with the truth model's linearised value beside it."""
+    estimate = result.estimates["with delays"]
+    unit = derivative_unit(name, estimate.units)
+    truth = (result.truth_derivatives or {}).get(name)
+    beside = "" if truth is None else f"; truth model {truth:+.4g} {unit}"
+    if sign == 0:
+        claim = f"{name} about zero, removed (high insensitivity)"
+        if name not in estimate.parameter_names:
+            return _decided(claim, f"removed{beside}", True)
+        value = estimate.value(name)
+        return _decided(claim, f"kept, identified {value:+.4g} {unit}{beside}", False)
+    claim = f"{name} {'<' if sign < 0 else '>'} 0"
+    if name not in estimate.parameter_names:
+        return Claim(claim, f"removed by the reduction{beside}", "not checked",
+                     "the selected structure has no such derivative")
+    index = estimate.index(name)
+    value, bound = float(estimate.values[index]), float(estimate.cramer_rao[index])
+    evidence = f"identified {value:+.4g} ± {bound:.2g} {unit}{beside}"
+    if abs(value) < SIGNIFICANCE * bound:
+        return Claim(claim, evidence, "not checked",
+                     f"|value| below {SIGNIFICANCE:g} Cramér-Rao bounds: the data do not fix "
+                     f"the sign")
+    return _decided(claim, evidence, math.copysign(1, value) == sign)
+
+
+def paper_claims(result) -> list[Claim]:
+    """The paper's claims for one case (see the module docstring), in the report's order."""
+    claims = rmse_claims(result)
+    regime = regime_of(result.condition.airspeed_kt)
+    if result.case.data_source in PAPER_SOURCES and regime is not None:
+        claims += [sign_claim(result, name, sign)
+                   for name, sign in SIGN_CLAIMS[regime].items()]
+    claims += [muad_claim(result, pair) for pair in ON_AXIS_PAIRS]
+    claims += [muad_claim(result, pair) for pair in OFF_AXIS_PAIRS]
+    claims += [phase_claim(result, pair) for pair in OFF_AXIS_PAIRS]
+    return claims
+
+
+def claims_tally(claims) -> tuple[list[Claim], list[Claim]]:
+    """(decided, failed): the claims with a verdict, and those that do not hold."""
+    decided = [c for c in claims if c.verdict != "not checked"]
+    return decided, [c for c in decided if c.verdict == "does not hold"]

@@ -1,0 +1,49 @@
+"""Delay profiles on a constructed roll/pitch problem with a known 0.06 s delay."""
+
+import numpy as np
+import pytest
+import rotorid
+from rotorid import Derivative, FlightCondition, ModelStructure
+from rotorid.estimation.profiles import delay_profile, fixing_delay
+from test_output_error import doublet_maneuvers, with_outputs
+
+HOVER = FlightCondition.from_airspeed(0.0)
+TRUE = {"M_u": 0.5, "M_q": -3.7, "M_long": 0.9, "L_v": -0.4, "L_p": -8.0, "L_lat": 2.0}
+TAU = 0.06
+
+
+@pytest.fixture(scope="module")
+def fitted():
+    structure = ModelStructure(HOVER, [Derivative(n) for n in TRUE]).with_delays(["L_lat"])
+    data = with_outputs(structure, structure.as_vector({**TRUE, "tau_L_lat": TAU}),
+                        doublet_maneuvers(n=300), noise=0.02, seed=3)
+    estimator = rotorid.create("estimators", "output-error")
+    free = structure.with_delays(["L_lat"], upper=0.3)
+    return free, estimator.estimate(free, data, start=TRUE), data, estimator
+
+
+def test_the_profile_has_its_minimum_at_the_true_delay_and_meets_the_free_fit(fitted):
+    structure, estimate, data, estimator = fitted
+    grid = [0.0, 0.03, TAU, 0.09, 0.12]
+    profile = delay_profile(structure, estimate, data, estimator, "tau_L_lat", grid)
+    assert profile.grid.tolist() == grid and profile.converged.all()
+    assert int(np.argmin(profile.cost)) == grid.index(TAU)
+    assert profile.free_value == pytest.approx(TAU, abs=0.005)
+    # Fixing the delay can only cost: no grid point beats the free fit.
+    assert np.all(profile.cost >= profile.free_cost * (1 - 1e-9))
+    assert np.all(profile.relative_rmse > -1e-6)
+    # At the free fit's own delay the profile is the free fit.
+    at_free = delay_profile(structure, estimate, data, estimator, "tau_L_lat",
+                            [profile.free_value])
+    assert at_free.cost[0] == pytest.approx(estimate.cost, rel=1e-5)
+    record = profile.as_dict()
+    assert record["grid_s"] == grid and record["free_rmse"] == pytest.approx(estimate.rmse)
+
+
+def test_only_a_delay_of_the_structure_can_be_fixed(fitted):
+    structure = fitted[0]
+    fixed = fixing_delay(structure, "tau_L_lat", 0.1)
+    assert "tau_L_lat" not in fixed.parameter_names
+    assert fixed.derivative("L_lat").delay.initial == 0.1
+    with pytest.raises(rotorid.EstimationError, match="tau_M_q is not a delay.*tau_L_lat"):
+        fixing_delay(structure, "tau_M_q", 0.1)
