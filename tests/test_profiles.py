@@ -47,3 +47,19 @@ def test_only_a_delay_of_the_structure_can_be_fixed(fitted):
     assert fixed.derivative("L_lat").delay.initial == 0.1
     with pytest.raises(rotorid.EstimationError, match="tau_M_q is not a delay.*tau_L_lat"):
         fixing_delay(structure, "tau_M_q", 0.1)
+
+
+def test_the_profile_figure_draws_one_line_and_one_marker_per_delay(fitted):
+    from rotorid.report.plots.profiles import plot_delay_profiles
+
+    structure, estimate, data, estimator = fitted
+    profile = delay_profile(structure, estimate, data, estimator, "tau_L_lat", [0.0, 0.06, 0.12])
+    figure = plot_delay_profiles([profile], title="test")
+    axis = figure.axes[0]
+    line, marker = axis.get_lines()
+    assert line.get_xdata().tolist() == [0.0, 0.06, 0.12]
+    assert line.get_ydata() == pytest.approx(100 * profile.relative_rmse)
+    assert marker.get_xdata().tolist() == [profile.free_value]
+    assert "[s]" in axis.get_xlabel() and "[%]" in axis.get_ylabel()
+    legend = axis.get_legend()
+    assert legend.get_bbox_to_anchor().x0 > axis.get_window_extent().x1 - 1   # outside the axes

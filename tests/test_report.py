@@ -134,6 +134,14 @@ def test_the_quick_hover_study_writes_a_complete_linked_report(quick_study):
     assert not [row for row in checks if row[0].startswith("delay on")]  # the paper gives no range
     assert record["reduction"]["selections"]["lowest-rmse"] == record["reduction"][
         "selected_step"]
+    # One profile per kept delay on the quick grid; fixing a delay never beats the free fit
+    # (det R, up to the fits' convergence).
+    profiles = record["delay_profiles"]
+    kept = record["estimates"]["with delays"]["delays"]
+    assert [p["delay"] for p in profiles] == [f"tau_{d}" for d in kept]
+    for profile in profiles:
+        assert profile["grid_s"] == [0.0, 0.15, 0.3]
+        assert min(profile["det_r"]) >= profile["free_det_r"] * (1 - 1e-3), profile["delay"]
     signs = {row[0]: row for row in _read_csv(case / "tables" / "key_derivatives.csv")[1:]}
     assert signs["Z_w"][8] == "agrees"      # heave damping: robustly negative in hover
 

@@ -284,6 +284,15 @@ def pair_anchor(pair: str) -> str:
     return "pair-" + file_stem(pair.replace("/", "-"))
 
 
+def _other_selections(path) -> str:
+    """Where the other selection rules land on the path (tolerance rules with their
+    tolerance)."""
+    others = [f"{rule} ({path.rmse_tolerance:.0%}) step {index}" if rule != "lowest-rmse"
+              else f"{rule} step {index}"
+              for rule, index in path.selections().items() if rule != path.rule]
+    return f"Other rules would select: {', '.join(others)}." if others else ""
+
+
 def _delays_text(result) -> str:
     estimate = result.estimates["with delays"]
     parts = [f"{delayed_derivative(n)} {estimate.values[i]:.3f} ± {estimate.cramer_rao[i]:.3f} s"
@@ -383,9 +392,10 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
     body += [
         '<h2 id="reduction">Model reduction</h2>',
         f"<p>Selected step {path.selected_index} of {len(path.steps) - 1} by rule "
-        f"<code>{path.rule}</code> (tolerance {path.rmse_tolerance:.0%}): "
+        f"<code>{path.rule}</code>: "
         f"{path.selected.n_parameters} parameters, RMSE {path.selected.rmse:.4f}; "
-        f"removed in order: {html.escape(', '.join(path.removed) or 'none')}.</p>",
+        f"removed in order: {html.escape(', '.join(path.removed) or 'none')}. "
+        f"{_other_selections(path)}</p>",
         figures_html(figures.get("reduction", [])),
         "<h3>Removed parameters (Appendix B)</h3>", _html_table(removed_rows(result), 7),
         '<h2 id="delays">Time delays</h2>',
