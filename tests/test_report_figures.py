@@ -72,8 +72,10 @@ def test_rmse_curve(hover):
     band_height = rmse.min() * path.rmse_tolerance / (high - low)
     assert band_height > 0.05
     labels = [t.get_text() for t in figure.legends[0].get_texts()]
-    assert any(label.startswith("lowest RMSE: step") for label in labels)
+    # Where every selection rule lands, the path's own marked as selected.
     assert any(label.startswith(f"selected ({path.rule}") for label in labels)
+    for rule in ("parsimonious", "first-rise"):
+        assert sum(rule in label for label in labels) == 1, labels
     assert UNIT.search(axis.get_xlabel()) and UNIT.search(axis.get_ylabel())
     _legend_outside(figure)
     _no_duplicate_lines(axis)

@@ -43,9 +43,11 @@ def flight_label(condition) -> str:
 def rmse_caption(path) -> str:
     return ("RMSE (eq. 18) of each converged structure against the number of removed "
             "parameters; the name on the top axis is the parameter removed at that step. The "
-            f"shaded band spans the lowest RMSE to {path.rmse_tolerance:.0%} above it; the star "
-            "marks the lowest RMSE (the paper's rule), the diamond the structure selected by "
-            f"rule <code>{html.escape(path.rule)}</code>. The y-axis shows the region the rules "
+            f"shaded band spans the lowest RMSE to {path.rmse_tolerance:.0%} above it (the "
+            "tolerance rules' band); the star marks the structure selected by rule "
+            f"<code>{html.escape(path.rule)}</code>, the other markers where the other rules "
+            "(lowest-rmse, the paper's; parsimonious; first-rise) would land, one marker per "
+            "step. The y-axis shows the region the rules "
             "look at; steps whose RMSE lies above it are drawn as open triangles at the top.")
 
 

@@ -55,11 +55,18 @@ def _save(figure, handle, fmt: str, dpi: int) -> None:
 
 
 def rule_marks(path: ReductionPath) -> dict[str, int]:
-    """Step index where each selection rule lands: the lowest RMSE (the paper's rule) and
-    the rule the path selected with (label → step index)."""
-    rmse = np.array([s.rmse for s in path.steps], dtype=float)
-    marks = {"lowest RMSE": int(np.nanargmin(rmse))}
-    marks[f"selected ({path.rule}, tolerance {path.rmse_tolerance:.0%})"] = path.selected_index
+    """Step index where the selection rules land (:meth:`ReductionPath.selections`), one
+    entry per step, naming the rules that land there; the path's own rule's step first and
+    labelled "selected" (label → step index)."""
+    selections = path.selections()
+    by_step: dict[int, list[str]] = {}
+    for rule in [path.rule, *(r for r in selections if r != path.rule)]:
+        by_step.setdefault(selections[rule], []).append(rule)
+    marks = {}
+    for index, rules in by_step.items():
+        text = ", ".join(rules) + ("" if rules == ["lowest-rmse"]
+                                   else f", tolerance {path.rmse_tolerance:.0%}")
+        marks[f"selected ({text})" if path.rule in rules else text] = index
     return marks
 
 
