@@ -175,13 +175,8 @@ def plot_error(errors: Mapping[str, PairVerification] | PairVerification,
     phase_axis.set_ylim(*limits(shown_phase, least=10.0))
     mag_axis.set_ylabel("|ε| [dB]")
     phase_axis.set_ylabel("∠ε [deg]")
-    coh_axis.set_ylabel(("partial γ²" if analytic else "γ²") + " [-]")
-    coh_axis.set_ylim(0.0, 1.05)
-    coh_axis.set_xlabel("frequency ω [rad/s]")
-    for axis in (mag_axis, phase_axis, coh_axis):
-        decade_axis(axis)
-    _figure_legend(figure, (mag_axis, coh_axis))
-    return figure
+    return _finish(figure, mag_axis, phase_axis, coh_axis,
+                   ("partial γ²" if analytic else "γ²") + " [-]")
 
 
 def _figure_legend(figure, axes) -> None:
@@ -255,7 +250,13 @@ def plot_bode(item: PairVerification, output_unit: str = "", input_unit: str = "
     phase_axis.set_ylim(*limits(shown_phase, least=30.0))
     mag_axis.set_ylabel(f"magnitude [dB, {unit}]")
     phase_axis.set_ylabel("phase [deg]")
-    coh_axis.set_ylabel("γ² [-]")
+    return _finish(figure, mag_axis, phase_axis, coh_axis, "γ² [-]")
+
+
+def _finish(figure, mag_axis, phase_axis, coh_axis, coherence_label: str):
+    """The coherence axis's label and range, decade ticks on the shared frequency axis and
+    one legend below the axes; returns ``figure``."""
+    coh_axis.set_ylabel(coherence_label)
     coh_axis.set_ylim(0.0, 1.05)
     coh_axis.set_xlabel("frequency ω [rad/s]")
     for axis in (mag_axis, phase_axis, coh_axis):
