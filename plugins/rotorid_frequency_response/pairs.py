@@ -24,12 +24,12 @@ from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS, ManeuverSet
 from rotorid.errors import EstimationError
 from rotorid.frozen import readonly_array
 from rotorid.verification.compare import default_omega
-from rotorid.verification.pairs import parse_pair, primary_axis
 from rotorid.verification.frequency import (
     FrequencyResponse,
     apparent_response,
     response_from_maneuvers,
 )
+from rotorid.verification.pairs import parse_pair, primary_axis, sweeps_exciting
 from rotorid_envelopes.cost import COST_THRESHOLD, MismatchCost, coherence_weight
 
 
@@ -110,15 +110,10 @@ def sweep_pair_data(maneuvers: ManeuverSet, pairs: Sequence[str] | None = None,
     docstring); a pair without coherent frequencies gives its name instead."""
     pairs = all_pairs(maneuvers) if pairs is None else tuple(pairs)
     grid = default_omega(maneuvers)
-    axes = [primary_axis(m) for m in maneuvers]
     found = []
     for name in pairs:
         output, control = parse_pair(name)
-        chosen = {m.name for m, axis in zip(maneuvers, axes) if axis == control}
-        if not chosen:
-            raise EstimationError(f"pair {name}: no sweep excites {control!r}; the sweeps "
-                                  f"excite {', '.join(sorted(set(axes)))}")
-        subset = maneuvers.select(lambda m: m.name in chosen)
+        subset = sweeps_exciting(maneuvers, control, name, EstimationError)
         points = cost_points(response_from_maneuvers(subset, control, output, grid,
                                                      windows=windows),
                              n_points, threshold, band)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS
-from rotorid.errors import VerificationError
+from rotorid.errors import RotoridError, VerificationError
 
 #: The paper's verification pairs (figs. 4, 5, 12, 14): ``output/input``.
 PAPER_PAIRS = ("q/long", "p/long", "q/lat", "p/lat", "r/coll", "az/coll", "r/ped", "ay/ped")
@@ -34,3 +34,16 @@ def primary_axis(maneuver) -> str:
         return axis
     centred = maneuver.inputs - maneuver.inputs.mean(axis=0)
     return INPUT_CHANNELS[int(np.argmax(np.sqrt(np.mean(centred ** 2, axis=0))))]
+
+
+def sweeps_exciting(sweeps, control: str, pair: str,
+                    error: type[RotoridError] = VerificationError):
+    """The sweeps of the :class:`~rotorid.data.ManeuverSet` ``sweeps`` whose
+    :func:`primary_axis` is ``control``, as a ManeuverSet; when none is, raises ``error``
+    naming ``pair`` and the axes the sweeps do excite."""
+    axes = [primary_axis(m) for m in sweeps]
+    names = {m.name for m, axis in zip(sweeps, axes) if axis == control}
+    if not names:
+        raise error(f"pair {pair}: no sweep excites {control!r}; the sweeps excite "
+                    f"{', '.join(sorted(set(axes)))}")
+    return sweeps.select(lambda m: m.name in names)

@@ -91,23 +91,18 @@ def run(args) -> int:
     from rotorid.errors import UsageError
     from rotorid.io import atomic_write
     from rotorid.verification.compare import default_omega
-    from rotorid.verification.pairs import parse_pair, primary_axis
     from rotorid.verification.frequency import moving_inputs, response_from_maneuvers
+    from rotorid.verification.pairs import parse_pair, sweeps_exciting
 
     out = Path(args.out)
     if out.suffix.lower() not in FORMATS:
         raise UsageError(f"--out {out}: give a file ending in {', '.join(FORMATS)}")
     sweeps = load_sweeps(args.sweeps)
     omega = default_omega(sweeps)
-    axes = [primary_axis(m) for m in sweeps]
     responses = []
     for pair in chosen_pairs(args.pairs, sweeps):
         output, control = parse_pair(pair)
-        names = {m.name for m, axis in zip(sweeps, axes) if axis == control}
-        if not names:
-            raise UsageError(f"pair {pair}: no sweep excites {control!r}; the sweeps excite "
-                             f"{', '.join(sorted(set(axes)))}")
-        subset = sweeps.select(lambda m: m.name in names)
+        subset = sweeps_exciting(sweeps, control, pair, UsageError)
         others = moving_inputs(subset, control) if args.conditioned else ()
         responses.append(response_from_maneuvers(subset, control, output, omega,
                                                  conditioned_on=others))
