@@ -9,7 +9,6 @@ import rotorid
 import scipy.linalg
 from rotorid import Derivative, ModelStructure
 from rotorid.errors import DataError, EstimationError, IdentifiabilityWarning
-from rotorid.model.structure import STATES
 from rotorid_filter_error.estimator import FilterErrorProblem
 from rotorid_filter_error.kalman import innovation_blocks
 from rotorid_filter_error.riccati import steady_state_filter
@@ -30,28 +29,36 @@ def structure(delays=()):
     return ModelStructure(HOVER, [Derivative(n) for n in SMALL_TRUTH]).with_delays(delays)
 
 
-def noisy_data(process, seed=1, dt=0.02):
-    """Doublet maneuvers of the small hover model, simulated independently of the estimator
-    (zero-order-hold discretisation by one matrix exponential), with white process noise
-    added to the states each sample and white measurement noise."""
-    model = structure()
-    a, b, c, d = model.matrices(model.as_vector(SMALL_TRUTH))
-    block = np.zeros((12, 12))
-    block[:8, :8], block[:8, 8:] = a, b
+def noisy_data(process, seed=1, dt=0.02, model=None, truth=SMALL_TRUTH, variance=VARIANCE):
+    """Doublet maneuvers of ``model`` (default the small six-dof hover model) in its own
+    channels, simulated independently of the estimator (zero-order-hold discretisation by one
+    matrix exponential), with white process noise added to the states each sample and white
+    measurement noise."""
+    model = structure() if model is None else model
+    a, b, c, d = model.matrices(model.as_vector(truth))
+    n, m = b.shape
+    block = np.zeros((n + m, n + m))
+    block[:n, :n], block[:n, n:] = a, b
     exp = scipy.linalg.expm(block * dt)
-    phi, gamma = exp[:8, :8], exp[:8, 8:]
-    rows = [STATES.index(s) for s in process]
+    phi, gamma = exp[:n, :n], exp[:n, n:]
+    rows = [model.states.index(s) for s in process]
     sigma = np.array(list(process.values()))
     rng = np.random.default_rng(seed)
+    controls = [rotorid.CONTROLS.index(u) for u in model.controls]
     maneuvers = []
-    for m in doublet_maneuvers(dt=dt):
-        x, outputs = np.zeros(8), np.empty((m.n_samples, 8))
-        for k, u in enumerate(m.inputs):
+    for record in doublet_maneuvers(dt=dt):
+        inputs = record.inputs[:, controls]
+        if not np.any(inputs):
+            continue
+        x, outputs = np.zeros(n), np.empty((record.n_samples, len(model.outputs)))
+        for k, u in enumerate(inputs):
             outputs[k] = c @ x + d @ u
             x = phi @ x + gamma @ u
             x[rows] += sigma * rng.standard_normal(len(rows))
-        outputs += rng.standard_normal(outputs.shape) * np.sqrt(VARIANCE)
-        maneuvers.append(m.with_outputs(outputs))
+        outputs += rng.standard_normal(outputs.shape) * np.sqrt(variance)
+        maneuvers.append(rotorid.Maneuver(record.name, record.time, inputs, outputs,
+                                          input_names=model.controls,
+                                          output_names=model.outputs))
     return rotorid.ManeuverSet(maneuvers)
 
 
@@ -110,6 +117,25 @@ def test_recovers_derivatives_process_and_measurement_noise_within_3_cr():
     assert result.noise_covariance == pytest.approx(np.diag(VARIANCE), rel=0.1, abs=1e-12)
 
 
+def test_longitudinal_template_recovers_derivatives_and_noise_within_3_cr():
+    """A longitudinal structure (four states, two controls, four outputs) on records holding
+    only its channels; the process noise enters its three equations by default."""
+    truth = {n: SMALL_TRUTH[n] for n in ("X_u", "X_q", "X_long", "Z_w", "Z_coll", "M_u", "M_q",
+                                         "M_long")}
+    model = ModelStructure(HOVER, [Derivative(n) for n in truth], template="longitudinal")
+    process = {"u": 0.005, "w": 0.03, "q": 0.05}
+    variance = VARIANCE[:4]
+    data = noisy_data(process, model=model, truth=truth, variance=variance)
+    assert data.output_names == ("ax", "az", "q", "theta")
+    result = estimator().estimate(model, data)
+    assert result.converged, result.stop_reason
+    assert result.parameter_names[len(truth):] == ("F_u", "F_w", "F_q", "R_ax", "R_az", "R_q",
+                                                   "R_theta")
+    expected = np.concatenate([model.as_vector(truth), list(process.values()), variance])
+    error = np.abs(result.values - expected) / result.cramer_rao
+    assert np.all(error < 3.0), dict(zip(result.parameter_names, error.round(2)))
+
+
 def test_output_error_is_biased_on_the_same_data():
     """The reason for the filter: output error misses some derivatives by many CR bounds."""
     data = noisy_data(PROCESS)
@@ -141,7 +167,9 @@ def test_in_still_air_filter_error_reduces_to_output_error():
 def test_start_values_and_options_are_checked():
     data = noisy_data(PROCESS)
     with pytest.raises(EstimationError, match="process_noise"):
-        estimator(process_noise=("u", "x"))
+        estimator(process_noise=("u", "u"))
+    with pytest.raises(EstimationError, match="process_noise names x, not states"):
+        estimator(process_noise=("u", "x")).estimate(structure(), data)
     with pytest.raises(EstimationError, match="unknown parameters"):
         estimator().estimate(structure(), data, start={"F_theta": 1.0})
     with pytest.raises(EstimationError, match="linear model structures"):

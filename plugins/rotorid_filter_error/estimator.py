@@ -6,9 +6,11 @@ white process noise on the physical states and white measurement noise on the ou
     x_n+1 = Φ x_n + Σ_j Pu[j] u_n−j + F w_n      y_n = H x_n + Σ_j Du[j] u_n−j
     z_n = y_n + v_n      w_n ~ N(0, I), v_n ~ N(0, R)
 
-F is diagonal over :data:`PROCESS_NOISE_STATES` (``F_<state>``: standard deviation of the noise
-added to that state over one sample, structure units) and R diagonal (``R_<output>``, the
-measurement-noise variance, units²). Both are estimated with the derivatives and delays. The
+F is diagonal over the process-noise states (``F_<state>``: standard deviation of the noise
+added to that state over one sample, structure units; by default the states of the structure's
+force and moment equations) and R diagonal over the structure's outputs (``R_<output>``, the
+measurement-noise variance, units²). States, controls and outputs are the structure's own
+(:attr:`~rotorid.model.structure.ModelStructure.states` …), so any linear structure fits. Both are estimated with the derivatives and delays. The
 steady-state Kalman filter (:mod:`.riccati`, :mod:`.kalman`) turns the data into innovations ν_n
 with covariance B = H P Hᵀ + R; the negative log-likelihood is
 
@@ -39,8 +41,7 @@ from rotorid.data import ManeuverSet
 from rotorid.errors import EstimationError, SimulationDivergedError
 from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.models import LinearModel
-from rotorid.model.structure import OUTPUTS, STATES, ModelStructure
-from rotorid.model.templates import SIX_DOF
+from rotorid.model.structure import ACCELERATION_OUTPUT, ModelStructure
 from rotorid.plugin.manager import notify
 from rotorid.simulation.discretisation import COMPLEX_STEP
 from rotorid_output_error.levenberg_marquardt import Settings, run
@@ -50,11 +51,6 @@ from .riccati import steady_state_filter
 from .system import companion_system
 
 NAME = "filter-error"
-#: States the process noise enters by default: the six force and moment equations.
-PROCESS_NOISE_STATES = ("u", "w", "q", "v", "p", "r")
-#: Measured output whose first differences size the start of each state's process noise.
-_START_OUTPUT = {"u": "ax", "w": "az", "v": "ay", "q": "q", "p": "p", "r": "r",
-                 "theta": "theta", "phi": "phi"}
 #: Default start of F relative to the measurement-noise size of the state's output: small,
 #: because large process noise lets the filter follow the data, a poor local minimum.
 _PROCESS_START = 0.1
@@ -62,13 +58,52 @@ _PROCESS_START = 0.1
 _VARIANCE_FLOOR = 1e-8
 
 
-def _states(value) -> tuple[str, ...]:
-    states = tuple(value)
-    unknown = [s for s in states if s not in STATES]
-    if unknown or len(set(states)) != len(states):
-        raise EstimationError(f"process_noise must name distinct states of {', '.join(STATES)}, "
-                              f"got {list(states)}")
-    return tuple(s for s in STATES if s in states)
+def _names(value) -> tuple[str, ...] | None:
+    if value is None:
+        return None
+    states = (value,) if isinstance(value, str) else tuple(value)
+    if len(set(states)) != len(states) or not all(isinstance(s, str) for s in states):
+        raise EstimationError(f"process_noise must name distinct states, got {list(states)}")
+    return states
+
+
+def process_noise_states(structure: ModelStructure, names: tuple[str, ...] | None
+                         ) -> tuple[str, ...]:
+    """The states the process noise enters, in the structure's state order: ``names``, or by
+    default the states of the structure's force and moment equations."""
+    if names is None:
+        return tuple(structure.states[i] for i in structure.equation_rows)
+    unknown = [s for s in names if s not in structure.states]
+    if unknown:
+        raise EstimationError(f"process_noise names {', '.join(unknown)}, not states of the "
+                              f"structure ({', '.join(structure.states)}); choose among those")
+    return tuple(s for s in structure.states if s in names)
+
+
+def process_noise_start(structure: ModelStructure, states: tuple[str, ...],
+                        variance: np.ndarray, dt: float) -> dict[str, float]:
+    """Default start of ``F_<state>`` (structure units per sample): a tenth of the noise size
+    of an output that measures the state, either the state itself (σ) or, for a velocity,
+    the specific force of its equation (σ·dt, the change over one sample).
+
+    ``variance`` (p,) is the start of R over the structure's outputs.
+    """
+    measured = structure.known_output_matrix()
+    starts = {}
+    for state in states:
+        direct = np.flatnonzero(measured[:, structure.states.index(state)])
+        rate = ACCELERATION_OUTPUT.get(state)
+        if direct.size:
+            size = np.sqrt(variance[direct[0]])
+        elif rate in structure.outputs:
+            size = np.sqrt(variance[structure.outputs.index(rate)]) * dt
+        else:
+            raise EstimationError(
+                f"no output measures state {state} or its rate, so F_{state} has no default "
+                f"start; give process_noise_start = {{F_{state} = ...}} (structure units per "
+                f"sample) or leave {state} out of process_noise")
+        starts[state] = _PROCESS_START * float(size)
+    return starts
 
 
 def _start_choice(instance, attribute, value):
@@ -85,18 +120,19 @@ class FilterErrorProblem:
                  process_noise: tuple[str, ...], settings: Settings):
         self.structure = structure
         self.hold = maneuvers.hold
-        self.records = Records.from_maneuvers(maneuvers)
+        self.records = Records.from_maneuvers(maneuvers, structure)
         self.settings = settings
         self.n_samples = self.records.n_samples
-        self.noise_rows = [STATES.index(s) for s in process_noise]
+        self.process_noise = process_noise
+        self.noise_rows = [structure.states.index(s) for s in process_noise]
         self.n_structure = structure.n_parameters
-        self.output_names = OUTPUTS
+        self.output_names = structure.outputs
         self.parameter_names = (tuple(structure.parameter_names)
                                 + tuple(f"F_{s}" for s in process_noise)
-                                + tuple(f"R_{o}" for o in OUTPUTS))
+                                + tuple(f"R_{o}" for o in structure.outputs))
 
     def split(self, values) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(structure parameters, F (n_F,), R diagonal (8,)) of a parameter vector."""
+        """(structure parameters, F (n_F,), R diagonal (p,)) of a parameter vector."""
         values = np.asarray(values)
         k, n_f = self.n_structure, len(self.noise_rows)
         return values[:k], values[k:k + n_f], values[k + n_f:]
@@ -120,7 +156,7 @@ class FilterErrorProblem:
         return system, steady_state_filter(system.transition, system.output, process, r_dir)
 
     def innovations(self, values) -> tuple[np.ndarray, np.ndarray]:
-        """Time-major innovations (N, M, 8) and their covariance B (8, 8) at ``values``."""
+        """Time-major innovations (N, M, p) and their covariance B (p, p) at ``values``."""
         system, steady = self.filter(values)
         blocks = [block for _, block, _ in innovation_blocks(system, steady, self.records)]
         return np.concatenate(blocks), steady.innovation[0]
@@ -139,7 +175,8 @@ class FilterErrorProblem:
             cost = float(np.exp(quadratic + log_det))
         if sign <= 0 or not np.isfinite(cost):
             return np.inf, None, None, np.inf
-        rmse = float(np.sqrt(np.sum(innovations**2) / (8 * self.n_samples)))
+        rmse = float(np.sqrt(np.sum(innovations**2)
+                             / (len(self.output_names) * self.n_samples)))
         return cost, b, self.records.split(innovations), rmse
 
     def failure(self, values) -> str:
@@ -161,7 +198,7 @@ class FilterErrorProblem:
         whiten = np.linalg.cholesky(b_inv)                           # B⁻¹ = W Wᵀ
 
         def products(block, d_block):
-            flat = np.moveaxis(d_block @ whiten, 2, 0).reshape(p, -1)   # (P, L·M·8)
+            flat = np.moveaxis(d_block @ whiten, 2, 0).reshape(p, -1)   # (P, L·M·p)
             return flat @ flat.T, flat @ (block @ whiten).reshape(-1)
 
         # the products of one block run on a second thread while the filter steps the next
@@ -184,11 +221,12 @@ class FilterErrorEstimator:
 
     Args:
         max_iterations, cost_tolerance, step_tolerance: stopping rules (as output error's).
-        process_noise: states the process noise enters (one ``F_<state>`` each).
+        process_noise: states the process noise enters (one ``F_<state>`` each); default the
+            states of the structure's force and moment equations.
         process_noise_start: optional ``F_<state>`` → start value (structure units per sample);
-            by default F starts at a tenth of the noise size of the state's output (over one
-            sample for the velocities, from the accelerometers): a large start lets the filter
-            follow the data and end in a poor local minimum.
+            by default F starts at a tenth of the noise size of an output measuring the state
+            (:func:`process_noise_start`): a large start lets the filter follow the data and
+            end in a poor local minimum.
         enforce_signs: use the sign priors as bounds.
         start: ``"auto"`` (equation error when every derivative's initial value is zero, else
             the initial values), ``"initial"`` or ``"equation-error"`` for the derivatives and delays.
@@ -199,7 +237,7 @@ class FilterErrorEstimator:
     max_iterations: int = 50
     cost_tolerance: float = 1e-7
     step_tolerance: float = 1e-9
-    process_noise: tuple[str, ...] = attrs.field(default=PROCESS_NOISE_STATES, converter=_states)
+    process_noise: tuple[str, ...] | None = attrs.field(default=None, converter=_names)
     process_noise_start: Mapping[str, float] | None = None
     enforce_signs: bool = False
     start: str = attrs.field(default="auto", validator=_start_choice)
@@ -216,13 +254,11 @@ class FilterErrorEstimator:
             raise EstimationError("the filter-error estimator identifies linear model "
                                   "structures (ModelStructure); use output error for a model "
                                   "of one's own")
-        if structure.template != SIX_DOF:
-            raise EstimationError(f"the filter-error estimator identifies six-dof structures "
-                                  f"only, not the {structure.template.name} template; use "
-                                  f"--estimator output-error for it")
         with blas.single_threaded():
             settings = Settings(self.max_iterations, self.cost_tolerance, self.step_tolerance)
-            problem = FilterErrorProblem(structure, maneuvers, self.process_noise, settings)
+            problem = FilterErrorProblem(structure, maneuvers,
+                                         process_noise_states(structure, self.process_noise),
+                                         settings)
             values, note = self._start_values(problem, maneuvers, start)
             bounds = self._bounds(problem, values)
 
@@ -253,15 +289,16 @@ class FilterErrorEstimator:
             initial = LinearModel(structure).start_values(maneuvers)
             note = "start values from equation error"
         variance = self._noise_start(problem.records)
-        steps = {s: _PROCESS_START * np.sqrt(variance[OUTPUTS.index(_START_OUTPUT[s])])
-                 * (problem.records.dt if s in ("u", "w", "v") else 1.0)
-                 for s in self.process_noise}
-        steps.update({k[2:]: float(v) for k, v in dict(self.process_noise_start or {}).items()
-                      if k.startswith("F_") and k[2:] in steps})
-        unknown = set(self.process_noise_start or {}) - {f"F_{s}" for s in self.process_noise}
+        states = problem.process_noise
+        given = dict(self.process_noise_start or {})
+        unknown = set(given) - {f"F_{s}" for s in states}
         if unknown:
-            raise EstimationError(f"process_noise_start for unknown parameters {sorted(unknown)}")
-        values = np.concatenate([initial, [steps[s] for s in self.process_noise], variance])
+            raise EstimationError(f"process_noise_start for unknown parameters {sorted(unknown)}; "
+                                  f"the process noise is {', '.join(f'F_{s}' for s in states)}")
+        missing = tuple(s for s in states if f"F_{s}" not in given)
+        steps = {**process_noise_start(structure, missing, variance, problem.records.dt),
+                 **{name[2:]: float(value) for name, value in given.items()}}
+        values = np.concatenate([initial, [steps[s] for s in states], variance])
         if start is None:
             return values, note
         if isinstance(start, Mapping):

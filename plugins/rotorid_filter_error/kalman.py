@@ -19,11 +19,12 @@ import attrs
 import numpy as np
 from rotorid.data import ManeuverSet
 from rotorid.errors import DataError
-
+from rotorid.model.structure import ModelStructure
 from rotorid.simulation.discretisation import COMPLEX_STEP
+from rotorid.simulation.simulator import lagged_sources
 
 from .riccati import SteadyStateFilter
-from .system import CompanionSystem, lagged_inputs
+from .system import CompanionSystem
 
 #: Time samples per block handed to the caller.
 BLOCK = 128
@@ -31,8 +32,9 @@ BLOCK = 128
 
 @attrs.frozen(eq=False)
 class Records:
-    """The maneuvers stacked time-major: ``inputs`` (N, M, 4), ``outputs`` (N, M, 8),
-    ``mask`` (N, M) True on recorded samples, ``x0`` (M, 8) initial states, ``dt`` s."""
+    """The maneuvers stacked time-major in a structure's signals: ``inputs`` (N, M, m) its
+    controls, ``outputs`` (N, M, p) its outputs, ``mask`` (N, M) True on recorded samples,
+    ``x0`` (M, n) initial states, ``dt`` s."""
 
     dt: float
     inputs: np.ndarray
@@ -42,8 +44,9 @@ class Records:
     lengths: tuple
 
     @classmethod
-    def from_maneuvers(cls, maneuvers: ManeuverSet) -> "Records":
-        """Stack ``maneuvers``; they must share one sample time."""
+    def from_maneuvers(cls, maneuvers: ManeuverSet, structure: ModelStructure) -> "Records":
+        """Stack the channels of ``structure``'s controls and outputs from ``maneuvers``; they
+        must share one sample time."""
         dts = [m.dt for m in maneuvers]
         if max(dts) - min(dts) > 1e-9 * max(dts):
             raise DataError(f"the filter-error estimator needs one sample time for all "
@@ -51,15 +54,15 @@ class Records:
                             f"resample them first")
         lengths = tuple(m.n_samples for m in maneuvers)
         n, count = max(lengths), len(maneuvers)
-        inputs, outputs = np.zeros((n, count, 4)), np.zeros((n, count, 8))
+        inputs = np.zeros((n, count, structure.n_controls))
+        outputs = np.zeros((n, count, structure.n_outputs))
         mask = np.zeros((n, count), dtype=bool)
         for b, m in enumerate(maneuvers):
-            inputs[: m.n_samples, b] = m.inputs
-            outputs[: m.n_samples, b] = m.outputs
+            inputs[: m.n_samples, b] = m.columns(structure.controls)
+            outputs[: m.n_samples, b] = m.columns(structure.outputs)
             mask[: m.n_samples, b] = True
-        x0 = np.array([np.zeros(8) if m.initial_state is None else m.initial_state
-                       for m in maneuvers])
-        return cls(float(np.mean(dts)), inputs, outputs, mask, x0, lengths)
+        return cls(float(np.mean(dts)), inputs, outputs, mask,
+                   _initial_states(maneuvers, structure.n_states), lengths)
 
     @property
     def n_samples(self) -> int:
@@ -67,8 +70,19 @@ class Records:
         return int(self.mask.sum())
 
     def split(self, innovations: np.ndarray) -> list[np.ndarray]:
-        """Time-major (N, M, 8) → one (N_i, 8) array per maneuver."""
+        """Time-major (N, M, p) → one (N_i, p) array per maneuver."""
         return [innovations[:n, b] for b, n in enumerate(self.lengths)]
+
+
+def _initial_states(maneuvers: ManeuverSet, n_states: int) -> np.ndarray:
+    """(M, n): each maneuver's ``initial_state``, trim (zeros) where it has none."""
+    for m in maneuvers:
+        if m.initial_state is not None and m.initial_state.shape != (n_states,):
+            raise DataError(f"maneuver {m.name!r}: initial_state has {m.initial_state.size} "
+                            f"values but the structure has {n_states} states; give one value "
+                            f"per state of the structure, or none (trim)")
+    return np.array([np.zeros(n_states) if m.initial_state is None else m.initial_state
+                     for m in maneuvers]).reshape(len(maneuvers), n_states)
 
 
 def _nominal_and_derivative(stack: np.ndarray):
@@ -93,9 +107,9 @@ def _run(start: np.ndarray, transition_t: np.ndarray, forcing: np.ndarray) -> np
 
 def innovation_blocks(system: CompanionSystem, steady: SteadyStateFilter,
                       records: Records) -> Iterator[tuple[int, np.ndarray, np.ndarray | None]]:
-    """Yield ``(first, ν, ∂ν)`` for samples first … first+L−1: innovations ν (L, M, 8) and,
+    """Yield ``(first, ν, ∂ν)`` for samples first … first+L−1: innovations ν (L, M, p) and,
     when ``system`` and ``steady`` hold complex-step directions, their derivatives ∂ν
-    (L, M, D, 8) (else None).
+    (L, M, D, p) (else None).
 
     The step runs in closed-loop form x̃_n+1 = A x̃_n + e_n with A = Φ(I − KH) and
     e_n = Σ Pu u + ΦK (z_n − Σ Du u). The sensitivities ∂x̃ obey the same A, forced by ∂A x̃_n
@@ -103,7 +117,7 @@ def innovation_blocks(system: CompanionSystem, steady: SteadyStateFilter,
     forcing term and every output product is one large product over the block, and only the
     step ∂x̃ @ Aᵀ of all maneuvers and directions stays inside the time loop.
     """
-    lagged = lagged_inputs(records.inputs, system.taps)
+    lagged = lagged_sources(records.inputs, system.taps)                           # (N, M, T)
     n, count = records.mask.shape
     correction = system.transition @ steady.gain                                   # ΦK
     a, d_a = _nominal_and_derivative(system.transition - correction @ system.output)
@@ -111,25 +125,25 @@ def innovation_blocks(system: CompanionSystem, steady: SteadyStateFilter,
     k, d_k = _nominal_and_derivative(correction)
     pu, d_pu = _nominal_and_derivative(system.state_forcing)
     du, d_du = _nominal_and_derivative(system.output_forcing)
-    size = a.shape[0]
+    size, n_y, n_x = a.shape[0], records.outputs.shape[2], records.x0.shape[1]
     a_t = np.ascontiguousarray(a.T)
     state = np.zeros((count, size))
-    state[:, :8] = records.x0
+    state[:, :n_x] = records.x0
     if d_a is not None:
         n_dir = d_a.shape[0]
         # (x̃ @ coupling)[m, d] = ((∂H x̃)ᵀ, (∂A x̃)ᵀ) of maneuver m and direction d
         coupling = np.concatenate([d_h, d_a], axis=1).transpose(2, 0, 1).reshape(size, -1)
         sens = np.zeros((count * n_dir, size))                     # rows (maneuver, direction)
-        # inputs (…, T) @ these give the directions' forcing side by side, (…, D·S) / (…, D·8)
+        # inputs (…, T) @ these give the directions' forcing side by side, (…, D·S) / (…, D·p)
         d_state_forcing = d_pu.transpose(1, 0, 2).reshape(d_pu.shape[1], -1)
         d_output_forcing = d_du.transpose(1, 0, 2).reshape(d_du.shape[1], -1)
-        d_gain = d_k.transpose(2, 0, 1).reshape(8, -1)             # ∂(ΦK) applied to z − Du u
+        d_gain = d_k.transpose(2, 0, 1).reshape(n_y, -1)           # ∂(ΦK) applied to z − Du u
     for first in range(0, n, BLOCK):
         stop = min(first + BLOCK, n)
         length = stop - first
         inputs = lagged[first:stop]                                                # (L, M, T)
         mask = records.mask[first:stop, :, None]
-        corrected = records.outputs[first:stop] - inputs @ du                      # (L, M, 8)
+        corrected = records.outputs[first:stop] - inputs @ du                      # (L, M, p)
         states = _run(state, a_t, inputs @ pu + corrected @ k.T)                   # (L, M, S)
         innovations = (corrected - states @ h.T) * mask
         if d_a is None:
@@ -138,13 +152,13 @@ def innovation_blocks(system: CompanionSystem, steady: SteadyStateFilter,
         rows = length * count
         products = (states.reshape(rows, size) @ coupling).reshape(length, count, n_dir, -1)
         flat_inputs = inputs.reshape(rows, -1)
-        d_corrected = -(flat_inputs @ d_output_forcing).reshape(length, count, n_dir, 8)
-        d_drive = ((flat_inputs @ d_state_forcing + corrected.reshape(rows, 8) @ d_gain)
+        d_corrected = -(flat_inputs @ d_output_forcing).reshape(length, count, n_dir, n_y)
+        d_drive = ((flat_inputs @ d_state_forcing + corrected.reshape(rows, n_y) @ d_gain)
                    .reshape(length, count, n_dir, size)
-                   + (d_corrected.reshape(-1, 8) @ k.T).reshape(length, count, n_dir, size)
-                   + products[..., 8:])
+                   + (d_corrected.reshape(-1, n_y) @ k.T).reshape(length, count, n_dir, size)
+                   + products[..., n_y:])
         d_states = _run(sens, a_t, d_drive.reshape(length, count * n_dir, size))
-        d_innovations = (d_corrected - products[..., :8]
-                         - (d_states.reshape(-1, size) @ h.T).reshape(length, count, n_dir, 8)
+        d_innovations = (d_corrected - products[..., :n_y]
+                         - (d_states.reshape(-1, size) @ h.T).reshape(length, count, n_dir, n_y)
                          ) * mask[..., None]
         yield first, innovations, d_innovations

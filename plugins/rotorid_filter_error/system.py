@@ -19,7 +19,6 @@ import attrs
 import numpy as np
 from rotorid.model.structure import ModelStructure
 from rotorid.simulation.discretisation import COMPLEX_STEP, discrete_maps
-from rotorid.simulation.simulator import lagged_sources
 
 
 @attrs.frozen(eq=False)
@@ -27,11 +26,11 @@ class CompanionSystem:
     """Per direction (leading axis D), S companion states, T input taps.
 
     Attributes:
-        transition: Φ (D, S, S).
-        output: H (D, 8, S).
-        taps: ((lag, control), …) the inputs u_n−lag the forcing reads.
+        transition: Φ (D, S, S); the first n companion states are the structure's states.
+        output: H (D, p, S), p the structure's outputs.
+        taps: ((lag, control column), …) the inputs u_n−lag the forcing reads.
         state_forcing: (D, T, S) weights: the state forcing at n is lagged(u)[n] @ weights.
-        output_forcing: (D, T, 8) the same for the outputs' direct terms.
+        output_forcing: (D, T, p) the same for the outputs' direct terms.
     """
 
     transition: np.ndarray
@@ -46,7 +45,7 @@ class CompanionSystem:
 
 
 def _directions(nominal: dict, derivative: dict, extra: int, varied: bool) -> dict:
-    """lag → (D, 8, C): the nominal map, or its complex-step directions followed by ``extra``
+    """lag → (D, rows, C): the nominal map, or its complex-step directions followed by ``extra``
     copies of the nominal map (directions of parameters the maps do not depend on)."""
     if not varied:
         return {lag: m[None] for lag, m in nominal.items()}
@@ -75,36 +74,30 @@ def companion_system(structure: ModelStructure, values, dt: float, hold: str,
         for lag, stack in family.items():
             for c in (_columns(stack) if lag >= 1 else ()):
                 depth[int(c)] = max(depth.get(int(c), 0), lag)
-    slots = {(c, lag): 8 + k for k, (c, lag) in enumerate(
+    n_x, n_y = structure.n_states, structure.n_outputs
+    slots = {(c, lag): n_x + k for k, (c, lag) in enumerate(
         (c, lag) for c in sorted(depth) for lag in range(1, depth[c] + 1))}
-    n_dir, size = ps[0].shape[0], 8 + len(slots)
+    n_dir, size = ps[0].shape[0], n_x + len(slots)
     dtype = ps[0].dtype
     transition = np.zeros((n_dir, size, size), dtype)
-    output = np.zeros((n_dir, 8, size), dtype)
-    transition[:, :8, :8] = ps[0]
+    output = np.zeros((n_dir, n_y, size), dtype)
+    transition[:, :n_x, :n_x] = ps[0]
     if 0 in cs:
-        output[:, :, :8] = cs[0]
+        output[:, :, :n_x] = cs[0]
     for (c, lag), slot in slots.items():
         transition[:, slot, c if lag == 1 else slots[(c, lag - 1)]] = 1.0
         if lag in ps:
-            transition[:, :8, slot] = ps[lag][:, :, c]
+            transition[:, :n_x, slot] = ps[lag][:, :, c]
         if lag in cs:
             output[:, :, slot] = cs[lag][:, :, c]
     taps = sorted({(lag, int(c)) for family in (pu, du) for lag, stack in family.items()
                    for c in _columns(stack)})
     state_forcing = np.zeros((n_dir, len(taps), size), dtype)
-    output_forcing = np.zeros((n_dir, len(taps), 8), dtype)
+    output_forcing = np.zeros((n_dir, len(taps), n_y), dtype)
     for t, (lag, c) in enumerate(taps):
         if lag in pu:
-            state_forcing[:, t, :8] = pu[lag][:, :, c]
+            state_forcing[:, t, :n_x] = pu[lag][:, :, c]
         if lag in du:
             output_forcing[:, t, :] = du[lag][:, :, c]
     return CompanionSystem(transition, output, tuple(taps), state_forcing, output_forcing)
 
-
-def lagged_inputs(inputs: np.ndarray, taps) -> np.ndarray:
-    """(N, M, T): column t is control c at sample n − lag for tap (lag, c); inputs (N, M, 4)
-    time-major; samples outside the record are trim (zero)."""
-    sources = np.zeros(inputs.shape[:2] + (12,))
-    sources[:, :, 8:] = inputs
-    return lagged_sources(sources, [(lag, 8 + c) for lag, c in taps])
