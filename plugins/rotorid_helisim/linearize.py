@@ -17,6 +17,7 @@ from __future__ import annotations
 import attrs
 import numpy as np
 from rotorid.errors import StructureError
+from rotorid.model.residualisation import residualise
 from rotorid.units import (
     FLIGHT_TEST,
     SI,
@@ -139,12 +140,7 @@ def linearize(model: Bo105Model, trim: Trim, full: bool = False, units: str = "s
                              "(different inflow option); trim this model first")
     names, a, b = jacobians(model, trim)
     if not full:
-        nb = len(PADFIELD_STATES)
-        a_rr = a[nb:, nb:]
-        a_br = a[:nb, nb:]
-        gain = np.linalg.solve(a_rr, np.hstack([a[nb:, :nb], b[nb:]]))
-        a = a[:nb, :nb] - a_br @ gain[:, :nb]
-        b = b[:nb] - a_br @ gain[:, nb:]
+        a, b = residualise(a, b, names, PADFIELD_STATES)
         names = PADFIELD_STATES
     controls = BLADE_ANGLES
     if system is FLIGHT_TEST:
