@@ -736,6 +736,54 @@ run_tasks(exec, tasks, "process")
     assert not any(p.exists() for p in written)
 
 
+@pytest.mark.slow
+def test_dask_workers_write_nothing_after_the_study_is_killed(tmp_path):
+    """`rotorid study` on a Dask cluster whose scheduler and worker are not its children,
+    SIGKILLed once its first reduction step is written: the worker goes on computing the case
+    but refuses every later write (the run's lease, rotorid.lease), so nothing in --out
+    changes after the kill."""
+    pytest.importorskip("distributed")
+    dask = Path(sys.executable).with_name("dask")
+    address_file = tmp_path / "scheduler.json"
+    logs = {name: (tmp_path / f"{name}.log").open("w") for name in ("scheduler", "worker")}
+    cluster = [subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", "0",
+                                 "--no-dashboard", "--scheduler-file", address_file],
+                                stderr=logs["scheduler"])]
+    try:
+        cluster.append(subprocess.Popen(
+            [dask, "worker", "--scheduler-file", address_file, "--nworkers", "1",
+             "--nthreads", "1", "--no-dashboard"], stderr=logs["worker"]))
+        deadline = time.monotonic() + 60
+        while not address_file.is_file() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        address = json.loads(address_file.read_text())["address"]
+        case = tmp_path / "long.toml"            # the tiny case, reduced to its last parameter
+        case.write_text((Path(__file__).parent / "cases" / "tiny.toml").read_text().replace(
+            "continue_to_zero = false", "continue_to_zero = true"))
+        out = tmp_path / "out"
+        killed = subprocess.Popen([sys.executable, "-m", "rotorid.cli.main", "study", str(case),
+                                   "--no-figures", "--executor", "dask", "--scheduler", address,
+                                   "--out", str(out)], stderr=subprocess.DEVNULL)
+        first_step = out / "tiny" / "steps" / "step_000.json"
+        deadline = time.monotonic() + 120
+        while not first_step.exists() and killed.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+        killed.kill()
+        assert killed.wait() == -signal.SIGKILL, "the run ended before it could be killed"
+        at_kill = {p: p.stat().st_mtime_ns for p in _files_under(out / "tiny")}
+        deadline = time.monotonic() + 60
+        while "not writing" not in (tmp_path / "worker.log").read_text() \
+                and time.monotonic() < deadline:
+            time.sleep(0.2)
+        time.sleep(2.0)
+        assert "not writing" in (tmp_path / "worker.log").read_text()
+        assert {p: p.stat().st_mtime_ns for p in _files_under(out / "tiny")} == at_kill
+    finally:
+        for process in reversed(cluster):
+            process.terminate()
+            process.wait(timeout=30)
+
+
 # ----------------------------------------------------------------- kill and resume
 @pytest.mark.slow
 def test_a_study_killed_after_its_first_step_resumes_to_the_same_files(tmp_path):

@@ -76,6 +76,11 @@ class VerificationError(RotoridError, ValueError):
     no coherent frequency points, or spectra that cannot be formed from the records."""
 
 
+class OrphanedRunError(RotoridError, RuntimeError):
+    """A task's run has ended (its process died): the task refuses to write into the run's
+    results directory and stops (:mod:`rotorid.lease`)."""
+
+
 class RotoridWarning(UserWarning):
     """Base class of rotorid warnings."""
 

@@ -11,6 +11,10 @@ arguments), so any executor runs them:
 * any :class:`~concurrent.futures.Executor`, e.g. a Dask cluster's
   ``dask.distributed.Client("tcp://HOST:8786").get_executor()``.
 
+Tasks that write into a results directory run under the caller's lease on it
+(:mod:`rotorid.lease`, ``run_tasks(..., lease=...)``): once the caller has died, a task still
+running (on a Dask worker, which outlives it) refuses its next write and ends.
+
 The numerical hot paths run with one BLAS thread, so a task computes the same bytes whichever
 executor runs it (on the same platform and library versions). A task that fails, or whose
 worker dies, is reported by name; the other tasks still finish and are returned.
@@ -27,6 +31,7 @@ from collections.abc import Callable, Hashable, Iterator, Mapping
 from concurrent.futures import Executor, ProcessPoolExecutor
 
 from rotorid.errors import PluginError, StudyError
+from rotorid.lease import Lease, writing_for
 
 #: Executor names accepted by the commands (``--executor``).
 KINDS = ("serial", "process", "dask")
@@ -57,7 +62,8 @@ Task = tuple[tuple, Mapping]
 
 
 def run_tasks(function: Callable, tasks: Mapping[Hashable, Task], executor=None,
-              label: Callable[[Hashable], str] = str) -> tuple[dict, dict]:
+              label: Callable[[Hashable], str] = str,
+              lease: Lease | None = None) -> tuple[dict, dict]:
     """Run ``function(*args, **kwargs)`` for every task; results and failures by task key.
 
     Args:
@@ -66,6 +72,9 @@ def run_tasks(function: Callable, tasks: Mapping[Hashable, Task], executor=None,
         executor: ``None``, ``"process"`` (a single task then runs in this process) or an
             Executor (see the module docstring).
         label: names a task in failure messages, e.g. ``lambda k: f"case {k}"``.
+        lease: the caller's lease on the directory the tasks write into
+            (:func:`rotorid.lease.hold_lease`); tasks in other processes then write only
+            while the caller is alive.
 
     Returns:
         ``(results, failures)``: key → return value for the tasks that finished, key → one
@@ -77,13 +86,19 @@ def run_tasks(function: Callable, tasks: Mapping[Hashable, Task], executor=None,
     if executor == "process":
         with ProcessPoolExecutor(max_workers=max(1, min(len(tasks), cpu_count())),
                                  initializer=_stop_with, initargs=(os.getpid(),)) as pool:
-            return run_tasks(function, tasks, pool, label)
+            return run_tasks(function, tasks, pool, label, lease)
     if executor is None:
         futures = {key: _Deferred(function, args, kwargs) for key, (args, kwargs) in tasks.items()}
     else:
-        futures = {key: executor.submit(function, *args, **kwargs)
+        futures = {key: executor.submit(_under_lease, lease, function, *args, **kwargs)
                    for key, (args, kwargs) in tasks.items()}
     return _collect(futures, label)
+
+
+def _under_lease(lease: Lease | None, function: Callable, *args, **kwargs):
+    """``function(*args, **kwargs)`` with every write checked against ``lease`` (a task)."""
+    with writing_for(lease):
+        return function(*args, **kwargs)
 
 
 #: Seconds between a pool worker's checks that the process which started it is alive.

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import BinaryIO
 
 from rotorid.errors import DataFileError, MissingFileError
+from rotorid.lease import check_owner_alive
 
 
 def atomic_write(path: str | os.PathLike, content: bytes | str | Callable[[BinaryIO], object]
@@ -31,9 +32,11 @@ def atomic_write(path: str | os.PathLike, content: bytes | str | Callable[[Binar
 
     The new file gets the permissions of the file it replaces, or the usual permissions for a
     new file (0o666 less the umask). On any error the target is left untouched and the
-    temporary file is removed.
+    temporary file is removed. In a task whose run has ended nothing is written
+    (:class:`~rotorid.errors.OrphanedRunError`, :mod:`rotorid.lease`).
     """
     target = Path(path)
+    check_owner_alive(target)
     if not target.parent.is_dir():
         raise MissingFileError(f"cannot write {target}: directory {target.parent} does not exist")
     temporary = target.with_name(f".{target.name}.{uuid.uuid4().hex}.tmp")
@@ -48,6 +51,7 @@ def atomic_write(path: str | os.PathLike, content: bytes | str | Callable[[Binar
             os.fsync(handle.fileno())
         if target.exists():
             os.chmod(temporary, stat.S_IMODE(target.stat().st_mode))
+        check_owner_alive(target)
         os.replace(temporary, target)
     except BaseException:
         temporary.unlink(missing_ok=True)

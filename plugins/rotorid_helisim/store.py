@@ -18,6 +18,7 @@ from pathlib import Path
 from rotorid.data import ManeuverSet
 from rotorid.errors import DataFileError
 from rotorid.io import atomic_write
+from rotorid.lease import check_owner_alive
 
 MANIFEST = "manifest.json"
 
@@ -69,6 +70,7 @@ def save(maneuvers: ManeuverSet, directory, digest: str, settings: dict) -> Path
     from rotorid_files.formats import FileSource
 
     directory = Path(directory)
+    check_owner_alive(directory)
     directory.mkdir(parents=True, exist_ok=True)
     manifest = directory / MANIFEST
     previous = _manifest(directory).get("files", [])

@@ -20,6 +20,7 @@ from rotorid.estimation.profiles import DelayProfile
 from rotorid.estimation.reduction import ReductionStep
 from rotorid.plugin.contracts import Removal
 from rotorid.io import atomic_write, jsonable, read_json_object
+from rotorid.lease import check_owner_alive
 from rotorid.model.structure import ModelStructure
 from rotorid.study.case import FlightCase
 from rotorid.study.result import CaseResult
@@ -28,6 +29,7 @@ from rotorid.study.result import CaseResult
 def prepare_directory(directory: Path, case: FlightCase, resume: bool) -> None:
     """Create ``directory`` for ``case`` and record its settings; without ``resume`` remove
     earlier resume points. Resuming results of other settings is an error."""
+    check_owner_alive(directory)
     (directory / "steps").mkdir(parents=True, exist_ok=True)
     for stale in [*directory.glob(".*.tmp"), *directory.glob("*/.*.tmp")]:
         stale.unlink()        # left by an interrupted atomic write; never a finished file

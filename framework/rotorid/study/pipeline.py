@@ -17,6 +17,7 @@ a rerun with ``resume=True`` skips what is done.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 import time
@@ -34,6 +35,7 @@ from rotorid.estimation.data_checks import check_fit_data
 from rotorid.estimation.reduction import ReductionPath, ReductionStep, reduce
 from rotorid.estimation.sanity import check_before_fit
 from rotorid.executors import check_executor, failure_error, run_tasks
+from rotorid.lease import hold_lease
 from rotorid.model.derivatives import delayed_derivative
 from rotorid.model.modelfile import parse_model
 from rotorid.model.structure import FlightCondition, ModelStructure
@@ -350,9 +352,12 @@ class Study:
                        report_writer=self.report_writer)
         if self.manager is not None:
             options["manager"] = self.manager
-        results, failures = run_tasks(run_case_task,
-                                      {c.name: ((c,), options) for c in self.cases},
-                                      self.executor, label=lambda name: f"case {name}")
+        tasks = {c.name: ((c,), options) for c in self.cases}
+        # tasks in other processes write only while this process lives (rotorid.lease)
+        holding = contextlib.nullcontext() if self.executor is None else hold_lease(self.out_dir)
+        with holding as lease:
+            results, failures = run_tasks(run_case_task, tasks, self.executor,
+                                          label=lambda name: f"case {name}", lease=lease)
         if failures:
             raise failure_error("cases", results, failures, self.out_dir)
         if self.report_writer is not None:
