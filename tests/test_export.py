@@ -128,6 +128,8 @@ def test_verify_skips_the_pairs_a_decoupled_model_cannot_produce(flight, capsys)
     assert "does not respond to long" in skipped["p/long"]
     assert "skipped r/coll: the model's r does not respond to coll" in captured.out
     assert summary["average_cost"] is not None
+    assert "q/long compared [##########          ] 1/2, about " in captured.err
+    assert "az/coll compared [####################] 2/2, about 0 s left" in captured.err
 
 
 def test_verify_of_only_pairs_a_decoupled_model_cannot_produce_is_one_line(flight, capsys):

@@ -12,6 +12,7 @@ from rotorid.errors import ExitStatus
 from rotorid.estimation.estimate import Estimate
 from rotorid.executors import run_tasks
 from rotorid.notebook import case_result_html, case_result_summary
+from rotorid.progress import Countdown, duration_text
 from rotorid.study.pipeline import log_progress
 
 TINY = Path(__file__).parent / "cases" / "tiny.toml"
@@ -81,8 +82,31 @@ def test_progress_goes_through_the_rotorid_logger(caplog):
         run_tasks(pow, {k: ((k, 2), {}) for k in range(3)}, label=lambda k: f"run {k}")
     messages = [r.getMessage() for r in caplog.records]
     assert messages[0] == "[hover] reduction step 3"
-    assert messages[1].startswith("run 0 done (1/3, about ")
-    assert messages[3].startswith("run 2 done (3/3, about 0 s left)")
+    assert messages[1].startswith("run 0 done [#######             ] 1/3, about ")
+    assert messages[3] == "run 2 done [####################] 3/3, about 0 s left"
+
+
+def fake_clock(*readings):
+    """A clock that returns ``readings`` in turn (s)."""
+    values = iter(readings)
+    return lambda: next(values)
+
+
+def test_a_countdown_shows_a_bar_and_the_time_left_from_the_mean_step():
+    countdown = Countdown(4, clock=fake_clock(100.0, 110.0, 130.0))
+    assert countdown.step() == "[#####               ] 1/4, about 30 s left"     # 10 s × 3
+    assert countdown.step() == "[##########          ] 2/4, about 30 s left"     # 15 s × 2
+
+
+def test_a_resumed_reduction_counts_reused_steps_but_times_only_its_own():
+    countdown = Countdown(10, done=2, at_most=True, clock=fake_clock(0.0, 20.0))
+    assert countdown.step() == ("[######              ] 3 of at most 10, at most about "
+                                "2 min left")                                  # 20 s × 7
+
+
+def test_durations_are_rounded_to_seconds_or_minutes():
+    assert [duration_text(s) for s in (0.2, 99.4, 100.0, 3600.0)] == [
+        "0 s", "99 s", "2 min", "60 min"]
 
 
 def test_the_command_shows_progress_on_stderr_and_leaves_logging_as_it_was(tmp_path, capsys):
@@ -93,6 +117,7 @@ def test_the_command_shows_progress_on_stderr_and_leaves_logging_as_it_was(tmp_p
                  "--no-figures"]) == ExitStatus.OK
     err = capsys.readouterr().err
     assert "[tiny] reduction step 0: full structure" in err
+    assert "iter [##                  ] 1 of at most 9, at most about " in err
     assert logger.handlers == handlers and logger.level == level
 
 

@@ -32,6 +32,7 @@ from concurrent.futures import Executor, ProcessPoolExecutor
 
 from rotorid.errors import PluginError, StudyError
 from rotorid.lease import Lease, writing_for
+from rotorid.progress import Countdown
 
 #: Executor names accepted by the commands (``--executor``).
 KINDS = ("serial", "process", "dask")
@@ -139,8 +140,8 @@ class _Deferred:
 def _collect(futures: Mapping, label) -> tuple[dict, dict]:
     """Wait for every task in order; with several, log each one's end and the time left."""
     results, failures = {}, {}
-    started = time.monotonic()
-    for done, (key, future) in enumerate(futures.items(), start=1):
+    countdown = Countdown(len(futures))
+    for key, future in futures.items():
         try:
             results[key] = future.result()
         except Exception as error:  # one task's failure must not lose the others
@@ -148,9 +149,8 @@ def _collect(futures: Mapping, label) -> tuple[dict, dict]:
                 f"{type(error).__name__}: {error}")
             failures[key] = f"{label(key)}: {detail}"
         if len(futures) > 1:
-            left = (time.monotonic() - started) / done * (len(futures) - done)
-            _log.info("%s %s (%d/%d, about %.0f s left)", label(key),
-                      "failed" if key in failures else "done", done, len(futures), left)
+            _log.info("%s %s %s", label(key), "failed" if key in failures else "done",
+                      countdown.step())
     return results, failures
 
 

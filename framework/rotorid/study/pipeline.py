@@ -41,6 +41,7 @@ from rotorid.model.modelfile import parse_model
 from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.plugin.contracts import CaseData
 from rotorid.plugin.manager import create, notify, using
+from rotorid.progress import Countdown
 from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase
 from rotorid.study.checks import check_case, check_cases
@@ -117,18 +118,21 @@ def checked_structure(case: FlightCase, structure: ModelStructure, ident: Maneuv
 def _reduce(case: FlightCase, structure: ModelStructure, ident: ManeuverSet, estimator,
             directory: Path, resume: bool, report: Progress) -> tuple[ReductionPath, int]:
     """The reduction path of ``structure`` (continuing the finished steps saved in
-    ``directory`` when resuming) and how many steps were reused."""
+    ``directory`` when resuming) and how many steps were reused. Each step's progress line
+    ends with the steps left at most (one per free derivative) and the time they may take."""
     def on_step(step: ReductionStep) -> None:
         save_step(directory, step)
         removed = "full structure" if step.removal is None else (
             f"removed {step.removal.parameter} ({step.removal.criterion} "
             f"{step.removal.metric:.1f} %)")
         report(case.name, f"reduction step {step.index}: {removed}, {step.n_parameters} "
-                          f"parameters, RMSE {step.rmse:.4f}, {step.estimate.iterations} iter")
+                          f"parameters, RMSE {step.rmse:.4f}, {step.estimate.iterations} iter "
+                          f"{countdown.step()}")
 
     finished = load_steps(directory, structure) if resume else []
     if finished:
         report(case.name, f"resuming after {len(finished)} finished reduction steps")
+    countdown = Countdown(len(structure.free_derivatives) + 1, done=len(finished), at_most=True)
     criteria = [create("reduction-criteria", name, **options) for name, options in case.criteria]
     with warnings.catch_warnings():
         # Reduction starts from deliberately over-parameterised structures: their unidentifiable

@@ -12,7 +12,7 @@ plugins of the ``rotorid_validation_envelopes`` family (contract
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import attrs
 import numpy as np
@@ -255,7 +255,9 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
                    envelopes: Mapping[str, ValidationEnvelope] | None = None, *,
                    analytic=None, omega=None, windows=None,
                    conditioning: str | Sequence[str] = "auto",
-                   model_response: str = "simulated") -> VerificationResult:
+                   model_response: str = "simulated",
+                   on_pair: Callable[[PairVerification], None] | None = None
+                   ) -> VerificationResult:
     """Compare a model's simulated sweeps with the recorded ones, pair by pair.
 
     Args:
@@ -273,6 +275,7 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
             ``model_outputs``; ``"apparent"``: it is formed from the analytic responses and
             the recorded inputs' cross-spectra (:func:`rotorid.verification.frequency.apparent_response`;
             needs ``analytic``), for models whose simulation drifts.
+        on_pair: called with each pair's verification as it is done (progress).
 
     Both comparisons use single-input responses of truth and model: the model is driven by
     every recorded input, so the other inputs affect both sides alike.
@@ -293,7 +296,11 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
         sweeps, list(model_outputs), [primary_axis(m) for m in sweeps], omega,
         None if analytic is None else analytic(omega), envelopes, windows, conditioning,
         model_response)
-    results = [comparison.pair(name) for name in names]
+    results = []
+    for name in names:
+        results.append(comparison.pair(name))
+        if on_pair is not None:
+            on_pair(results[-1])
     return VerificationResult(results, time_domain_metrics(sweeps, model_outputs),
                               _drift_notes(results))
 

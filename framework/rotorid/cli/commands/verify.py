@@ -19,7 +19,8 @@ does not respond to that input, the measured output never moves) is skipped with
 (:mod:`rotorid.verification.producible`). Writes ``verification.json`` (every check, J_ave,
 time-domain metrics, the skipped pairs, and per pair the frequency responses it was judged
 on) and, per pair, ``error_<output>_<input>.png`` and ``bode_<output>_<input>.png`` into
-``--out``.
+``--out``. Progress (stderr): a line per pair compared and per pair drawn, with a bar and the
+time left (:class:`rotorid.progress.Countdown`).
 """
 
 from __future__ import annotations
@@ -135,6 +136,7 @@ def run(args) -> int:
     from rotorid.estimation.result_file import load_result
     from rotorid.io import atomic_write, jsonable
     from rotorid.model.modelfile import load_model
+    from rotorid.progress import Countdown
     from rotorid.report.plots.case import save_figure
     from rotorid.report.plots.frequency import plot_bode, plot_error
     from rotorid.verification.compare import envelopes_by_name
@@ -152,19 +154,23 @@ def run(args) -> int:
         raise VerificationError("no pair can be verified: " + "; ".join(
             f"{pair}: {reason}" for pair, reason in selection.skipped.items()))
     envelopes = envelopes_by_name([e.strip() for e in args.envelopes.split(",") if e.strip()])
-    logging.getLogger("rotorid.verify").info(
-        "verifying %s on %d sweep(s)", ", ".join(selection.pairs), len(sweeps))
-    verification = verify_model(structure, values, sweeps, selection.pairs, envelopes)
+    log = logging.getLogger("rotorid.verify")
+    log.info("verifying %s on %d sweep(s)", ", ".join(selection.pairs), len(sweeps))
+    compared = Countdown(len(selection.pairs))
+    verification = verify_model(
+        structure, values, sweeps, selection.pairs, envelopes,
+        on_pair=lambda item: log.info("%s compared %s", item.pair, compared.step()))
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     shown = [e for e in envelopes.values() if e.kind == "bounds"]
+    drawn = Countdown(len(verification.pairs))
     for item in () if args.no_figures else verification.pairs:
-        logging.getLogger("rotorid.verify").info("figures of %s", item.pair)
         stem = item.pair.replace("/", "_")
         save_figure(plot_error(item, shown), out / f"error_{stem}", formats=("png",))
         save_figure(plot_bode(item, structure.units.label(item.truth.output)),
                     out / f"bode_{stem}", formats=("png",))
+        log.info("%s figures drawn %s", item.pair, drawn.step())
     summary = verification.summary()
     for entry, item in zip(summary["pairs"], verification.pairs):
         entry["frequency_response"] = response_arrays(item)
