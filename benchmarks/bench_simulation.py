@@ -124,14 +124,14 @@ def pade_system(structure, values) -> tuple[np.ndarray, ...]:
     a[:8, :8] = structure.known_state_matrix()
     c[:, :8] = structure.known_output_matrix()
     lag = 8
-    for eq, src, gain, tau, out in zip(table.equation, table.source, table.gain, table.delay,
-                                       table.output):
+    for eq, src, gain, tau, out, weight in zip(table.equation, table.source, table.gain,
+                                               table.delay, table.output, table.weight):
         direct, column = (a, src) if src < 8 else (b, src - 8)
         direct_out = c if src < 8 else d
         if tau <= 0:
             direct[eq, column] += gain
             if out >= 0:
-                direct_out[out, column] += gain
+                direct_out[out, column] += weight * gain
             continue
         ap, bp, cp, dp = scipy.signal.tf2ss([tau**2 / 12, -tau / 2, 1.0],
                                             [tau**2 / 12, tau / 2, 1.0])
@@ -141,8 +141,8 @@ def pade_system(structure, values) -> tuple[np.ndarray, ...]:
         direct[eq, column] += gain * dp[0, 0]
         a[eq, block] += gain * cp[0]
         if out >= 0:
-            direct_out[out, column] += gain * dp[0, 0]
-            c[out, block] += gain * cp[0]
+            direct_out[out, column] += weight * gain * dp[0, 0]
+            c[out, block] += weight * gain * cp[0]
         lag += 2
     return a, b, c, d
 

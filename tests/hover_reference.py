@@ -37,8 +37,8 @@ def true_structure() -> tuple[ModelStructure, np.ndarray]:
     derivative_a = a - structure.known_state_matrix()
     values = {}
     for d in structure.derivatives:
-        row = structure.states.index(d.equation)
-        if d.is_control:
+        row = structure.states.index(structure.equation_of(d))
+        if structure.is_control(d):
             values[d.name] = b[row, structure.controls.index(d.variable)]
         else:
             values[d.name] = derivative_a[row, structure.states.index(d.variable)]

@@ -319,7 +319,7 @@ COMMANDS = [
      ["model.toml", "not a valid TOML file", "line"]),
     ("model-unknown-derivative", _simulate_inputs(
         _good_csv, model_text=MODEL + "\n[derivatives.X_zz]\ninitial = 1.0\n"),
-     ExitStatus.ERROR, ["model.toml", "'X_zz'", "unknown variable 'zz'"]),
+     ExitStatus.ERROR, ["model.toml", "X_zz", "does not fit the six-dof template"]),
     ("model-unknown-template", _model_with('populate = "all"', 'template = "tandem"'),
      ExitStatus.ERROR, ["model.toml", "template = 'tandem'", "'six-dof'"]),
     ("model-negative-delay", _model_with("delay = 0.0", "delay = -0.1"), ExitStatus.ERROR,

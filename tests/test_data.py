@@ -139,7 +139,7 @@ def test_extra_channels_are_read_by_name_cut_with_the_record_and_checked():
     assert maneuver.with_outputs(np.zeros((10, 8))).channel("V")[9] == 59.0
     with pytest.raises(DataError, match="unknown channel 'beta'; channels: time, .*, r, V$"):
         maneuver.channel("beta")
-    with pytest.raises(DataError, match="extra channel 'q' repeats a fixed channel"):
+    with pytest.raises(DataError, match="extra channel 'q' repeats an input or output channel"):
         attrs.evolve(base, extra_channels={"q": np.zeros(10)})
     with pytest.raises(DataError, match=r"expected shape \(10, 1\) for channels V, got \(9, 1\)"):
         attrs.evolve(base, extra_channels={"V": np.zeros(9)})

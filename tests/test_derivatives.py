@@ -2,8 +2,9 @@
 
 import attrs
 import pytest
-from rotorid.errors import DerivativeError, RotoridError
+from rotorid.errors import DerivativeError, RotoridError, StructureError
 from rotorid.model.derivatives import Delay, Derivative, Sign, parse_name
+from rotorid.model.structure import FlightCondition, ModelStructure
 
 
 @pytest.mark.parametrize("name, letter, variable", [
@@ -20,25 +21,31 @@ def test_names_split_into_letter_and_variable(name, letter, variable):
     ("X_u", False, "u"), ("Y_r", False, "v"), ("Z_w", False, "w"),
     ("L_lat", True, "p"), ("M_long", True, "q"), ("N_ped", True, "r"),
 ])
-def test_equation_and_control_flag(name, is_control, equation):
-    derivative = Derivative(name)
-    assert derivative.is_control is is_control
-    assert derivative.equation == equation
+def test_the_six_dof_structure_knows_each_derivatives_equation_and_role(name, is_control,
+                                                                        equation):
+    structure = ModelStructure.six_dof(FlightCondition())
+    derivative = structure.derivative(name)
+    assert structure.is_control(derivative) is is_control
+    assert structure.equation_of(derivative) == equation
 
 
 @pytest.mark.parametrize("name, fragment", [
-    ("Q_p", "unknown force/moment letter 'Q'"),
-    ("l_p", "unknown force/moment letter 'l'"),
-    ("L_x", "unknown variable 'x'"),
-    ("L_theta", "unknown variable 'theta'"),
     ("Lp", "must look like"),
-    ("L_p_q", "must look like"),
+    ("L_3p", "must look like"),
+    ("3_p", "must look like"),
     ("", "must look like"),
     (3, "must look like"),
 ])
-def test_unknown_names_are_rejected_with_the_reason(name, fragment):
+def test_malformed_names_are_rejected_with_the_reason(name, fragment):
     with pytest.raises(DerivativeError, match=fragment):
         Derivative(name)
+
+
+@pytest.mark.parametrize("name", ["Q_p", "l_p", "L_x", "L_theta", "L_p_q"])
+def test_names_the_six_dof_template_lacks_are_rejected_listing_what_it_has(name):
+    with pytest.raises(StructureError, match=r"does not fit the six-dof template \(equations "
+                                             r"X Y Z L M N; variables u v w p q r long"):
+        ModelStructure(FlightCondition(), [Derivative(name)])
 
 
 def test_defaults_are_free_zero_without_prior_or_delay():
@@ -137,9 +144,9 @@ def test_derivatives_are_frozen_and_copies_leave_the_original_alone():
 
 def test_derivative_errors_are_rotorid_value_errors():
     with pytest.raises(RotoridError):
-        Derivative("A_u")
+        Derivative("Au")
     with pytest.raises(ValueError):
-        Derivative("A_u")
+        Derivative("Au")
 
 
 @pytest.mark.parametrize("value", ["1.0", True, None, [1.0]])

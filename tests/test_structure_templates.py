@@ -42,7 +42,8 @@ def test_subsets_hold_their_axes_derivatives_in_six_dof_order():
         ("v", "p", "phi", "r"), ("lat", "ped"), ("ay", "p", "phi", "r"))
     assert ModelStructure.six_dof(CONDITION).equation_rows == (0, 1, 2, 4, 5, 7)
     assert longitudinal.equation_rows == (0, 1, 2)
-    assert set(TEMPLATES) == {"six-dof", "longitudinal", "lateral"}
+    assert set(TEMPLATES) == {"six-dof", "longitudinal", "lateral", "fixed-wing-longitudinal",
+                              "fixed-wing-lateral"}
 
 
 def test_longitudinal_known_terms_match_the_hand_derived_values():
@@ -69,7 +70,7 @@ def test_signals_carry_the_structure_units():
 
 def test_foreign_derivatives_and_signs_are_refused_by_name():
     longitudinal = ModelStructure.populated(CONDITION, "longitudinal")
-    with pytest.raises(StructureError, match="derivative L_p is not in this structure"):
+    with pytest.raises(StructureError, match="derivative L_p does not fit the longitudinal template"):
         longitudinal.without("L_p")
     with pytest.raises(StructureError, match="Y_v does not fit the longitudinal template"):
         ModelStructure(CONDITION, [*longitudinal.derivatives[:2],

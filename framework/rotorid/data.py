@@ -67,10 +67,14 @@ def check_time(time: np.ndarray, where: str) -> float:
 
 def _check_layout(names: tuple[str, ...], layout: tuple[str, ...], role: str,
                   where: str) -> None:
-    """``names`` must be some of the ``layout`` channels, in its order."""
-    if list(names) != [c for c in layout if c in names] or len(set(names)) != len(names):
-        raise DataError(f"{where}: {role} channels {', '.join(names)} must be some of "
-                        f"{', '.join(layout)}, each once and in that order")
+    """``names`` must be distinct identifiers; a record of helicopter channels only holds them
+    in the ``layout``'s order (a model's own layout may order them as it likes)."""
+    bad = [c for c in names if not c.isidentifier() or c == "time"]
+    helicopter = all(c in layout for c in names)
+    if (len(set(names)) != len(names) or bad
+            or (helicopter and list(names) != [c for c in layout if c in names])):
+        raise DataError(f"{where}: {role} channels {', '.join(names)} must be distinct names "
+                        f"(not 'time'); the helicopter's ({', '.join(layout)}) in that order")
 
 
 def _check_block(block: np.ndarray, channels, rows: int, where: str) -> None:
@@ -118,12 +122,15 @@ class Maneuver:
         check_time(self.time, where)
         _check_layout(self.input_names, INPUT_CHANNELS, "input", where)
         _check_layout(self.output_names, OUTPUT_CHANNELS, "output", where)
+        both = sorted(set(self.input_names) & set(self.output_names))
+        if both:
+            raise DataError(f"{where}: channel {both[0]!r} is both an input and an output")
         _check_block(self.inputs, self.input_names, self.time.size, where)
         _check_block(self.outputs, self.output_names, self.time.size, where)
         for name, values in self.extra_channels.items():
-            if name in ALL_CHANNELS:
-                raise DataError(f"{where}: extra channel {name!r} repeats a fixed channel; "
-                                "give it another name")
+            if name in self.channel_names:
+                raise DataError(f"{where}: extra channel {name!r} repeats an input or output "
+                                "channel; give it another name")
             _check_block(values.reshape(-1, 1) if values.ndim <= 1 else values, (name,),
                          self.time.size, where)
         if self.initial_state is not None and self.initial_state.ndim != 1:
@@ -141,22 +148,27 @@ class Maneuver:
         step stated in the metadata."""
         where = f"maneuver {name!r}"
         columns, ingestion = Ingestion.coerce(ingestion).mapped(columns, where)
-        inputs = tuple(c for c in INPUT_CHANNELS if c in columns)
-        outputs = tuple(c for c in OUTPUT_CHANNELS if c in columns)
+        signals = ingestion.signals
+        input_layout = INPUT_CHANNELS if signals is None else signals.inputs.names
+        output_layout = OUTPUT_CHANNELS if signals is None else signals.outputs.names
+        inputs = tuple(c for c in input_layout if c in columns)
+        outputs = tuple(c for c in output_layout if c in columns)
         missing = [label for label, present in (("time", "time" in columns),
                                                 ("every input", inputs),
                                                 ("every output", outputs)) if not present]
         if missing:
             raise DataError(f"{where}: missing column(s) {', '.join(missing)}; a maneuver "
-                            f"needs time, at least one input ({', '.join(INPUT_CHANNELS)}) and "
-                            f"at least one output ({', '.join(OUTPUT_CHANNELS)})")
+                            f"needs time, at least one input ({', '.join(input_layout)}) and "
+                            f"at least one output ({', '.join(output_layout)}); link the "
+                            f"file's own column names in a channel map")
         prepared, notes = prepare_columns(columns, unit_system(units).name, ingestion, where)
         return cls(name, prepared["time"],
                    np.column_stack([prepared[c] for c in inputs]),
                    np.column_stack([prepared[c] for c in outputs]),
                    metadata={**dict(metadata or {}), **notes}, units=units,
                    initial_state=initial_state,
-                   extra_channels={k: v for k, v in prepared.items() if k not in ALL_CHANNELS},
+                   extra_channels={k: v for k, v in prepared.items()
+                                   if k not in ("time",) + inputs + outputs},
                    input_names=inputs, output_names=outputs)
 
     @classmethod

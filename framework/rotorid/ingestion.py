@@ -29,7 +29,7 @@ import attrs
 import numpy as np
 
 from rotorid.errors import DataError, DataWarning, SignalError
-from rotorid.model.signals import ChannelMap
+from rotorid.model.signals import ChannelMap, ModelSignals
 from rotorid.units import (
     CHANNEL_KINDS,
     canonical_unit,
@@ -101,6 +101,9 @@ class Ingestion:
         channels: a :class:`~rotorid.model.signals.ChannelMap` (or a ``[channels]`` table)
             linking the record's own column names to channels, with unit, scale and offset;
             applied first, by :meth:`mapped`.
+        signals: the model's signals (optional): their kinds decide unit conversions, and a
+            maneuver built with them takes the model's controls and outputs as its inputs
+            and outputs (e.g. ``elevator`` and ``alpha`` of an aeroplane).
     """
 
     trim: str | Mapping[str, float] | None = attrs.field(default=None, validator=_check_trim)
@@ -108,6 +111,16 @@ class Ingestion:
     sample_time: float | None = attrs.field(default=None, converter=_optional_positive)
     channel_units: Mapping[str, str] = attrs.field(factory=dict, converter=_units)
     channels: ChannelMap = attrs.field(factory=ChannelMap, converter=_channel_map)
+    signals: ModelSignals | None = None
+
+    def kind(self, channel: str) -> str | None:
+        """Physical kind of ``channel``: the model's signal's when :attr:`signals` declares
+        it, else the shipped channel's, else ``None`` (read as recorded)."""
+        if self.signals is not None:
+            declared = {s.name: s.kind for s in self.signals.all}
+            if channel in declared:
+                return declared[channel]
+        return CHANNEL_KINDS.get(channel)
 
     def __attrs_post_init__(self):
         if self.resample == "decimate" and self.sample_time is None:
@@ -136,7 +149,7 @@ class Ingestion:
                 raise DataError(f"{where}: column {link.signal!r} and column {link.column!r} "
                                 f"(linked to it in {source}) both give {link.signal!r}; keep "
                                 f"one")
-            kind = CHANNEL_KINDS.get(link.signal)
+            kind = self.kind(link.signal)
             if kind is not None and not unit_fits_kind(link.unit, kind):
                 raise DataError(f"{source}: column {link.column!r} has unit {link.unit}, which "
                                 f"does not fit {link.signal!r} ({kind}); give one of "
@@ -155,17 +168,16 @@ class Ingestion:
         return cls(**dict(value or {}))
 
 
-def _convert_units(columns: dict, channel_units: Mapping[str, str], units: str,
-                   where: str) -> dict:
+def _convert_units(columns: dict, ingestion: "Ingestion", units: str, where: str) -> dict:
     system = unit_system(units)
-    for channel, unit in channel_units.items():
+    for channel, unit in ingestion.channel_units.items():
         if channel not in columns:
             continue
-        kind = CHANNEL_KINDS.get(channel)
+        kind = ingestion.kind(channel)
         if kind is None or kind == "control":
             raise DataError(f"{where}: channel {channel!r} cannot be given a unit ({unit}): "
                             f"units convert outputs and extra channels, controls keep theirs")
-        target = canonical_unit(system.label(channel))
+        target = canonical_unit(system.unit_of(kind))
         try:
             factor = conversion_factor(unit, target)
         except SignalError as error:
@@ -279,7 +291,7 @@ def prepare_columns(columns: Mapping[str, np.ndarray], units: str,
     prepared = {k: np.asarray(v, dtype=float).reshape(-1) for k, v in columns.items()}
     notes: dict = {}
     if ingestion.channel_units:
-        prepared = _convert_units(prepared, ingestion.channel_units, units, where)
+        prepared = _convert_units(prepared, ingestion, units, where)
         notes["converted_units"] = {k: v for k, v in ingestion.channel_units.items()
                                   if k in prepared}
     if ingestion.resample is not None:

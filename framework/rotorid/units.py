@@ -53,9 +53,12 @@ KIND_DIMENSIONS = {
 CHANNEL_KINDS = {
     "u": "velocity", "v": "velocity", "w": "velocity",
     "p": "rate", "q": "rate", "r": "rate",
-    "theta": "angle", "phi": "angle",
+    "theta": "angle", "phi": "angle", "alpha": "angle", "beta": "angle",
     "ax": "acceleration", "ay": "acceleration", "az": "acceleration",
+    "p_dot": "angular-acceleration", "q_dot": "angular-acceleration",
+    "r_dot": "angular-acceleration",
     "long": "control", "lat": "control", "coll": "control", "ped": "control",
+    "elevator": "control", "aileron": "control", "rudder": "control", "throttle": "control",
 }
 
 
@@ -93,6 +96,7 @@ class UnitSystem:
                 "velocity": self.length_per_metre,
                 "acceleration": self.length_per_metre,
                 "rate": self.angle_per_radian,
+                "angular-acceleration": self.angle_per_radian,
                 "angle": self.angle_per_radian,
                 "control": 1.0,
             }[kind]
@@ -104,13 +108,22 @@ class UnitSystem:
         kind = CHANNEL_KINDS.get(channel)
         if kind is None:
             raise StructureError(f"unknown channel {channel!r}; known: {', '.join(CHANNEL_KINDS)}")
-        return {
-            "velocity": f"{self.length_label}/s",
-            "acceleration": f"{self.length_label}/s²",
-            "rate": f"{self.angle_label}/s",
-            "angle": self.angle_label,
-            "control": control_label,
-        }[kind]
+        return self.unit_of(kind, control_label)
+
+    def unit_of(self, kind: str, control_label: str = "%") -> str:
+        """Unit label of a signal of physical ``kind`` in this system (controls: ``control_label``)."""
+        try:
+            return {
+                "velocity": f"{self.length_label}/s",
+                "acceleration": f"{self.length_label}/s²",
+                "rate": f"{self.angle_label}/s",
+                "angular-acceleration": f"{self.angle_label}/s²",
+                "angle": self.angle_label,
+                "control": control_label,
+            }[kind]
+        except KeyError:
+            raise StructureError(f"unknown physical kind {kind!r}; use one of "
+                                 f"{', '.join(KIND_DIMENSIONS)}") from None
 
 
 FLIGHT_TEST = UnitSystem("flight-test", 1.0 / FOOT, 180.0 / math.pi, "ft", "deg")
@@ -131,17 +144,26 @@ def unit_system(name: str | UnitSystem) -> UnitSystem:
         ) from None
 
 
-def channel_scale(channels, target: UnitSystem, source: UnitSystem = SI) -> np.ndarray:
+def channel_scale(channels, target: UnitSystem, source: UnitSystem = SI,
+                  kinds=None) -> np.ndarray:
     """Per-channel factors that convert values in ``source`` units into ``target`` units.
 
     Args:
         channels: channel names such as ``("u", "w", "q", "theta")``.
+        kinds: optional ``name -> kind`` function for names beyond :data:`CHANNEL_KINDS`
+            (a model's own signals); unknown names raise.
     Returns:
         array of shape ``(len(channels),)``.
     """
-    return np.array(
-        [target.factor(CHANNEL_KINDS[c]) / source.factor(CHANNEL_KINDS[c]) for c in channels]
-    )
+    def kind(channel):
+        found = (kinds(channel) if kinds is not None else None) or CHANNEL_KINDS.get(channel)
+        if found is None:
+            raise StructureError(f"channel {channel!r} has no physical kind, so it cannot be "
+                                 f"converted between unit systems; declare it as a signal of "
+                                 f"the model (with its kind)")
+        return found
+
+    return np.array([target.factor(kind(c)) / source.factor(kind(c)) for c in channels])
 
 
 def convert_state_space(a, b, states, controls, target: UnitSystem, source: UnitSystem = SI):

@@ -27,7 +27,7 @@ from rotorid.ingestion import Ingestion
 from rotorid.io import atomic_write, require_file
 from rotorid.model.structure import STATES
 from rotorid.plugin.contracts import CaseData
-from rotorid.units import channel_scale, unit_system
+from rotorid.units import CHANNEL_KINDS, channel_scale, unit_system
 
 from . import arrays, csvfile
 
@@ -71,8 +71,9 @@ def write_maneuver(maneuver: Maneuver, path: str | os.PathLike) -> Path:
     return atomic_write(path, lambda handle: writer(maneuver, handle))
 
 
-def convert_units(maneuver: Maneuver, units) -> Maneuver:
-    """``maneuver`` expressed in the unit system ``units`` (controls keep their unit)."""
+def convert_units(maneuver: Maneuver, units, kinds=None) -> Maneuver:
+    """``maneuver`` expressed in the unit system ``units`` (controls keep their unit);
+    ``kinds`` (name → kind, optional) gives the kinds of a model's own signals."""
     source, target = unit_system(maneuver.units), unit_system(units)
     if source == target:
         return maneuver
@@ -80,7 +81,11 @@ def convert_units(maneuver: Maneuver, units) -> Maneuver:
     if maneuver.initial_state is not None:
         state = maneuver.initial_state * channel_scale(STATES, target, source)
     return attrs.evolve(maneuver, outputs=maneuver.outputs * channel_scale(
-        maneuver.output_names, target, source), units=target.name, initial_state=state)
+        maneuver.output_names, target, source, kinds), units=target.name, initial_state=state,
+        extra_channels={name: values * (channel_scale((name,), target, source, kinds)[0]
+                                        if (kinds and kinds(name)) or name in CHANNEL_KINDS
+                                        else 1.0)
+                        for name, values in maneuver.extra_channels.items()})
 
 
 def _expand(location) -> list[Path]:
@@ -150,7 +155,7 @@ class FileSource:
                                     f"{origin[maneuver.name]} and {path}; rename one")
             origin[maneuver.name] = path
             maneuvers.append(maneuver if self.units is None
-                             else convert_units(maneuver, self.units))
+                             else convert_units(maneuver, self.units, self.ingestion.kind))
         units = {m.units for m in maneuvers}
         if len(units) > 1:
             raise DataFileError(f"{location}: files mix unit systems {sorted(units)}; load with "

@@ -97,10 +97,13 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
         columns, ingestion = ingestion.mapped(columns, str(path))
     except DataError as error:
         raise DataFileError(str(error)) from None
-    unknown = [c for c in columns if c not in ALL_CHANNELS + VELOCITIES]
+    declared = () if ingestion.signals is None else ingestion.signals.all.names
+    known = tuple(dict.fromkeys(ALL_CHANNELS + VELOCITIES + declared))
+    unknown = [c for c in columns if c not in known]
     if unknown:
         raise DataFileError(f"{path}: unknown channel(s) {', '.join(map(repr, unknown))}; "
-                            f"channels are {','.join(ALL_CHANNELS + VELOCITIES)}")
+                            f"channels are {','.join(known)}; link the file's own column "
+                            f"names to them in the model file's [channels] table")
     if "time" not in columns:
         raise DataFileError(f"{path}: missing channel(s) time; a maneuver file needs time, "
                             f"then any of {','.join(ALL_CHANNELS[1:])}")

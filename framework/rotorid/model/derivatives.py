@@ -1,10 +1,12 @@
 """Declarative stability and control derivatives, with sign priors and optional time delays.
 
-A derivative is named ``<letter>_<variable>``: the letter is the force or moment equation
-(X, Y, Z forces per unit mass; L, M, N moments per unit inertia, L and N inertia-coupled),
-the variable a state (u v w p q r) or a control (long lat coll ped). ``L_p`` is the roll
-damping, ``M_long`` the pitch control power. A :class:`Derivative` is a declaration, never a
-result: estimates live in :class:`rotorid.estimation.estimate.Estimate`.
+A derivative is named ``<letter>_<variable>``: the letter names the equation it drives, the
+variable the state or input it multiplies. The rigid-body templates use the usual letters
+(X, Y, Z forces per unit mass; L, M, N moments per unit inertia, L and N inertia-coupled) over
+the states u v w p q r and the controls, so ``L_p`` is the roll damping and ``M_long`` the pitch
+control power; a declared structure names its own letters and variables
+(:mod:`rotorid.model.templates`), which decides which names fit it. A :class:`Derivative` is a
+declaration, never a result: estimates live in :class:`rotorid.estimation.estimate.Estimate`.
 """
 
 from __future__ import annotations
@@ -16,12 +18,12 @@ import attrs
 
 from rotorid.errors import DerivativeError
 
+#: The rigid body's force and moment letters, velocity and rate states and helicopter controls.
 FORCE_MOMENT_LETTERS = ("X", "Y", "Z", "L", "M", "N")
 STATE_VARIABLES = ("u", "v", "w", "p", "q", "r")
 CONTROL_VARIABLES = ("long", "lat", "coll", "ped")
-VARIABLES = STATE_VARIABLES + CONTROL_VARIABLES
 
-#: Equation (state derivative) each letter drives.
+#: Rigid-body equation (state derivative) each letter drives.
 EQUATION_OF_LETTER = {"X": "u", "Y": "v", "Z": "w", "L": "p", "M": "q", "N": "r"}
 #: Prefix of a delay's parameter name: ``tau_L_lat`` is the delay on ``L_lat``.
 DELAY_PREFIX = "tau_"
@@ -149,28 +151,23 @@ class Delay:
 
 
 def parse_name(name: str) -> tuple[str, str]:
-    """Split a derivative name into (letter, variable), rejecting unknown parts.
+    """Split a derivative name into (letter, variable) at its first underscore.
+
+    The letter is an identifier without underscores, the variable any identifier; whether the
+    pair fits a structure is the structure's template's decision.
 
     >>> parse_name("M_long")
     ('M', 'long')
+    >>> parse_name("Bc_beta_1s")
+    ('Bc', 'beta_1s')
     """
-    if not isinstance(name, str) or name.count("_") != 1:
+    parts = name.split("_", 1) if isinstance(name, str) else []
+    if len(parts) != 2 or not all(part.isidentifier() for part in parts):
         raise DerivativeError(
             f"derivative name {name!r} must look like 'L_p' or 'M_long': "
-            f"<{'|'.join(FORCE_MOMENT_LETTERS)}>_<{'|'.join(VARIABLES)}>"
-        )
-    letter, variable = name.split("_")
-    if letter not in FORCE_MOMENT_LETTERS:
-        raise DerivativeError(
-            f"derivative {name!r}: unknown force/moment letter {letter!r}; "
-            f"use one of {', '.join(FORCE_MOMENT_LETTERS)}"
-        )
-    if variable not in VARIABLES:
-        raise DerivativeError(
-            f"derivative {name!r}: unknown variable {variable!r}; "
-            f"use a state ({' '.join(STATE_VARIABLES)}) or a control ({' '.join(CONTROL_VARIABLES)})"
-        )
-    return letter, variable
+            f"<equation letter>_<state or input>, e.g. one of the rigid body's "
+            f"{'|'.join(FORCE_MOMENT_LETTERS)} and a state or control")
+    return parts[0], parts[1]
 
 
 @attrs.frozen
@@ -211,23 +208,13 @@ class Derivative:
 
     @property
     def letter(self) -> str:
-        """Force/moment letter: X Y Z L M N."""
-        return self.name.split("_")[0]
+        """Letter of the equation the derivative drives, e.g. ``M`` (rigid body: X Y Z L M N)."""
+        return parse_name(self.name)[0]
 
     @property
     def variable(self) -> str:
         """State or control the derivative multiplies."""
-        return self.name.split("_")[1]
-
-    @property
-    def is_control(self) -> bool:
-        """True for a control derivative (``*_long``, ``*_lat``, ``*_coll``, ``*_ped``)."""
-        return self.variable in CONTROL_VARIABLES
-
-    @property
-    def equation(self) -> str:
-        """State whose time derivative this derivative contributes to (u v w p q r)."""
-        return EQUATION_OF_LETTER[self.letter]
+        return parse_name(self.name)[1]
 
     @property
     def delay_name(self) -> str:

@@ -27,6 +27,26 @@ Example (flight-test units; derivative values in the structure's units)::
     Q_degps = { signal = "q", unit = "deg/s" }
     DELE = { signal = "long", unit = "%", scale = -1.0, offset = 0.0 }
 
+A structure of one's own is declared instead of a template (signals as ``name = "kind"`` in
+array order; kinds: velocity, angle, rate, acceleration, angular-acceleration, control; the unit
+system gives each kind its unit)::
+
+    [structure]
+    name = "short-period"
+    states = { alpha = "angle", q = "rate" }
+    controls = { elevator = "control" }
+    outputs = { alpha = "angle", q = "rate", q_dot = "angular-acceleration", az = "acceleration" }
+    equations = { Z = "alpha", M = "q" }     # derivative letter → the state it drives
+    variables = ["alpha", "q", "elevator"]   # optional: default every state and control
+    populate = "all"                         # Z_alpha Z_q Z_elevator M_alpha M_q M_elevator
+
+    [structure.known]                        # ẋ_state += value · state
+    alpha = { q = 1.0 }
+
+    [structure.output_equations]             # y += value · (state, control or d(state));
+    q_dot = { "d(q)" = 1.0 }                 # an output named like a state reads it
+    az = { "d(alpha)" = 50.0, q = -50.0 }    # by default
+
 :func:`load_model` reads a file, :func:`parse_model` an already parsed mapping,
 :func:`load_channel_map` the file's ``[channels]`` table (for the data files' readers),
 :func:`save_model` writes a structure back (atomically) so that loading it gives an equal
@@ -46,11 +66,14 @@ from rotorid.io import atomic_write, require_file
 from rotorid.model.derivatives import Derivative
 from rotorid.model.signals import ChannelMap
 from rotorid.model.structure import FlightCondition, ModelStructure
-from rotorid.model.templates import SIX_DOF, TEMPLATES
+from rotorid.units import FLIGHT_TEST
+from rotorid.model.templates import SIX_DOF, TEMPLATES, DeclaredTerms, StructureTemplate
 
 POPULATE = ("all", "none")
 _TOP_KEYS = ("units", "condition", "structure", "derivatives", "channels")
 _STRUCTURE_KEYS = ("template", "populate", "remove")
+_DECLARATION_KEYS = ("name", "states", "controls", "outputs", "equations", "variables", "known",
+                     "output_equations")
 _DERIVATIVE_KEYS = ("initial", "sign", "delay", "fixed")
 _DELAY_KEYS = {"initial": "number", "upper": "number", "fixed": "boolean"}
 
@@ -108,12 +131,23 @@ def _structure(mapping: Mapping, source: str) -> ModelStructure:
     for key, value in condition.items():
         _require("number", value, f"{source}: [condition] {key}")
     settings = _require("table", mapping.get("structure", {}), f"{source}: [structure]")
-    _check_keys(settings, _STRUCTURE_KEYS, f"{source}: [structure]")
-    template = _require("string", settings.get("template", SIX_DOF.name),
-                        f"{source}: [structure] template")
-    if template not in TEMPLATES:
-        raise DataFileError(f"{source}: [structure] template = {template!r}; use "
-                            f"{' or '.join(map(repr, TEMPLATES))}")
+    _check_keys(settings, _STRUCTURE_KEYS + _DECLARATION_KEYS, f"{source}: [structure]")
+    if "states" in settings:
+        if "template" in settings:
+            raise DataFileError(f"{source}: [structure] give a template or declare states, "
+                                f"controls and outputs, not both")
+        template = _declared_template(settings, f"{source}: [structure]")
+    else:
+        stray = [key for key in _DECLARATION_KEYS if key in settings]
+        if stray:
+            raise DataFileError(f"{source}: [structure] {stray[0]} belongs to a declared "
+                                f"structure; declare states, controls and outputs too")
+        template = _require("string", settings.get("template", SIX_DOF.name),
+                            f"{source}: [structure] template")
+        if template not in TEMPLATES:
+            raise DataFileError(f"{source}: [structure] template = {template!r}; use "
+                                f"{' or '.join(map(repr, TEMPLATES))}, or declare states, "
+                                f"controls and outputs")
     populate = _require("string", settings.get("populate", "all"),
                         f"{source}: [structure] populate")
     if populate not in POPULATE:
@@ -143,6 +177,65 @@ def _structure(mapping: Mapping, source: str) -> ModelStructure:
     for derivative in derivatives:
         structure = structure.replacing(derivative)
     return structure
+
+
+def _signals(settings: Mapping, key: str, where: str) -> dict[str, str]:
+    table = _require("table", settings.get(key), f"{where} {key}")
+    if not table:
+        raise DataFileError(f"{where} {key} is empty; declare at least one, e.g. "
+                            f'{key} = {{ q = "rate" }}')
+    for name, kind in table.items():
+        _require("string", kind, f"{where} {key}.{name} (its kind)")
+    return dict(table)
+
+
+def _coefficients(table, where: str) -> list[tuple[str, str, float]]:
+    rows = []
+    for target, terms in _require("table", table, where).items():
+        for source, value in _require("table", terms, f"{where}.{target}").items():
+            rows.append((target, source, _require("number", value,
+                                                  f"{where}.{target}.{source}")))
+    return rows
+
+
+def _declared_template(settings: Mapping, where: str) -> StructureTemplate:
+    """A template declared in ``[structure]`` (see the module docstring)."""
+    for key in ("states", "controls", "outputs", "equations"):
+        if key not in settings:
+            raise DataFileError(f"{where}: a declared structure needs {key} "
+                                f"(see docs/concepts.md, Declared structures)")
+    states = _signals(settings, "states", where)
+    controls = _signals(settings, "controls", where)
+    outputs = _signals(settings, "outputs", where)
+    kinds = {**outputs, **controls, **states}
+    clash = [n for n in outputs if n in states and outputs[n] != states[n]]
+    if clash:
+        raise DataFileError(f"{where}: {clash[0]} is a state of kind {states[clash[0]]} and an "
+                            f"output of kind {outputs[clash[0]]}; give it one kind")
+    equations = _require("table", settings["equations"], f"{where} equations")
+    for letter, state in equations.items():
+        _require("string", state, f"{where} equations.{letter}")
+    variables = settings.get("variables", list(states) + list(controls))
+    if not isinstance(variables, list) or not all(isinstance(v, str) for v in variables):
+        raise DataFileError(f"{where} variables must be a list of state and control names")
+    output_terms = _coefficients(settings.get("output_equations", {}),
+                                 f"{where} output_equations")
+    written = {row[0] for row in output_terms}
+    output_terms += [(name, name, 1.0) for name in outputs if name in states and
+                     name not in written]
+    known = DeclaredTerms(_coefficients(settings.get("known", {}), f"{where} known"),
+                          output_terms)
+    name = _require("string", settings.get("name", "declared"), f"{where} name")
+    template = StructureTemplate(name, tuple(states), tuple(controls), tuple(outputs),
+                                 f"declared in the model file ({len(states)} states)",
+                                 equations, variables, kinds, known)
+    silent = [o for o in outputs if o not in {row[0] for row in output_terms}]
+    if silent:
+        raise DataFileError(f"{where}: output {silent[0]} has no output equation; write one in "
+                            f"[structure.output_equations] (e.g. {silent[0]} = "
+                            f'{{ "d({next(iter(states))})" = 1.0 }})')
+    template.known_terms(None, FLIGHT_TEST)  # names in the coefficients, one reader per state
+    return template
 
 
 def _channel_map(mapping: Mapping, source: str) -> ChannelMap:
@@ -222,6 +315,31 @@ def _derivative_lines(derivative: Derivative) -> list[str]:
     return lines
 
 
+def _inline(pairs) -> str:
+    return "{ " + ", ".join(f'"{k}" = {v}' for k, v in pairs) + " }"
+
+
+def _template_lines(template: StructureTemplate) -> list[str]:
+    """``template = "…"`` for a shipped template, else the whole declaration."""
+    if TEMPLATES.get(template.name) == template:
+        return [f'template = "{template.name}"']
+    kinds = template.kind_of
+    known: DeclaredTerms = template.known
+    lines = [f'name = "{template.name}"']
+    for key, names in (("states", template.states), ("controls", template.controls),
+                       ("outputs", template.outputs)):
+        lines.append(f"{key} = " + _inline((n, f'"{kinds[n]}"') for n in names))
+    lines.append("equations = " + _inline((k, f'"{s}"') for k, s in template.equations))
+    lines.append("variables = [" + ", ".join(f'"{v}"' for v in template.variables) + "]")
+    for key, rows in (("known", known.state_terms), ("output_equations", known.output_terms)):
+        grouped: dict[str, list] = {}
+        for target, source, value in rows:
+            grouped.setdefault(target, []).append((source, _number(value)))
+        lines.append(f"{key} = {{ " + ", ".join(f'"{target}" = {_inline(pairs)}'
+                                               for target, pairs in grouped.items()) + " }")
+    return lines
+
+
 def format_model(structure: ModelStructure) -> str:
     """The model file text of ``structure``: its template, ``populate = "all"`` with a
     ``remove`` list when its derivatives keep the template's order, else ``populate = "none"``
@@ -233,7 +351,7 @@ def format_model(structure: ModelStructure) -> str:
              f"u0_mps = {_number(c.u0)}", f"v0_mps = {_number(c.v0)}",
              f"w0_mps = {_number(c.w0)}", f"theta0_deg = {_number(_degrees(c.theta0))}",
              f"phi0_deg = {_number(_degrees(c.phi0))}", "", "[structure]",
-             f'template = "{structure.template.name}"']
+             *_template_lines(structure.template)]
     full = structure.template.derivative_names()
     kept = set(structure.names)
     if [n for n in full if n in kept] == list(structure.names):

@@ -130,7 +130,7 @@ def state_space(structure: ModelStructure, values=None, *, pade_order: int = 0
         raise StructureError(f"pade_order must be 0 (delays as data) or a positive order, got "
                              f"{pade_order}")
     table = structure.terms(values)
-    delays = tuple(DelayedTerm(d.name, d.equation, d.variable, float(tau))
+    delays = tuple(DelayedTerm(d.name, structure.equation_of(d), d.variable, float(tau))
                    for d, tau in zip(structure.derivatives, table.delay) if tau > 0)
     a, b, c, d, names = _assemble(structure, table, pade_order)
     states, controls, outputs = structure.states, structure.controls, structure.outputs
@@ -139,7 +139,7 @@ def state_space(structure: ModelStructure, values=None, *, pade_order: int = 0
         raise StructureError("no control drives a state or an output of this model; give it "
                              "control derivatives (X_long, M_long …)")
     rows, kept = _produced(a, b, c, d, columns)
-    units = {name: structure.units.label(name) for name in states + controls + outputs}
+    units = {signal.name: signal.unit for signal in structure.signals.all}
     units.update({name: units[source] for name, source in names[len(states):]})
     return NamedStateSpace(
         a[np.ix_(rows, rows)], b[np.ix_(rows, columns)], c[np.ix_(kept, rows)],
@@ -165,18 +165,18 @@ def _assemble(structure: ModelStructure, table, pade_order: int):
     """Full A, B, C, D (the structure's n states plus the Padé states) and (name, source) of
     every state."""
     n_states = structure.n_states
-    a = structure.known_state_matrix()
+    known = structure.known_terms()
+    a, c, d = known.a.copy(), known.c.copy(), known.d.copy()
     b = np.zeros((n_states, structure.n_controls))
-    c = structure.known_output_matrix()
-    d = np.zeros((structure.n_outputs, structure.n_controls))
     groups: dict[tuple[int, float], list] = {}
-    for derivative, eq, src, gain, tau, out in zip(
+    for derivative, eq, src, gain, tau, out, weight in zip(
             structure.derivatives, table.equation, table.source, table.gain, table.delay,
-            table.output):
+            table.output, table.weight):
         if pade_order and tau > 0:
-            groups.setdefault((int(src), float(tau)), []).append((derivative.name, eq, gain, out))
+            groups.setdefault((int(src), float(tau)), []).append(
+                (derivative.name, eq, gain, (out, weight)))
             continue
-        _add(a, b, c, d, eq, src, out, gain, n_states, state_gain=None)
+        _add(a, b, c, d, eq, src, (out, weight), gain, n_states, state_gain=None)
     names = [(s, s) for s in structure.states]
     sources = structure.states + structure.controls
     for (src, tau), terms in groups.items():
@@ -200,18 +200,20 @@ def _assemble(structure: ModelStructure, table, pade_order: int):
     return a, b, c, d, names
 
 
-def _add(a, b, c, d, eq, src, out, gain, n_states: int, state_gain) -> None:
-    """Add a term ``gain·source`` to equation ``eq`` (and to output ``out`` when ≥ 0), plus
-    ``state_gain = (columns, row)`` on the Padé states of a delayed source; sources below
-    ``n_states`` are states, the others controls."""
-    targets = [(a, b, eq)] + ([(c, d, out)] if out >= 0 else [])
-    for states, controls, row in targets:
+def _add(a, b, c, d, eq, src, reader, gain, n_states: int, state_gain) -> None:
+    """Add a term ``gain·source`` to equation ``eq`` (and, weighted, to the output of
+    ``reader = (output, weight)`` when the output is ≥ 0), plus ``state_gain = (columns, row)``
+    on the Padé states of a delayed source; sources below ``n_states`` are states, the others
+    controls."""
+    out, weight = reader
+    targets = [(a, b, eq, 1.0)] + ([(c, d, out, weight)] if out >= 0 else [])
+    for states, controls, row, scale in targets:
         if src < n_states:
-            states[row, src] += gain
+            states[row, src] += scale * gain
         else:
-            controls[row, src - n_states] += gain
+            controls[row, src - n_states] += scale * gain
         if state_gain is not None:
-            states[row, state_gain[0]] += state_gain[1]
+            states[row, state_gain[0]] += scale * state_gain[1]
 
 
 def _reachable(a: np.ndarray, b: np.ndarray) -> list[int]:

@@ -1,8 +1,10 @@
-"""Flight condition and the linear helicopter model structure.
+"""Flight condition and the linear model structure.
 
-A structure has the shape of its template (:mod:`rotorid.model.templates`): the paper's coupled
-rigid-body model about straight trimmed flight (``six-dof``, default) or its ``longitudinal``
-or ``lateral`` subset, whose equations are the six-dof's rows for its states::
+A structure has the shape of its template (:mod:`rotorid.model.templates`): states, controls,
+outputs, equations and known terms. The default is the paper's coupled helicopter rigid-body
+model about straight trimmed flight (``six-dof``); other templates are its ``longitudinal`` or
+``lateral`` subset, fixed-wing small-perturbation models, or a model file's own declaration.
+The six-dof model::
 
     states   x = [u w q theta v p phi r]
     controls u = [long lat coll ped]
@@ -17,7 +19,7 @@ or ``lateral`` subset, whose equations are the six-dof's rows for its states::
     ax = ΣX·z     ay = ΣY·z     az = ΣZ·z
 
 ``ΣX·z`` sums the X derivatives times their state or control, each possibly delayed. The
-known gravity and kinematic terms are built here, in the structure's unit system, with the
+template builds the known gravity and kinematic terms in the structure's unit system, with the
 deg↔rad factors folded in. Estimable quantities are the free derivatives and free delays; they
 form the parameter vector in :attr:`ModelStructure.parameter_names` order.
 """
@@ -33,12 +35,11 @@ import numpy as np
 from rotorid.errors import StructureError
 from rotorid.model.derivatives import (
     DEFAULT_DELAY_UPPER,
-    EQUATION_OF_LETTER,
-    FORCE_MOMENT_LETTERS,
     Delay,
     Derivative,
     Sign,
     delayed_derivative,
+    parse_name,
 )
 from rotorid.model.signals import ModelSignals
 from rotorid.model.templates import (
@@ -46,13 +47,12 @@ from rotorid.model.templates import (
     OUTPUTS,
     SIX_DOF,
     STATES,
+    KnownTerms,
     StructureTemplate,
     structure_template,
 )
 from rotorid.units import FLIGHT_TEST, FOOT, KNOT, UnitSystem, unit_system
 
-#: Output measuring each force equation's specific force.
-ACCELERATION_OUTPUT = {"u": "ax", "v": "ay", "w": "az"}
 #: The paper's delayed derivatives (τ1 … τ8).
 PAPER_DELAYED = ("L_p", "L_q", "L_long", "L_lat", "M_p", "M_q", "M_long", "M_lat")
 
@@ -169,8 +169,8 @@ class TermTable:
     - ``equation``: row in the state vector (index into the structure's states) the term drives;
     - ``source``: column in ``[x; u]`` (0 … n−1 the n states, n … n+m−1 the m controls);
     - ``gain``: derivative value; ``delay``: delay in s (0 where none);
-    - ``output``: row in the structure's outputs of the specific force the term also feeds,
-      −1 if none.
+    - ``output``: row in the structure's outputs that also reads the term (a specific force,
+      a state derivative), −1 if none; ``weight``: the term's weight in that output (0 if none).
     """
 
     equation: np.ndarray
@@ -178,6 +178,7 @@ class TermTable:
     gain: np.ndarray
     delay: np.ndarray
     output: np.ndarray
+    weight: np.ndarray
 
 
 @attrs.frozen
@@ -255,9 +256,7 @@ class ModelStructure:
         for d in self.derivatives:
             if d.name == name:
                 return d
-        from rotorid.model.derivatives import parse_name
-
-        parse_name(name)  # raises for names that are not derivative names at all
+        self.template.check(Derivative(name))  # names the template cannot hold at all
         raise StructureError(
             f"derivative {name} is not in this structure ({len(self.derivatives)} derivatives: "
             f"{', '.join(self.names)})"
@@ -298,7 +297,7 @@ class ModelStructure:
     def equation_rows(self) -> tuple[int, ...]:
         """Rows of the state vector that derivative terms can drive (the force and moment
         equations), in state order."""
-        driven = {EQUATION_OF_LETTER[letter] for letter in FORCE_MOMENT_LETTERS}
+        driven = {state for _, state in self.template.equations}
         return tuple(i for i, name in enumerate(self.states) if name in driven)
 
     def is_delay(self) -> np.ndarray:
@@ -427,78 +426,68 @@ class ModelStructure:
         return dict(zip(self.parameter_names, self.as_vector(values).tolist()))
 
     # ----------------------------------------------------------------- matrices
+    def known_terms(self) -> KnownTerms:
+        """The template's known A0, C0, D0 and W at this condition, in this structure's units
+        (:class:`~rotorid.model.templates.KnownTerms`)."""
+        return self.template.known_terms(self.condition, self.units)
+
     def known_state_matrix(self) -> np.ndarray:
-        """The gravity and kinematic terms of A, shape (n, n), in the structure's units: the
-        six-dof model's rows and columns of the structure's states."""
-        c = self.condition
-        k = self.units.radian_per_angle
-        g = self.units.g
-        scale = self.units.length_per_metre
-        u0, v0, w0 = c.u0 * scale, c.v0 * scale, c.w0 * scale
-        st, ct = math.sin(c.theta0), math.cos(c.theta0)
-        sp, cp = math.sin(c.phi0), math.cos(c.phi0)
-        i = {s: n for n, s in enumerate(STATES)}
-        a = np.zeros((len(STATES), len(STATES)))
-        a[i["u"], i["q"]] = -w0 * k
-        a[i["u"], i["r"]] = v0 * k
-        a[i["u"], i["theta"]] = -g * ct * k
-        a[i["v"], i["r"]] = -u0 * k
-        a[i["v"], i["p"]] = w0 * k
-        a[i["v"], i["phi"]] = g * ct * cp * k
-        a[i["v"], i["theta"]] = -g * st * sp * k
-        a[i["w"], i["p"]] = -v0 * k
-        a[i["w"], i["q"]] = u0 * k
-        a[i["w"], i["theta"]] = -g * cp * st * k
-        a[i["w"], i["phi"]] = -g * sp * ct * k
-        a[i["theta"], i["q"]] = cp
-        a[i["theta"], i["r"]] = -sp
-        a[i["phi"], i["p"]] = 1.0
-        a[i["phi"], i["q"]] = sp * st / ct
-        a[i["phi"], i["r"]] = cp * st / ct
-        rows = [i[name] for name in self.states]
-        return a[np.ix_(rows, rows)]
+        """The known terms of A (gravity, kinematics …), shape (n, n)."""
+        return self.known_terms().a
 
     def known_output_matrix(self) -> np.ndarray:
-        """The known part of C, shape (p, n): the outputs that are states (q θ p φ r)."""
-        c = np.zeros((self.n_outputs, self.n_states))
-        for row, name in enumerate(self.outputs):
-            if name in self.states:
-                c[row, self.states.index(name)] = 1.0
-        return c
+        """The known part of C (outputs that are states, α = w/U0 …), shape (p, n)."""
+        return self.known_terms().c
+
+    def known_feedthrough(self) -> np.ndarray:
+        """The known part of D, shape (p, m) (zero for the shipped templates)."""
+        return self.known_terms().d
+
+    def equation_of(self, derivative: Derivative) -> str:
+        """The state whose equation ``derivative`` drives (e.g. ``q`` for ``M_long``)."""
+        return self.template.equation_of(derivative)
+
+    def is_control(self, derivative: Derivative) -> bool:
+        """True when ``derivative`` multiplies a control (``M_long``), not a state (``M_q``)."""
+        return derivative.variable in self.controls
 
     def terms(self, values=None) -> TermTable:
         """Every derivative term at the parameter vector ``values`` (default: initial)."""
         vector = self.initial_values() if values is None else self.as_vector(values)
         free = {n: v for n, v in zip(self.parameter_names, vector)}
         sources = self.states + self.controls
-        equation, source, gain, delay, output = [], [], [], [], []
+        measured = self.known_terms().measured
+        equation, source, gain, delay, output, weight = [], [], [], [], [], []
         for d in self.derivatives:
-            equation.append(self.states.index(d.equation))
+            row = self.states.index(self.equation_of(d))
+            equation.append(row)
             source.append(sources.index(d.variable))
             gain.append(d.initial if d.fixed else free[d.name])
             if d.delay is None:
                 delay.append(0.0)
             else:
                 delay.append(d.delay.initial if d.delay.fixed else free[d.delay_name])
-            out = ACCELERATION_OUTPUT.get(d.equation)
-            output.append(self.outputs.index(out) if out in self.outputs else -1)
+            readers = np.flatnonzero(measured[:, row])
+            output.append(int(readers[0]) if readers.size else -1)
+            weight.append(float(measured[readers[0], row]) if readers.size else 0.0)
         as_int = lambda x: np.array(x, dtype=int)  # noqa: E731
         return TermTable(as_int(equation), as_int(source), np.array(gain, dtype=float),
-                         np.array(delay, dtype=float), as_int(output))
+                         np.array(delay, dtype=float), as_int(output),
+                         np.array(weight, dtype=float))
 
     def matrices(self, values=None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """A (n×n), B (n×m), C (p×n), D (p×m) with every delay set to zero."""
         table = self.terms(values)
         n = self.n_states
-        a = self.known_state_matrix()
+        known = self.known_terms()
+        a, c, d = known.a.copy(), known.c.copy(), known.d.copy()
         b = np.zeros((n, self.n_controls))
-        c = self.known_output_matrix()
-        d = np.zeros((self.n_outputs, self.n_controls))
-        for eq, src, gain, out in zip(table.equation, table.source, table.gain, table.output):
+        for eq, src, gain, out, weight in zip(table.equation, table.source, table.gain,
+                                              table.output, table.weight):
             target, column = (a, src) if src < n else (b, src - n)
             target[eq, column] += gain
             if out >= 0:
-                (c if src < n else d)[out, column] += gain
+                (c if src < n else d)[out, column] += weight * gain
         return a, b, c, d
 
     def describe(self) -> str:

@@ -1,67 +1,171 @@
-"""Helicopter model templates: the states, controls and outputs of a linear structure.
+"""Structure templates: the states, inputs, outputs, equations and known terms of a linear model.
 
-A template fixes the shape of a :class:`~rotorid.model.structure.ModelStructure`: which states,
-controls and outputs it has (in the order of its arrays) and so which derivatives it can hold.
-Shipped templates:
+A template fixes the shape of a :class:`~rotorid.model.structure.ModelStructure`: its states,
+controls (inputs) and outputs in the order of its arrays, its *equations* (derivative letter →
+the state whose equation the letter's derivatives drive), the *variables* a derivative may
+multiply, and its *known terms*. The linear model is::
+
+    ẋ = A0·x + Σ_terms                 (each term: derivative × variable, possibly delayed)
+    y = C0·x + D0·u + W·Σ_terms        (W: weight of each equation's term sum in each output)
+
+so an accelerometer reads the force derivatives' sum (W = 1 on its equation), ``q_dot`` the
+pitch equation's, and ``alpha = w/U0`` is a known C0 coefficient. :class:`KnownTerms` holds
+A0, C0, D0 and W for one flight condition and unit system. A known control term is a fixed
+derivative (``[derivatives.M_elevator] fixed = …``). Each equation's term sum may be read by
+one output at most (the sensitivities' fast path relies on it).
+
+Shipped templates (rigid body about straight trimmed flight; known gravity and kinematic terms
+in the structure's unit system, :func:`rigid_body_terms`):
 
 * ``six-dof`` (the paper's, default): states ``u w q theta v p phi r``, controls
   ``long lat coll ped``, outputs ``ax az q theta ay p phi r``; 60 derivatives;
-* ``longitudinal``: states ``u w q theta``, controls ``long coll``, outputs ``ax az q theta``;
-  the X, Z and M derivatives over u w q long coll (15);
-* ``lateral``: states ``v p phi r``, controls ``lat ped``, outputs ``ay p phi r``; the Y, L
-  and N derivatives over v p r lat ped (15).
+* ``longitudinal`` / ``lateral``: the helicopter's longitudinal (``u w q theta``; ``long coll``;
+  ``ax az q theta``) and lateral-directional (``v p phi r``; ``lat ped``; ``ay p phi r``)
+  subsets, 15 derivatives each;
+* ``fixed-wing-longitudinal``: states ``u w q theta``, controls ``elevator throttle``, outputs
+  ``u alpha q theta q_dot ax az`` (α = w/U0), 15 derivatives;
+* ``fixed-wing-lateral``: states ``v p phi r``, controls ``aileron rudder``, outputs
+  ``beta p phi r ay`` (β = v/U0), 15 derivatives.
 
-A subset's known gravity and kinematic terms are the six-dof's rows and columns of its states,
-so a subset is the six-dof model with the other axes' states held at trim.
+A subset's known terms are the six-dof's rows and columns of its states, so a subset is the
+six-dof model with the other axes' states held at trim. A model file may also declare a template
+of its own (:class:`DeclaredTerms`, :mod:`rotorid.model.modelfile`).
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable, Mapping
+
 import attrs
+import numpy as np
 
 from rotorid.errors import StructureError
 from rotorid.model.derivatives import (
     CONTROL_VARIABLES,
+    DELAY_PREFIX,
     EQUATION_OF_LETTER,
     FORCE_MOMENT_LETTERS,
     STATE_VARIABLES,
     Derivative,
 )
 from rotorid.model.signals import ModelSignals, Signal, SignalSet
-from rotorid.units import CHANNEL_KINDS, UnitSystem
+from rotorid.units import CHANNEL_KINDS, KIND_DIMENSIONS, UnitSystem
 
 STATES = ("u", "w", "q", "theta", "v", "p", "phi", "r")
 CONTROLS = CONTROL_VARIABLES
 OUTPUTS = ("ax", "az", "q", "theta", "ay", "p", "phi", "r")
+#: Output measuring each rigid-body force equation's specific force.
+ACCELERATION_OUTPUT = {"u": "ax", "v": "ay", "w": "az"}
+#: Prefix of an output that reads a state's derivative (``q_dot`` reads q̇'s term sum).
+DERIVATIVE_SUFFIX = "_dot"
+
+
+@attrs.frozen(eq=False)
+class KnownTerms:
+    """The known coefficients of a structure at one condition, in its units.
+
+    Attributes:
+        a: A0, (n, n); c: C0, (p, n); d: D0, (p, m);
+        measured: W, (p, n): ``measured[j, i]`` weights state i's derivative-term sum in
+            output j.
+    """
+
+    a: np.ndarray
+    c: np.ndarray
+    d: np.ndarray
+    measured: np.ndarray
+
+
+def _tuple_of_names(value) -> tuple[str, ...]:
+    return tuple(str(v) for v in value)
+
+
+def _pairs(value) -> tuple[tuple[str, str], ...]:
+    """A mapping (or pairs) as hashable (key, value) pairs in their order."""
+    items = value.items() if isinstance(value, Mapping) else value
+    return tuple((str(k), str(v)) for k, v in items)
 
 
 @attrs.frozen
 class StructureTemplate:
-    """The states, controls and outputs of a helicopter structure (names, array order)."""
+    """The shape of a linear structure: signals, equations, variables and known terms.
+
+    Attributes:
+        name: template name (``six-dof`` …, or a declared model's own).
+        states, controls, outputs: signal names in array order.
+        summary: one line for listings.
+        equations: (letter, state) pairs: each derivative letter and the state whose equation
+            it drives, in the order of a fully populated structure (a mapping is accepted).
+        variables: states and controls a derivative may multiply, in the order of a fully
+            populated structure.
+        kinds: (signal, kind) pairs: the physical kind of every signal (:data:`rotorid.units.KIND_DIMENSIONS`); the unit
+            system turns it into a unit.
+        known: ``known(template, condition, units) -> KnownTerms``.
+    """
 
     name: str
-    states: tuple[str, ...]
-    controls: tuple[str, ...]
-    outputs: tuple[str, ...]
+    states: tuple[str, ...] = attrs.field(converter=_tuple_of_names)
+    controls: tuple[str, ...] = attrs.field(converter=_tuple_of_names)
+    outputs: tuple[str, ...] = attrs.field(converter=_tuple_of_names)
     summary: str
+    equations: tuple[tuple[str, str], ...] = attrs.field(converter=_pairs)
+    variables: tuple[str, ...] = attrs.field(converter=_tuple_of_names)
+    kinds: tuple[tuple[str, str], ...] = attrs.field(converter=_pairs)
+    known: Callable
 
     def __attrs_post_init__(self):
-        unknown = [n for n in self.states if n not in STATES]
-        unknown += [n for n in self.controls if n not in CONTROLS]
-        unknown += [n for n in self.outputs if n not in OUTPUTS]
+        where = f"template {self.name!r}"
+        for role, names in (("state", self.states), ("control", self.controls),
+                            ("output", self.outputs)):
+            bad = [n for n in names if not n.isidentifier()]
+            twice = sorted({n for n in names if names.count(n) > 1})
+            if bad or twice:
+                raise StructureError(f"{where}: {role} names must be distinct identifiers "
+                                     f"(got {', '.join(bad + twice)})")
+        if set(self.controls) & (set(self.states) | set(self.outputs)):
+            raise StructureError(f"{where}: a control cannot also be a state or an output "
+                                 f"({', '.join(sorted(set(self.controls) & set(self.states + self.outputs)))})")
+        for letter, state in self.equations:
+            if not letter.isidentifier() or "_" in letter or letter + "_" == DELAY_PREFIX:
+                raise StructureError(f"{where}: equation letter {letter!r} must be an "
+                                     f"identifier without underscores, not 'tau'")
+            if state not in self.states:
+                raise StructureError(f"{where}: equation {letter} drives {state!r}, which is "
+                                     f"not a state ({', '.join(self.states)})")
+        driven = [state for _, state in self.equations]
+        if len(set(driven)) != len(driven):
+            raise StructureError(f"{where}: two equation letters drive the same state; give "
+                                 f"each state at most one letter")
+        unknown = [v for v in self.variables if v not in self.states + self.controls]
         if unknown:
-            raise StructureError(f"template {self.name!r}: {', '.join(unknown)} are not signals "
-                                 f"of the six-dof helicopter model")
+            raise StructureError(f"{where}: derivative variables {', '.join(unknown)} are not "
+                                 f"states or controls")
+        missing = [n for n in self.states + self.controls + self.outputs
+                   if n not in self.kind_of]
+        strange = sorted({kind for _, kind in self.kinds if kind not in KIND_DIMENSIONS})
+        if strange:
+            raise StructureError(f"{where}: unknown signal kind {strange[0]!r}; use one of "
+                                 f"{', '.join(KIND_DIMENSIONS)}")
+        if missing:
+            raise StructureError(f"{where}: no physical kind for {', '.join(missing)}; give each "
+                                 f"signal a kind (velocity, angle, rate, acceleration, "
+                                 f"angular-acceleration or control)")
 
     @property
     def letters(self) -> tuple[str, ...]:
-        """Force and moment equations whose state the template has (e.g. X Z M)."""
-        return tuple(k for k in FORCE_MOMENT_LETTERS if EQUATION_OF_LETTER[k] in self.states)
+        """Equation letters (e.g. X Z M)."""
+        return tuple(letter for letter, _ in self.equations)
 
     @property
-    def variables(self) -> tuple[str, ...]:
-        """Variables a derivative may multiply: the velocity and rate states, then controls."""
-        return tuple(v for v in STATE_VARIABLES if v in self.states) + self.controls
+    def kind_of(self) -> dict[str, str]:
+        """Signal name → physical kind."""
+        return dict(self.kinds)
+
+    def equation_of(self, derivative: Derivative) -> str:
+        """The state whose equation ``derivative`` drives."""
+        self.check(derivative)
+        return dict(self.equations)[derivative.letter]
 
     def derivative_names(self) -> tuple[str, ...]:
         """Every derivative of the fully populated structure, equation by equation."""
@@ -73,26 +177,175 @@ class StructureTemplate:
             raise StructureError(
                 f"derivative {derivative.name} does not fit the {self.name} template (equations "
                 f"{' '.join(self.letters)}; variables {' '.join(self.variables)}); remove it "
-                f"or choose a template that has it (six-dof has every derivative)")
+                f"or choose a template that has it")
 
     def signals(self, units: UnitSystem) -> ModelSignals:
         """The states, inputs and outputs as named signals in the unit system ``units``."""
         def signal_set(names):
-            return SignalSet(Signal(n, units.label(n), CHANNEL_KINDS[n]) for n in names)
+            kinds = self.kind_of
+            return SignalSet(Signal(n, units.unit_of(kinds[n]), kinds[n]) for n in names)
 
         return ModelSignals(signal_set(self.states), signal_set(self.controls),
                             signal_set(self.outputs))
 
+    def known_terms(self, condition, units: UnitSystem) -> KnownTerms:
+        """A0, C0, D0 and W at ``condition`` in ``units``, shapes checked."""
+        terms = self.known(self, condition, units)
+        n, m, p = len(self.states), len(self.controls), len(self.outputs)
+        for label, array, shape in (("A0", terms.a, (n, n)), ("C0", terms.c, (p, n)),
+                                    ("D0", terms.d, (p, m)), ("W", terms.measured, (p, n))):
+            if np.shape(array) != shape or not np.all(np.isfinite(array)):
+                raise StructureError(f"template {self.name!r}: known {label} must be finite "
+                                     f"with shape {shape}, got {np.shape(array)}")
+        for column in np.flatnonzero(np.count_nonzero(terms.measured, axis=0) > 1):
+            readers = [self.outputs[j] for j in np.flatnonzero(terms.measured[:, column])]
+            raise StructureError(f"template {self.name!r}: outputs {', '.join(readers)} all "
+                                 f"read {self.states[column]}'s derivative terms; one output "
+                                 f"per state derivative: keep one of them")
+        return terms
 
-SIX_DOF = StructureTemplate("six-dof", STATES, CONTROLS, OUTPUTS,
-                            "coupled 6-DoF rigid body (the paper's model)")
-LONGITUDINAL = StructureTemplate("longitudinal", ("u", "w", "q", "theta"), ("long", "coll"),
-                                 ("ax", "az", "q", "theta"),
-                                 "longitudinal axes only: surge, heave and pitch")
-LATERAL = StructureTemplate("lateral", ("v", "p", "phi", "r"), ("lat", "ped"),
-                            ("ay", "p", "phi", "r"),
-                            "lateral-directional axes only: sway, roll and yaw")
-TEMPLATES = {t.name: t for t in (SIX_DOF, LONGITUDINAL, LATERAL)}
+
+# ----------------------------------------------------------------- rigid-body known terms
+def _rigid_body_a(condition, units: UnitSystem) -> np.ndarray:
+    """Gravity and kinematic terms of the six-dof rigid body over :data:`STATES`, (8, 8)."""
+    c = condition
+    k = units.radian_per_angle
+    g = units.g
+    scale = units.length_per_metre
+    u0, v0, w0 = c.u0 * scale, c.v0 * scale, c.w0 * scale
+    st, ct = math.sin(c.theta0), math.cos(c.theta0)
+    sp, cp = math.sin(c.phi0), math.cos(c.phi0)
+    i = {s: n for n, s in enumerate(STATES)}
+    a = np.zeros((len(STATES), len(STATES)))
+    a[i["u"], i["q"]] = -w0 * k
+    a[i["u"], i["r"]] = v0 * k
+    a[i["u"], i["theta"]] = -g * ct * k
+    a[i["v"], i["r"]] = -u0 * k
+    a[i["v"], i["p"]] = w0 * k
+    a[i["v"], i["phi"]] = g * ct * cp * k
+    a[i["v"], i["theta"]] = -g * st * sp * k
+    a[i["w"], i["p"]] = -v0 * k
+    a[i["w"], i["q"]] = u0 * k
+    a[i["w"], i["theta"]] = -g * cp * st * k
+    a[i["w"], i["phi"]] = -g * sp * ct * k
+    a[i["theta"], i["q"]] = cp
+    a[i["theta"], i["r"]] = -sp
+    a[i["phi"], i["p"]] = 1.0
+    a[i["phi"], i["q"]] = sp * st / ct
+    a[i["phi"], i["r"]] = cp * st / ct
+    return a
+
+
+def rigid_body_terms(template: StructureTemplate, condition, units: UnitSystem) -> KnownTerms:
+    """The rigid body's known terms for ``template``'s states (a subset of :data:`STATES`).
+
+    A0: the six-dof gravity and kinematic terms; outputs named like a state read it; ``ax``,
+    ``ay``, ``az`` read the X, Y, Z term sums (specific forces); ``<state>_dot`` reads that
+    state's term sum; ``alpha`` and ``beta`` are w/U0 and v/U0 (small perturbations, in the
+    unit system's angle unit; U0 must not be 0).
+    """
+    rows = [STATES.index(s) for s in template.states]
+    a = _rigid_body_a(condition, units)[np.ix_(rows, rows)]
+    n, m, p = len(template.states), len(template.controls), len(template.outputs)
+    c, measured = np.zeros((p, n)), np.zeros((p, n))
+    for row, name in enumerate(template.outputs):
+        state = {"ax": "u", "ay": "v", "az": "w"}.get(name)
+        if name.endswith(DERIVATIVE_SUFFIX):
+            state = name[: -len(DERIVATIVE_SUFFIX)]
+        if state is not None and state in template.states:
+            measured[row, template.states.index(state)] = 1.0
+        elif name in template.states:
+            c[row, template.states.index(name)] = 1.0
+        elif name in ("alpha", "beta"):
+            velocity = {"alpha": "w", "beta": "v"}[name]
+            u0 = condition.u0 * units.length_per_metre
+            if u0 <= 0.0:
+                raise StructureError(f"template {template.name!r}: output {name} = "
+                                     f"{velocity}/U0 needs forward flight (U0 > 0); give the "
+                                     f"[condition] an airspeed")
+            c[row, template.states.index(velocity)] = units.angle_per_radian / u0
+        else:
+            raise StructureError(f"template {template.name!r}: no rigid-body output equation "
+                                 f"for {name!r}")
+    return KnownTerms(a, c, np.zeros((p, m)), measured)
+
+
+def _rigid_body_template(name, states, controls, outputs, summary) -> StructureTemplate:
+    equations = {k: s for k, s in EQUATION_OF_LETTER.items() if s in states}
+    variables = tuple(v for v in STATE_VARIABLES if v in states) + tuple(controls)
+    ordered = sorted(equations.items(), key=lambda item: FORCE_MOMENT_LETTERS.index(item[0]))
+    return StructureTemplate(name, states, controls, outputs, summary, ordered, variables,
+                             {s: CHANNEL_KINDS[s] for s in states + controls + outputs},
+                             rigid_body_terms)
+
+
+SIX_DOF = _rigid_body_template("six-dof", STATES, CONTROLS, OUTPUTS,
+                               "coupled 6-DoF helicopter rigid body (the paper's model)")
+LONGITUDINAL = _rigid_body_template("longitudinal", ("u", "w", "q", "theta"), ("long", "coll"),
+                                    ("ax", "az", "q", "theta"),
+                                    "helicopter longitudinal axes: surge, heave and pitch")
+LATERAL = _rigid_body_template("lateral", ("v", "p", "phi", "r"), ("lat", "ped"),
+                               ("ay", "p", "phi", "r"),
+                               "helicopter lateral-directional axes: sway, roll and yaw")
+FIXED_WING_LONGITUDINAL = _rigid_body_template(
+    "fixed-wing-longitudinal", ("u", "w", "q", "theta"), ("elevator", "throttle"),
+    ("u", "alpha", "q", "theta", "q_dot", "ax", "az"),
+    "fixed-wing longitudinal small perturbations (alpha = w/U0)")
+FIXED_WING_LATERAL = _rigid_body_template(
+    "fixed-wing-lateral", ("v", "p", "phi", "r"), ("aileron", "rudder"),
+    ("beta", "p", "phi", "r", "ay"),
+    "fixed-wing lateral-directional small perturbations (beta = v/U0)")
+TEMPLATES = {t.name: t for t in (SIX_DOF, LONGITUDINAL, LATERAL, FIXED_WING_LONGITUDINAL,
+                                 FIXED_WING_LATERAL)}
+
+
+# ----------------------------------------------------------------- declared templates
+@attrs.frozen
+class DeclaredTerms:
+    """Known terms written out as coefficients in a model file, independent of the condition.
+
+    Attributes:
+        state_terms: (state, source, value): ``ẋ_state += value · source``, the source a state
+            (a known control term is a fixed derivative instead).
+        output_terms: (output, source, value): ``y_output += value · source``, the source a
+            state, a control or ``d(state)`` (the state's full derivative ẋ).
+    """
+
+    state_terms: tuple[tuple[str, str, float], ...] = attrs.field(
+        converter=lambda rows: tuple((str(a), str(b), float(c)) for a, b, c in rows))
+    output_terms: tuple[tuple[str, str, float], ...] = attrs.field(
+        converter=lambda rows: tuple((str(a), str(b), float(c)) for a, b, c in rows))
+
+    def __call__(self, template: StructureTemplate, condition, units: UnitSystem) -> KnownTerms:
+        states, controls, outputs = template.states, template.controls, template.outputs
+        n, m, p = len(states), len(controls), len(outputs)
+        a = np.zeros((n, n))
+        for state, source, value in self.state_terms:
+            if source in controls:
+                raise StructureError(f"template {template.name!r}: a known term of {state} "
+                                     f"on control {source} is a fixed derivative; declare it "
+                                     f"in [derivatives] with fixed = {value}")
+            a[_position(states, state, "state", template),
+              _position(states, source, "state", template)] += value
+        cd, measured = np.zeros((p, n + m)), np.zeros((p, n))
+        for output, source, value in self.output_terms:
+            row = _position(outputs, output, "output", template)
+            if source.startswith("d(") and source.endswith(")"):
+                state = _position(states, source[2:-1], "state", template)
+                cd[row, :n] += value * a[state]
+                measured[row, state] += value
+            else:
+                column = _position(states + controls, source, "state, control or d(state)",
+                                   template)
+                cd[row, column] += value
+        return KnownTerms(a, cd[:, :n], cd[:, n:], measured)
+
+
+def _position(names, name, role, template) -> int:
+    if name not in names:
+        raise StructureError(f"template {template.name!r}: {name!r} is not a {role} "
+                             f"({', '.join(names)})")
+    return names.index(name)
 
 
 def structure_template(template: str | StructureTemplate) -> StructureTemplate:
@@ -103,4 +356,5 @@ def structure_template(template: str | StructureTemplate) -> StructureTemplate:
         return TEMPLATES[str(template)]
     except KeyError:
         raise StructureError(f"unknown structure template {template!r}; use one of "
-                             f"{', '.join(TEMPLATES)}") from None
+                             f"{', '.join(TEMPLATES)}, or declare states, controls and outputs "
+                             f"in the model file's [structure] table") from None

@@ -130,6 +130,7 @@ class _Terms:
     eq_col: np.ndarray        # (K,) column in E
     source: np.ndarray        # (K,) 0 … n−1 states, n … n+m−1 controls
     output: np.ndarray        # (K,) output row or −1
+    weight: np.ndarray        # (K,) weight of the term in that output
     delayed: np.ndarray       # (K,) bool: carries a delay
     gain: np.ndarray          # (K,) real
     delay: np.ndarray         # (K,) real
@@ -148,7 +149,8 @@ def _terms(structure: ModelStructure, values) -> _Terms:
         delay_param.append(index[d.delay_name] if has_free_delay else -1)
     row_col = {row: k for k, row in enumerate(structure.equation_rows)}
     return _Terms(table.equation, np.array([row_col[e] for e in table.equation]), table.source,
-                  table.output, np.array(delayed, dtype=bool), table.gain, table.delay,
+                  table.output, table.weight, np.array(delayed, dtype=bool), table.gain,
+                  table.delay,
                   np.array(gain_param), np.array(delay_param))
 
 
@@ -211,11 +213,13 @@ def discrete_maps(structure: ModelStructure, values, dt: float, hold: str = "zoh
     ps_raw = {0: phi[:, 0]}
     pu_raw: dict = {}
     implicit = np.zeros((n_dir, n_x, n_x), dtype=complex)
-    cs = {0: np.repeat(structure.known_output_matrix()[None].astype(complex), n_dir, axis=0)}
-    du: dict = {}
+    known = structure.known_terms()
+    cs = {0: np.repeat(known.c[None].astype(complex), n_dir, axis=0)}
+    du: dict = {0: np.repeat(known.d[None].astype(complex), n_dir, axis=0)} if np.any(
+        known.d) else {}
     history_columns: dict = {}
     for k in np.flatnonzero(in_a & (terms.output >= 0)):
-        cs[0][:, terms.output[k], terms.source[k]] += gain[:, k]
+        cs[0][:, terms.output[k], terms.source[k]] += terms.weight[k] * gain[:, k]
 
     for k in forcing:
         m, f, g, e = lag_m[k], frac[k], gain[:, k], terms.eq_col[k]
@@ -256,7 +260,7 @@ def discrete_maps(structure: ModelStructure, values, dt: float, hold: str = "zoh
             for lag, w in weights.items():
                 shape = (n_dir, n_y, n_u if is_control else n_x)
                 target = np.zeros(shape, dtype=complex)
-                target[:, out, column] = g * w
+                target[:, out, column] = terms.weight[k] * g * w
                 _add(du if is_control else cs, lag, target)
 
     fold = np.linalg.inv(np.eye(n_x) - implicit)

@@ -30,7 +30,7 @@ from rotorid import blas
 from rotorid.data import ManeuverSet
 from rotorid.errors import DataError, SimulationDivergedError, StructureError
 from rotorid.executors import cpu_count
-from rotorid.model.structure import ACCELERATION_OUTPUT, ModelStructure
+from rotorid.model.structure import ModelStructure
 from rotorid.simulation.discretisation import DiscreteMaps, discrete_maps
 
 #: A state perturbation beyond this magnitude (structure units) counts as divergence.
@@ -416,9 +416,9 @@ class Simulator:
 
 
 def _direct_outputs(structure: ModelStructure) -> list[int]:
-    """Outputs whose equations contain parameters directly (the accelerations)."""
-    accelerations = set(ACCELERATION_OUTPUT.values())
-    return [k for k, name in enumerate(structure.outputs) if name in accelerations]
+    """Outputs whose equations contain parameters directly (accelerations, state
+    derivatives: those that read an equation's term sum)."""
+    return np.flatnonzero(np.any(structure.known_terms().measured, axis=1)).tolist()
 
 
 def weighting_factor(weighting, leading=()) -> np.ndarray:

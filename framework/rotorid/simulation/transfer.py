@@ -33,8 +33,8 @@ def response_sensitivities(structure: ModelStructure, values, omega
 
     With R = (jωI − A)⁻¹, X = R·B and Y = C·R, a term of gain g and delay τ that drives
     equation row e from source s (and output row o when it also feeds a specific force)
-    enters as t = g·e^(−jωτ), and ∂H/∂t = (Y[:, e] + 1_o) ⊗ X[s, :] for a state source,
-    (Y[:, e] + 1_o) in control column s for a control. Then ∂H/∂g = e^(−jωτ)·∂H/∂t and
+    enters as t = g·e^(−jωτ), and ∂H/∂t = (Y[:, e] + w·1_o) ⊗ X[s, :] for a state source,
+    (Y[:, e] + w·1_o) in control column s for a control (w: the term's weight in output o). Then ∂H/∂g = e^(−jωτ)·∂H/∂t and
     ∂H/∂τ = −jω·g·e^(−jωτ)·∂H/∂t.
 
     Args: as :func:`frequency_response`.
@@ -58,7 +58,7 @@ def response_sensitivities(structure: ModelStructure, values, omega
             continue
         left = y[:, :, table.equation[k]].copy()            # (F, p)
         if table.output[k] >= 0:
-            left[:, table.output[k]] += 1.0
+            left[:, table.output[k]] += table.weight[k]
         source = table.source[k]
         if source < n_x:
             unit = left[:, :, None] * x[:, source, None, :]
@@ -84,21 +84,22 @@ def _delayed_matrices(structure: ModelStructure, table, omega: np.ndarray):
     """A (F, n, n), B (F, n, m), C (F, p, n), D (F, p, m) at each frequency, every delayed
     term multiplied by e^(−jωτ)."""
     n_f, n_x, n_u = omega.size, structure.n_states, structure.n_controls
-    a = np.repeat(structure.known_state_matrix()[None].astype(complex), n_f, axis=0)
+    known = structure.known_terms()
+    a = np.repeat(known.a[None].astype(complex), n_f, axis=0)
     b = np.zeros((n_f, n_x, n_u), dtype=complex)
-    c = np.repeat(structure.known_output_matrix()[None].astype(complex), n_f, axis=0)
-    d = np.zeros((n_f, structure.n_outputs, n_u), dtype=complex)
-    for eq, src, gain, tau, out in zip(table.equation, table.source, table.gain, table.delay,
-                                       table.output):
+    c = np.repeat(known.c[None].astype(complex), n_f, axis=0)
+    d = np.repeat(known.d[None].astype(complex), n_f, axis=0)
+    for eq, src, gain, tau, out, weight in zip(table.equation, table.source, table.gain,
+                                               table.delay, table.output, table.weight):
         term = gain * np.exp(-1j * omega * tau)
         if src < n_x:
             a[:, eq, src] += term
             if out >= 0:
-                c[:, out, src] += term
+                c[:, out, src] += weight * term
         else:
             b[:, eq, src - n_x] += term
             if out >= 0:
-                d[:, out, src - n_x] += term
+                d[:, out, src - n_x] += weight * term
     return a, b, c, d
 
 

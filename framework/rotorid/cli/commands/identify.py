@@ -207,6 +207,7 @@ def run(args) -> int:
             ingestion = _ingestion(args)
             if not by_reference:
                 ingestion["channels"] = load_channel_map(args.model)
+                ingestion["signals"] = model.signals
             maneuvers = _load_inputs(args.data, args.hold,
                                      None if by_reference else model.units.name, ingestion)
             if not by_reference:

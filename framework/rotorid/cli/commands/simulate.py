@@ -86,7 +86,7 @@ def _load_inputs(locations, hold: str, units: str, ingestion=None):
 
 def run(args) -> int:
     from rotorid.estimation.data_checks import check_delays
-    from rotorid.model.modelfile import load_model
+    from rotorid.model.modelfile import load_channel_map, load_model
     from rotorid.plugin.manager import create
     from rotorid.simulation.simulator import simulated_maneuvers
 
@@ -94,7 +94,9 @@ def run(args) -> int:
     values = None
     if args.values is not None:
         structure, values = read_values(Path(args.values), structure)
-    maneuvers = _load_inputs(args.inputs, args.hold, structure.units.name)
+    maneuvers = _load_inputs(args.inputs, args.hold, structure.units.name,
+                             {"signals": structure.signals,
+                              "channels": load_channel_map(args.model)})
     check_delays(structure, maneuvers, values)
     simulated = simulated_maneuvers(structure, values, maneuvers)
     paths = create("data-sources", "files", hold=args.hold).save(simulated, args.out, format=args.format)

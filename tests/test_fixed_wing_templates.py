@@ -1,0 +1,132 @@
+"""Fixed-wing templates: known terms by hand, output equations (α = w/U0, q̇ = ΣM, specific
+forces) against independent references, and sensitivities against finite differences.
+
+References: the small-perturbation body-axis equations (e.g. Etkin & Reid, *Dynamics of Flight*,
+ch. 4) written out below by hand; the delayed simulation against the fine-step trapezoidal
+solution of :mod:`delay_reference`; q̇'s analytic response against jω times q's.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from delay_reference import sampled_outputs
+from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
+from rotorid.errors import StructureError
+from rotorid.simulation.simulator import Simulator, sensitivities
+from rotorid.simulation.transfer import frequency_response, response_sensitivities
+from rotorid.units import G_SI
+
+U0, W0, THETA0 = 50.0, 2.0, math.atan2(2.0, 50.0)
+CONDITION = FlightCondition(u0=U0, w0=W0, theta0=THETA0)
+VALUES = {"X_u": -0.04, "X_w": 0.08, "X_elevator": 0.5, "X_throttle": 2.0, "Z_u": -0.3,
+          "Z_w": -2.0, "Z_q": -1.5, "Z_elevator": -6.0, "M_u": 0.01, "M_w": -0.08,
+          "M_q": -2.5, "M_elevator": -12.0, "tau_M_elevator": 0.065}
+
+
+def _structure(**delays):
+    structure = ModelStructure.populated(CONDITION, "fixed-wing-longitudinal", "si")
+    keep = {name for name in VALUES if not name.startswith("tau_")}
+    structure = structure.without(*[n for n in structure.names if n not in keep])
+    return structure.with_delays(["M_elevator"], upper=0.5)
+
+
+def test_longitudinal_known_terms_match_the_hand_derivation():
+    structure = _structure()
+    assert structure.states == ("u", "w", "q", "theta")
+    assert structure.outputs == ("u", "alpha", "q", "theta", "q_dot", "ax", "az")
+    g = G_SI
+    expected_a = np.array([[0, 0, -W0, -g * math.cos(THETA0)],
+                           [0, 0, U0, -g * math.sin(THETA0)],
+                           [0, 0, 0, 0],
+                           [0, 0, 1, 0]])
+    np.testing.assert_allclose(structure.known_state_matrix(), expected_a, atol=1e-12)
+    expected_c = np.zeros((7, 4))
+    expected_c[0, 0] = expected_c[2, 2] = expected_c[3, 3] = 1.0
+    expected_c[1, 1] = 1.0 / U0
+    np.testing.assert_allclose(structure.known_output_matrix(), expected_c, atol=1e-15)
+    measured = structure.known_terms().measured
+    assert [(structure.outputs[j], structure.states[i]) for j, i in zip(*np.nonzero(measured))] \
+        == [("q_dot", "q"), ("ax", "u"), ("az", "w")]
+
+
+def test_lateral_template_reads_beta_in_the_unit_systems_angle_unit():
+    structure = ModelStructure.populated(CONDITION, "fixed-wing-lateral", "flight-test")
+    assert structure.controls == ("aileron", "rudder")
+    c = structure.known_output_matrix()
+    u0_ft = U0 / 0.3048
+    assert c[structure.outputs.index("beta"), structure.states.index("v")] == pytest.approx(
+        180.0 / math.pi / u0_ft)
+    assert structure.signals.outputs["beta"].unit == "deg"
+
+
+def test_alpha_and_beta_need_forward_flight():
+    with pytest.raises(StructureError, match="needs forward flight"):
+        ModelStructure.populated(FlightCondition(), "fixed-wing-longitudinal").known_terms()
+
+
+def _maneuvers(hold):
+    dt = 0.02
+    t = np.arange(0.0, 6.0 + dt / 2, dt)
+    elevator = np.where((t > 0.5) & (t < 1.5), 0.02, 0.0) - np.where((t > 1.5) & (t < 2.5),
+                                                                      0.02, 0.0)
+    throttle = np.where(t > 3.0, 0.1, 0.0)
+    inputs = np.column_stack([elevator, throttle])
+    maneuver = Maneuver("doublet", t, np.zeros((t.size, 0)), np.zeros((t.size, 0)),
+                        input_names=(), output_names=(), units="si",
+                        extra_channels={"elevator": elevator, "throttle": throttle})
+    return t, inputs, ManeuverSet([maneuver], hold=hold)
+
+
+@pytest.mark.parametrize("hold", ["zoh", "foh"])
+def test_delayed_simulation_matches_the_fine_step_reference(hold):
+    structure = _structure()
+    t, inputs, maneuvers = _maneuvers(hold)
+    simulated = Simulator(structure, maneuvers).outputs(VALUES)[0]
+    reference = sampled_outputs(structure, structure.as_vector(VALUES), t, inputs, 0.02, hold,
+                                fine=0.001)
+    scale = np.max(np.abs(reference), axis=0)
+    np.testing.assert_allclose(simulated / scale, reference / scale, atol=2e-4)
+
+
+def test_q_dot_response_is_j_omega_times_the_q_response():
+    structure = _structure()
+    omega = np.logspace(-1, 1.5, 40)
+    response = frequency_response(structure, VALUES, omega)
+    q, q_dot = structure.outputs.index("q"), structure.outputs.index("q_dot")
+    np.testing.assert_allclose(response[:, q_dot], 1j * omega[:, None] * response[:, q],
+                               rtol=1e-10)
+    alpha, w = structure.outputs.index("alpha"), structure.outputs.index("az")
+    assert np.all(np.isfinite(response[:, alpha])) and np.any(response[:, w])
+
+
+def test_sensitivities_match_central_differences():
+    structure = _structure()
+    _, _, maneuvers = _maneuvers("zoh")
+    values = structure.as_vector(VALUES)
+    outputs, exact = sensitivities(structure, values, maneuvers)
+    simulator = Simulator(structure, maneuvers)
+    for k, name in enumerate(structure.parameter_names):
+        step = 1e-6 * max(1.0, abs(values[k]))
+        up, down = values.copy(), values.copy()
+        up[k] += step
+        down[k] -= step
+        numeric = (simulator.outputs(up)[0] - simulator.outputs(down)[0]) / (2 * step)
+        scale = np.max(np.abs(numeric)) + 1e-12
+        np.testing.assert_allclose(exact[0][:, k, :] / scale, numeric / scale, atol=1e-5,
+                                   err_msg=name)
+
+
+def test_frequency_sensitivities_match_central_differences():
+    structure = _structure()
+    omega = np.array([0.5, 2.0, 8.0])
+    values = structure.as_vector(VALUES)
+    _, exact = response_sensitivities(structure, values, omega)
+    for k in range(values.size):
+        step = 1e-7 * max(1.0, abs(values[k]))
+        up, down = values.copy(), values.copy()
+        up[k] += step
+        down[k] -= step
+        numeric = (frequency_response(structure, up, omega)
+                   - frequency_response(structure, down, omega)) / (2 * step)
+        np.testing.assert_allclose(exact[:, k], numeric, rtol=1e-5, atol=1e-7)
