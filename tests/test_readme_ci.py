@@ -117,8 +117,12 @@ def test_conventions_csv_example_reads(tmp_path):
     assert maneuver.n_samples == 2 and maneuver.channel("q")[1] == 0.3
 
 
-def test_conventions_model_file_example_parses():
-    (example,) = [b for b in fenced(ROOT / "docs" / "conventions.md", "toml")
-                  if b.startswith("units")]
-    structure = parse_model(tomllib.loads(example), "docs/conventions.md")
+def test_conventions_model_file_examples_parse():
+    template, declared = [b for b in fenced(ROOT / "docs" / "conventions.md", "toml")
+                          if b.startswith("units")]
+    structure = parse_model(tomllib.loads(template), "docs/conventions.md")
     assert len(structure.names) == 58 and structure.derivative("M_w").fixed
+    aeroplane = parse_model(tomllib.loads(declared + '[derivatives.M_elevator]\n'),
+                            "docs/conventions.md")
+    assert aeroplane.outputs == ("V", "alpha", "q", "theta", "q_dot", "ax", "az")
+    assert aeroplane.names == ("M_elevator",)
