@@ -12,8 +12,9 @@ from rotorid.simulation.transfer import frequency_response, response_sensitiviti
 from rotorid.verification.compare import default_omega
 from rotorid.verification.frequency import FrequencyResponse, response_from_maneuvers
 from rotorid_envelopes.cost import MismatchCost
-from rotorid_frequency_response.cost import MismatchProblem
-from rotorid_frequency_response.estimator import FrequencyResponseEstimator
+from rotorid_frequency_response.cost import Mismatch, MismatchProblem
+from rotorid_frequency_response.estimator import FrequencyResponseEstimator, varied_starts
+from rotorid_frequency_response.levenberg_marquardt import Settings, run
 from rotorid_frequency_response.pairs import pair_data
 from rotorid_signals.signals import Sweep
 
@@ -184,3 +185,51 @@ def test_errors_name_the_problem_and_the_fix():
     sweeps = _sweeps(structure, TRUTH, noise=0.0, seed=0).select(axis="lat")
     with pytest.raises(rotorid.EstimationError, match="no sweep excites 'long'"):
         FrequencyResponseEstimator(pairs=["q/long"]).estimate(structure, sweeps)
+
+
+def test_varied_starts_keep_signs_zeros_and_delays():
+    structure = _structure(("L_p", "L_lat", "M_q", "M_long", "N_lat"))
+    start = structure.as_vector({**TRUTH, "N_lat": 0.0})
+    starts = varied_starts(structure, start, 5, seed=1)
+    assert len(starts) == 5 and np.array_equal(starts[0], start)
+    delay = structure.is_delay()
+    for varied in starts[1:]:
+        assert np.array_equal(varied[delay], start[delay])
+        assert np.array_equal(np.sign(varied), np.sign(start))
+        ratio = varied[~delay & (start != 0)] / start[~delay & (start != 0)]
+        assert np.all(ratio != 1.0)
+    with pytest.raises(rotorid.EstimationError, match="starts must be a whole number"):
+        FrequencyResponseEstimator(starts=0)
+
+
+def test_several_starts_keep_the_lowest_cost_of_the_single_fits():
+    """The multi-start result is the best of the fits from each varied start alone."""
+    structure = _structure()
+    sweeps = _sweeps(structure, TRUTH, noise=0.3, seed=2)
+    single = FrequencyResponseEstimator(pairs=PAIRS)
+    data = single.fit_data(sweeps)
+    start = structure.as_vector({**TRUTH, "tau_L_lat": 0.0, "tau_M_long": 0.0}) * 2.0
+    costs = [single.estimate(structure, data, start=s).cost
+             for s in varied_starts(structure, start, 3, seed=4)]
+    best = FrequencyResponseEstimator(pairs=PAIRS, starts=3, seed=4).estimate(
+        structure, data, start=start)
+    assert best.cost == pytest.approx(min(costs), rel=1e-12)
+    assert any(note.startswith("best of 3 starts") for note in best.notes)
+
+
+def test_levenberg_marquardt_converges_on_a_curved_valley():
+    """Rosenbrock's valley as residuals (e = [10(θ₂ − θ₁²), 1 − θ₁], minimum 0 at (1, 1)):
+    the accelerated steps follow the curve to the minimum within the iteration limit."""
+
+    class Valley:
+        def evaluate(self, values, jacobian=True):
+            x, y = values
+            residuals = np.array([10.0 * (y - x * x), 1.0 - x])
+            matrix = np.array([[-20.0 * x, 10.0], [-1.0, 0.0]]) if jacobian else None
+            return Mismatch(residuals, matrix, (float(residuals @ residuals),))
+
+    result = run(Valley(), np.array([-1.2, 1.0]), (np.full(2, -np.inf), np.full(2, np.inf)),
+                 Settings(max_iterations=200, cost_tolerance=1e-14))
+    assert result.converged
+    assert np.allclose(result.values, [1.0, 1.0], atol=1e-5)
+    assert all(b < a for a, b in zip(result.cost_history, result.cost_history[1:]))

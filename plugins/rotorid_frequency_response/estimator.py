@@ -37,12 +37,35 @@ NAME = "frequency-response"
 START_STRATEGIES = ("auto", "initial", "equation-error")
 #: The factor between JᵀJ of the residual vector and Tischler's Hessian approximation.
 HESSIAN_SCALE = 10.0
+#: σ of the log-normal factors that vary the gains of the random starts.
+START_SPREAD = 0.5
 
 
 def _check_start(instance, attribute, value):
     if value not in START_STRATEGIES:
         raise EstimationError(f"start must be one of {', '.join(START_STRATEGIES)}, got "
                               f"{value!r}")
+
+
+def _check_starts(instance, attribute, value):
+    if isinstance(value, bool) or not (isinstance(value, int) and value >= 1):
+        raise EstimationError(f"starts must be a whole number ≥ 1, got {value!r}")
+
+
+def varied_starts(model: ModelStructure, start: np.ndarray, count: int, seed: int
+                  ) -> list[np.ndarray]:
+    """``start`` (P,) and ``count − 1`` random variations of it: every gain multiplied by
+    e^(σξ), ξ standard normal and σ = ``START_SPREAD`` (signs and zeros kept); the delays
+    keep their start values (a random delay of a few tenths of a second turns the phase by
+    more than 180° within the J band and starts the fit where J cannot guide it)."""
+    rng = np.random.default_rng(seed)
+    gain = ~model.is_delay()
+    varied = [np.asarray(start, dtype=float)]
+    for _ in range(count - 1):
+        values = varied[0].copy()
+        values[gain] *= np.exp(START_SPREAD * rng.standard_normal(int(np.sum(gain))))
+        varied.append(values)
+    return varied
 
 
 @attrs.frozen
@@ -62,6 +85,9 @@ class FrequencyResponseEstimator:
         enforce_signs: use the derivatives' sign priors as bounds.
         start: ``"auto"`` (equation error on the sweeps when every initial derivative is
             zero, else the initial values), ``"initial"`` or ``"equation-error"``.
+        starts: fits from the start values and from ``starts − 1`` random variations of
+            them (:func:`varied_starts`, drawn with ``seed``); the lowest J wins. The cost
+            of a structure with many weakly determined parameters has many local minima.
 
     Every accepted iteration is reported through the ``rotorid_estimation_iteration`` hook
     (stage ``""``, cost J, rmse sqrt(J_ave/20)).
@@ -78,6 +104,8 @@ class FrequencyResponseEstimator:
     step_tolerance: float = 1e-10
     enforce_signs: bool = False
     start: str = attrs.field(default="auto", validator=_check_start)
+    starts: int = attrs.field(default=1, validator=_check_starts)
+    seed: int = 0
 
     def fit_data(self, data) -> tuple[PairData | str, ...]:
         """What :meth:`estimate` matches, from a :class:`ManeuverSet` of sweeps (see
@@ -118,9 +146,24 @@ class FrequencyResponseEstimator:
                    lm_lambda=lam)
 
         settings = Settings(self.max_iterations, self.cost_tolerance, self.step_tolerance)
+        starts, results = varied_starts(model, start_values, self.starts, self.seed), []
         with blas.single_threaded():
-            result = run(problem, start_values, self._bounds(model), settings, progress)
-        return self._estimate(model, fitted, result, start_values, problem.n_points, notes)
+            for values in starts:
+                if np.isfinite(problem.evaluate(np.clip(values, *self._bounds(model)),
+                                                jacobian=False).cost):
+                    results.append(run(problem, values, self._bounds(model), settings,
+                                       progress))
+                else:
+                    results.append(None)       # a random start without a response
+        best = min((k for k, r in enumerate(results) if r is not None),
+                   key=lambda k: results[k].mismatch.cost)
+        if self.starts > 1:
+            notes.append(f"best of {self.starts} starts: start {best} "
+                         f"({'the start values' if best == 0 else 'varied'}); J per start: "
+                         + ", ".join("—" if r is None else f"{r.mismatch.cost:.1f}"
+                                     for r in results))
+        return self._estimate(model, fitted, results[best], starts[best], problem.n_points,
+                              notes)
 
     def pair_costs(self, model: ModelStructure, values, data) -> dict[str, float]:
         """J per pair of ``model`` at ``values`` (vector or name mapping) on ``data`` (as
