@@ -104,7 +104,7 @@ class FlightCase:
     rule: str = "lowest-rmse"
     rmse_tolerance: float = 0.01
     warm_start: bool = False
-    delay_derivatives: tuple[str, ...] = PAPER_DELAYED
+    delay_derivatives: tuple[str, ...] | None = None   # None: the paper's that the structure has
     delay_initial: float = 0.0
     delay_upper: float = 0.3
     delay_threshold: float = 20.0        # the paper's Cramér-Rao threshold
@@ -116,6 +116,12 @@ class FlightCase:
     compare_band_max: float | None = None
     quick_settings: Mapping = attrs.field(factory=dict, converter=dict)
     is_quick: bool = False
+
+    @property
+    def delayed(self) -> tuple[str, ...]:
+        """The derivatives to delay: ``[delays] derivatives``, by default the paper's eight
+        (those the reduced structure still has are delayed)."""
+        return PAPER_DELAYED if self.delay_derivatives is None else self.delay_derivatives
 
     @property
     def data_source(self) -> str:

@@ -115,7 +115,7 @@ def _structure_names(case, where: str) -> tuple[str, ...]:
 
 
 def _check_delays(case, names: tuple[str, ...], where: str) -> None:
-    unknown = [name for name in case.delay_derivatives if name not in names]
+    unknown = [name for name in case.delay_derivatives or () if name not in names]
     if unknown:
         raise DataFileError(f"{where}: [delays] derivatives {', '.join(unknown)} are not in "
                             f"the case's structure; delay only derivatives it declares")

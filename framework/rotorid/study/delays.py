@@ -30,7 +30,7 @@ def with_delays(case: FlightCase, selected: ReductionStep, ident: ManeuverSet, e
                 directory: Path) -> tuple[ModelStructure, Estimate, tuple[str, ...]]:
     """The selected structure with the case's delays, its estimate and the derivatives whose
     delays were dropped; reused from ``directory/delays.json`` when it holds this step's."""
-    delayed = selected.structure.with_delays(case.delay_derivatives, case.delay_initial,
+    delayed = selected.structure.with_delays(case.delayed, case.delay_initial,
                                              case.delay_upper)
     saved = load_delays(directory, selected.index)
     if saved is not None:

@@ -29,7 +29,7 @@ from typing import Protocol
 
 import attrs
 
-from rotorid.data import ManeuverSet
+from rotorid.data import ALL_CHANNELS, ManeuverSet
 from rotorid.errors import DataError, DataWarning, IdentifiabilityWarning, StudyError
 from rotorid.estimation.data_checks import check_fit_data
 from rotorid.estimation.reduction import ReductionPath, ReductionStep, reduce
@@ -84,13 +84,26 @@ def load_data(case: FlightCase, directory: Path) -> tuple[CaseData, FlightCondit
     """The case's data from its data source (which may store them in ``directory``) and the
     trim: the source's, or else the case's ``[condition]`` table."""
     source = create("data-sources", case.data_source)
-    data = source.case_data(case.data_settings, Path(directory))
+    data = source.case_data(_data_settings(case, source), Path(directory))
     if data.condition is not None:
         return data, data.condition
     if not case.condition:
         raise DataError(f"case {case.name}: the {case.data_source!r} data source gives no "
                         f"trim; add a [condition] table (airspeed_kt, theta0_deg, phi0_deg)")
     return data, FlightCondition.from_mapping(case.condition)
+
+
+def _data_settings(case: FlightCase, source) -> Mapping:
+    """The case's data settings, plus the structure's signals (``signals``) when the
+    structure names channels beyond the helicopter's and the source reads signals (the files
+    source: a maneuver then takes the model's own inputs and outputs)."""
+    settings = dict(case.data_settings)
+    if "signals" not in getattr(source, "ingestion_settings", ()):
+        return settings
+    signals = base_structure(case, FlightCondition(), "flight-test").signals
+    if any(name not in ALL_CHANNELS for name in signals.all.names):
+        settings["signals"] = signals
+    return settings
 
 
 def base_structure(case: FlightCase, condition: FlightCondition, units: str) -> ModelStructure:
