@@ -13,6 +13,7 @@ from rotorid.study.case import FlightCase
 from rotorid.study.pipeline import run_case
 from rotorid.study.result import MODELS
 from rotorid.verification.metrics import rmse
+from rotorid.verification.shifts import simulate_with_shifts
 
 TINY = Path(__file__).parent / "cases" / "tiny.toml"
 PAIRS = ["q/long", "p/lat"]
@@ -64,13 +65,27 @@ def test_comparison_recomputes_from_the_estimates(compared):
             assert recorded["rmse"] == pytest.approx(direct)
         assert record[label]["time_metrics"]["time"]["rmse"] == pytest.approx(
             result.time_metrics[label].rmse)
+        # with biases and shifts fitted: recomputed, and never above the plain simulation's
+        for method, values in (("time", result.estimates[label].as_mapping()),
+                               ("frequency", fitted.values)):
+            shifted = record[label]["shifted_metrics"][method]
+            plain = record[label]["time_metrics"][method]
+            try:
+                outputs = simulate_with_shifts(structure, values, multisteps).outputs
+            except SimulationDivergedError:
+                assert shifted is None
+                continue
+            assert shifted["rmse"] == pytest.approx(
+                rmse([m.outputs for m in multisteps], list(outputs)))
+            assert shifted["rmse"] <= plain["rmse"] * (1.0 + 1e-12)
 
 
 def test_report_section_lists_both_fits(compared):
     result, _ = compared
     rows = comparison_cost_rows(result)
     assert rows[0] == ["model", "pair", "time-domain fit", "frequency-domain fit"]
-    assert {row[1] for row in rows[1:]} >= {"J q/long", "J p/lat", "multistep RMSE"}
+    assert {row[1] for row in rows[1:]} >= {"J q/long", "J p/lat", "multistep RMSE",
+                                            "multistep RMSE, biases and shifts fitted"}
     section = comparison_html(result)
     assert "Frequency-domain fit beside the time-domain fit" in section
     assert "Cramér-Rao" in section
