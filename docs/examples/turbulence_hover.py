@@ -57,7 +57,8 @@ def truth_values(source, structure: ModelStructure) -> dict[str, float]:
     values = {}
     for d in structure.derivatives:
         row = structure.states.index(structure.equation_of(d))
-        values[d.name] = float(b[row, structure.controls.index(d.variable)] if structure.is_control(d)
+        values[d.name] = float(b[row, structure.controls.index(d.variable)]
+                               if structure.is_control(d)
                                else a[row, structure.states.index(d.variable)])
     return values
 

@@ -41,7 +41,7 @@ from rotorid.data import ManeuverSet
 from rotorid.errors import EstimationError, SimulationDivergedError
 from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.models import LinearModel
-from rotorid.model.structure import ACCELERATION_OUTPUT, ModelStructure
+from rotorid.model.structure import ModelStructure
 from rotorid.plugin.manager import notify
 from rotorid.simulation.discretisation import COMPLEX_STEP
 from rotorid_output_error.levenberg_marquardt import Settings, run
@@ -88,20 +88,22 @@ def process_noise_states(structure: ModelStructure, names: tuple[str, ...] | Non
 def process_noise_start(structure: ModelStructure, states: tuple[str, ...],
                         variance: np.ndarray, dt: float) -> dict[str, float]:
     """Default start of ``F_<state>`` (structure units per sample): a tenth of the noise size
-    of an output that measures the state, either the state itself (σ) or, for a velocity,
-    the specific force of its equation (σ·dt, the change over one sample).
+    of an output that measures the state, either the state itself (σ) or an output that reads
+    its equation's derivative terms, such as a velocity's specific force (σ·dt, the change
+    over one sample).
 
     ``variance`` (p,) is the start of R over the structure's outputs.
     """
-    measured = structure.known_output_matrix()
+    known = structure.known_terms()
     starts = {}
     for state in states:
-        direct = np.flatnonzero(measured[:, structure.states.index(state)])
-        rate = ACCELERATION_OUTPUT.get(state)
+        column = structure.states.index(state)
+        direct = np.flatnonzero(known.c[:, column])
+        rate = np.flatnonzero(known.measured[:, column])
         if direct.size:
             size = np.sqrt(variance[direct[0]])
-        elif rate in structure.outputs:
-            size = np.sqrt(variance[structure.outputs.index(rate)]) * dt
+        elif rate.size:
+            size = np.sqrt(variance[rate[0]]) * dt
         else:
             raise EstimationError(
                 f"no output measures state {state} or its rate, so F_{state} has no default "

@@ -249,7 +249,7 @@ def rigid_body_terms(template: StructureTemplate, condition, units: UnitSystem) 
     n, m, p = len(template.states), len(template.controls), len(template.outputs)
     c, measured = np.zeros((p, n)), np.zeros((p, n))
     for row, name in enumerate(template.outputs):
-        state = {"ax": "u", "ay": "v", "az": "w"}.get(name)
+        state = {out: velocity for velocity, out in ACCELERATION_OUTPUT.items()}.get(name)
         if name.endswith(DERIVATIVE_SUFFIX):
             state = name[: -len(DERIVATIVE_SUFFIX)]
         if state is not None and state in template.states:
