@@ -12,11 +12,10 @@ import tomllib
 import numpy as np
 import pytest
 from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
-from rotorid.errors import EstimationError, StructureError
+from rotorid.errors import StructureError
 from rotorid.model.modelfile import format_model, parse_model
 from rotorid.model.statespace import responding_outputs, state_space
 from rotorid.model.templates import TEMPLATES
-from rotorid.plugin.manager import create
 from rotorid.simulation.simulator import sensitivities
 from rotorid.simulation.transfer import frequency_response, response_sensitivities
 from rotorid.units import FOOT, G_SI
@@ -159,9 +158,3 @@ def test_a_lateral_structure_exports_with_its_own_signals():
     for ours, reference in zip((system.a, system.b, system.c, system.d), lateral.matrices()):
         np.testing.assert_array_equal(ours, reference)
     assert responding_outputs(lateral)["ped"] == ("ay", "p", "phi", "r")
-
-
-def test_the_filter_error_estimator_names_the_template_it_cannot_fit():
-    longitudinal, _ = _paired_structures()
-    with pytest.raises(EstimationError, match="six-dof structures only, not the longitudinal"):
-        create("estimators", "filter-error").estimate(longitudinal, _maneuvers(2))
