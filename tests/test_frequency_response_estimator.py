@@ -1,5 +1,6 @@
 """The frequency-response estimator: its cost and Jacobian, exact and noisy recovery."""
 
+import types
 import warnings
 
 import numpy as np
@@ -13,7 +14,12 @@ from rotorid.verification.compare import default_omega
 from rotorid.verification.frequency import FrequencyResponse, response_from_maneuvers
 from rotorid_envelopes.cost import MismatchCost
 from rotorid_frequency_response.cost import Mismatch, MismatchProblem
-from rotorid_frequency_response.estimator import FrequencyResponseEstimator, varied_starts
+from rotorid_frequency_response.estimator import (
+    FrequencyResponseEstimator,
+    best_start,
+    unstable_poles_above,
+    varied_starts,
+)
 from rotorid_frequency_response.levenberg_marquardt import Settings, run
 from rotorid_frequency_response.pairs import pair_data
 from rotorid_signals.signals import Sweep
@@ -233,3 +239,24 @@ def test_levenberg_marquardt_converges_on_a_curved_valley():
     assert result.converged
     assert np.allclose(result.values, [1.0, 1.0], atol=1e-5)
     assert all(b < a for a, b in zip(result.cost_history, result.cost_history[1:]))
+
+
+def test_unstable_poles_above_the_band_are_found_and_passed_over():
+    """A roll-rate model with L_p = +300 1/s has its pole at +300 rad/s (above a 20 rad/s
+    band); L_p = +0.5 is unstable but inside the band, L_p = −3 is stable."""
+    structure = _structure(("L_p", "L_lat"), delays=())
+    poles = unstable_poles_above(structure, {"L_p": 300.0, "L_lat": 0.9}, 20.0)
+    assert poles == pytest.approx([300.0])
+    for slow in (0.5, -3.0):
+        assert unstable_poles_above(structure, {"L_p": slow, "L_lat": 0.9}, 20.0).size == 0
+
+    def result(l_p, cost):
+        return types.SimpleNamespace(values=structure.as_vector({"L_p": l_p, "L_lat": 0.9}),
+                                     mismatch=types.SimpleNamespace(cost=cost))
+
+    best, notes = best_start(structure, [result(-3.0, 50.0), result(300.0, 10.0), None],
+                              20.0)
+    assert best == 0
+    assert "10.0 (unstable pole above the band)" in notes[0] and "—" in notes[0]
+    best, notes = best_start(structure, [result(300.0, 10.0)], 20.0)
+    assert best == 0 and "unstable poles above the J band (20 rad/s): 300" in notes[0]

@@ -24,6 +24,7 @@ from rotorid.data import ManeuverSet
 from rotorid.errors import EstimationError
 from rotorid.estimation.equation_error import equation_error_start
 from rotorid.estimation.estimate import Estimate
+from rotorid.model.statespace import state_space
 from rotorid.model.structure import ModelStructure
 from rotorid.plugin.manager import notify
 from rotorid.verification.frequency import FrequencyResponse
@@ -86,8 +87,10 @@ class FrequencyResponseEstimator:
         start: ``"auto"`` (equation error on the sweeps when every initial derivative is
             zero, else the initial values), ``"initial"`` or ``"equation-error"``.
         starts: fits from the start values and from ``starts − 1`` random variations of
-            them (:func:`varied_starts`, drawn with ``seed``); the lowest J wins. The cost
-            of a structure with many weakly determined parameters has many local minima.
+            them (:func:`varied_starts`, drawn with ``seed``); the lowest J wins among the
+            fits whose model has no unstable pole above the J band
+            (:func:`unstable_poles_above`). The cost of a structure with many weakly
+            determined parameters has many local minima.
 
     Every accepted iteration is reported through the ``rotorid_estimation_iteration`` hook
     (stage ``""``, cost J, rmse sqrt(J_ave/20)).
@@ -155,13 +158,8 @@ class FrequencyResponseEstimator:
                                        progress))
                 else:
                     results.append(None)       # a random start without a response
-        best = min((k for k, r in enumerate(results) if r is not None),
-                   key=lambda k: results[k].mismatch.cost)
-        if self.starts > 1:
-            notes.append(f"best of {self.starts} starts: start {best} "
-                         f"({'the start values' if best == 0 else 'varied'}); J per start: "
-                         + ", ".join("—" if r is None else f"{r.mismatch.cost:.1f}"
-                                     for r in results))
+        best, selection_notes = best_start(model, results, max(p.omega.max() for p in fitted))
+        notes += selection_notes
         return self._estimate(model, fitted, results[best], starts[best], problem.n_points,
                               notes)
 
@@ -242,6 +240,41 @@ class FrequencyResponseEstimator:
                            if (np.isfinite(lo) and v <= lo) or (np.isfinite(hi) and v >= hi)),
             notes=(*notes, "J per pair: " + ", ".join(
                 f"{p.pair} {c:.1f}" for p, c in zip(pairs, costs))))
+
+
+def unstable_poles_above(structure: ModelStructure, values, omega_max: float) -> np.ndarray:
+    """The eigenvalues (rad/s) of the model's delay-free dynamics matrix in the right
+    half-plane with modulus above ``omega_max`` (rad/s), fastest first.
+
+    The J points cannot determine such a pole: below its modulus a real pole at +a looks like
+    a gain and a lag of about 1/a s, which a fit uses in place of the rotor's lag, while the
+    model's time response diverges within about 1/a s.
+    """
+    poles = np.linalg.eigvals(state_space(structure, values).a)
+    fast = poles[(poles.real > 0) & (np.abs(poles) > omega_max)]
+    return fast[np.argsort(-np.abs(fast))]
+
+
+def best_start(model: ModelStructure, results, omega_max: float) -> tuple[int, list[str]]:
+    """The index of the lowest-J run whose model has no unstable pole above ``omega_max``
+    (the lowest-J run when every one has), and the notes on the choice."""
+    ran = [k for k, r in enumerate(results) if r is not None]
+    fast = {k: unstable_poles_above(model, results[k].values, omega_max) for k in ran}
+    admissible = [k for k in ran if not fast[k].size] or ran
+    best = min(admissible, key=lambda k: results[k].mismatch.cost)
+    notes = []
+    if len(results) > 1:
+        notes.append(f"best of {len(results)} starts: start {best} "
+                     f"({'the start values' if best == 0 else 'varied'}); J per start: "
+                     + ", ".join("—" if r is None else f"{r.mismatch.cost:.1f}"
+                                 + (" (unstable pole above the band)" if fast[k].size else "")
+                                 for k, r in enumerate(results)))
+    if fast[best].size:
+        notes.append(f"the model has unstable poles above the J band ({omega_max:.3g} rad/s): "
+                     + ", ".join(f"{p:.4g}" for p in fast[best]) + " rad/s; the J points "
+                     "cannot determine them and its time response diverges: fit the "
+                     "delays the structure lacks or end the band lower")
+    return best, notes
 
 
 def _equivalent_db(cost: float, n_pairs: int) -> float:
