@@ -221,3 +221,7 @@ def test_a_step_is_shortened_along_its_direction_to_stay_within_the_bounds():
     step = bounded_step(np.eye(2), np.array([-2.0, -2.0]), 0.0, np.array([1.0, 0.0]),
                          np.array([-np.inf, -np.inf]), np.array([1.0, np.inf]))
     np.testing.assert_allclose(step, [0.0, 2.0], rtol=1e-9)
+    # Projected instead: the first parameter stops at its bound, the other goes all the way.
+    step = bounded_step(np.eye(2), np.array([-2.0, -2.0]), 0.0, np.array([0.5, 0.0]),
+                         np.array([-np.inf, -np.inf]), np.array([1.0, np.inf]), shorten=False)
+    np.testing.assert_allclose(step, [0.5, 2.0], rtol=1e-9)

@@ -100,7 +100,7 @@ def test_filtered_output_sensitivities_match_finite_differences():
         down[k] -= step
         (nu_up, b_up), (nu_down, b_down) = problem.innovations(up), problem.innovations(down)
         expected = (nu_up - nu_down) / (2 * step)
-        assert sens[:, :, k] == pytest.approx(expected, rel=1e-5, abs=1e-6 * np.abs(
+        assert sens[..., k] == pytest.approx(expected, rel=1e-5, abs=1e-6 * np.abs(
             expected).max()), name
         assert d_innovation[k] == pytest.approx((b_up - b_down) / (2 * step), rel=1e-5,
                                                 abs=1e-9), name

@@ -48,7 +48,7 @@ from rotorid_output_error.levenberg_marquardt import Settings, run
 
 from .kalman import Records, innovation_blocks
 from .riccati import steady_state_filter
-from .system import companion_system
+from .system import companion_system, seen_states
 
 NAME = "filter-error"
 #: Default start of F relative to the measurement-noise size of the state's output: small,
@@ -75,13 +75,21 @@ def _names(value) -> tuple[str, ...] | None:
 def process_noise_states(structure: ModelStructure, names: tuple[str, ...] | None
                          ) -> tuple[str, ...]:
     """The states the process noise enters, in the structure's state order: ``names``, or by
-    default the states of the structure's force and moment equations."""
+    default the states of the structure's force and moment equations that the outputs see
+    (:func:`seen_states`; noise on a state they cannot see changes no innovation, and leaves
+    the filter without a steady state when that state's mode is not stable)."""
+    seen = seen_states(structure)
     if names is None:
-        return tuple(structure.states[i] for i in structure.equation_rows)
+        return tuple(structure.states[i] for i in structure.equation_rows if seen[i])
     unknown = [s for s in names if s not in structure.states]
     if unknown:
         raise EstimationError(f"process_noise names {', '.join(unknown)}, not states of the "
                               f"structure ({', '.join(structure.states)}); choose among those")
+    unseen = [s for s in names if not seen[structure.states.index(s)]]
+    if unseen:
+        raise EstimationError(f"process_noise names {', '.join(unseen)}, which no output of "
+                              f"the structure sees (noise there changes no innovation); leave "
+                              f"{'it' if len(unseen) == 1 else 'them'} out")
     return tuple(s for s in structure.states if s in names)
 
 
@@ -162,7 +170,8 @@ class FilterErrorProblem:
         self.settings = settings
         self.n_samples = self.records.n_samples
         self.process_noise = process_noise
-        self.noise_rows = [structure.states.index(s) for s in process_noise]
+        kept = [structure.states[i] for i in np.flatnonzero(seen_states(structure))]
+        self.noise_rows = [kept.index(s) for s in process_noise]
         self.n_structure = structure.n_parameters
         self.output_names = structure.outputs
         self.parameter_names = (tuple(structure.parameter_names)
@@ -183,14 +192,16 @@ class FilterErrorProblem:
         system = companion_system(self.structure, theta, self.records.dt, self.hold,
                                   n_f + r.size if directions else None)
         n_dir = system.transition.shape[0]
-        f_dir = np.repeat(f[None].astype(system.transition.dtype), n_dir, axis=0)
+        q_dir = np.repeat((f**2)[None].astype(system.transition.dtype), n_dir, axis=0)
         r_dir = np.repeat(r[None].astype(system.transition.dtype), n_dir, axis=0)
         if directions:
             k = self.n_structure
-            f_dir[k + np.arange(n_f), np.arange(n_f)] += 1j * COMPLEX_STEP
+            # ∂(F²)/∂F = 2F as the imaginary part, the real part left exactly F² (the complex
+            # square (F + ih)² would add −h², a negative variance where F = 0)
+            q_dir[k + np.arange(n_f), np.arange(n_f)] += 2j * COMPLEX_STEP * f
             r_dir[k + n_f + np.arange(r.size), np.arange(r.size)] += 1j * COMPLEX_STEP
         process = np.zeros((n_dir, system.size, system.size), dtype=system.transition.dtype)
-        process[:, self.noise_rows, self.noise_rows] = f_dir**2
+        process[:, self.noise_rows, self.noise_rows] = q_dir
         return system, steady_state_filter(system.transition, system.output, process, r_dir)
 
     def innovations(self, values) -> tuple[np.ndarray, np.ndarray]:
@@ -236,13 +247,13 @@ class FilterErrorProblem:
         whiten = np.linalg.cholesky(b_inv)                           # B⁻¹ = W Wᵀ
 
         def products(block, d_block):
-            flat = np.moveaxis(d_block @ whiten, 2, 0).reshape(p, -1)   # (P, L·M·p)
-            return flat @ flat.T, flat @ (block @ whiten).reshape(-1)
+            flat = d_block.reshape(-1, p)                                # (L·M·p_out, P)
+            return flat.T @ flat, flat.T @ block.reshape(-1)
 
         # the products of one block run on a second thread while the filter steps the next
         with ThreadPoolExecutor(max_workers=1) as pool:
-            parts = [pool.submit(products, block, d_block)
-                     for _, block, d_block in innovation_blocks(system, steady, self.records)]
+            parts = [pool.submit(products, block, d_block) for _, block, d_block
+                     in innovation_blocks(system, steady, self.records, whiten)]
             information = sum(part.result()[0] for part in parts)
             gradient = sum(part.result()[1] for part in parts)
         db = b_inv @ (steady.innovation.imag / COMPLEX_STEP)          # B⁻¹ ∂B/∂θ_i
@@ -293,7 +304,10 @@ class FilterErrorEstimator:
                                   "structures (ModelStructure); use output error for a model "
                                   "of one's own")
         with blas.single_threaded():
-            settings = Settings(self.max_iterations, self.cost_tolerance, self.step_tolerance)
+            # projected steps: in still air every F heads for its bound 0, and one F just above
+            # it would otherwise shorten every step (the fit then stalls far from the optimum)
+            settings = Settings(self.max_iterations, self.cost_tolerance, self.step_tolerance,
+                                shorten_steps=False)
             problem = FilterErrorProblem(structure, maneuvers,
                                          process_noise_states(structure, self.process_noise),
                                          settings)
@@ -370,15 +384,16 @@ class FilterErrorEstimator:
 
     def _estimate(self, problem, result, start, bounds, note) -> Estimate:
         lower, upper = bounds
-        at_bound = tuple(n for n, v, lo, hi in zip(problem.parameter_names, result.values,
+        values, information = result.values, result.information
+        at_bound = tuple(n for n, v, lo, hi in zip(problem.parameter_names, values,
                                                    lower, upper)
                          if (np.isfinite(lo) and v <= lo) or (np.isfinite(hi) and v >= hi))
         notes = ([note] if note else []) + [
             "cost exp(2L/N) = det B·exp(mean νᵀB⁻¹ν); RMSE of the innovations; "
             "noise_covariance is the measurement noise R"]
         return Estimate.from_fit(
-            problem, result.values, result.information, estimator=NAME, start=start,
-            noise_covariance=np.diag(problem.split(result.values)[-1]), cost=result.cost,
+            problem, values, information, estimator=NAME, start=start,
+            noise_covariance=np.diag(problem.split(values)[-1]), cost=result.cost,
             rmse=result.rmse, n_samples=problem.n_samples, cost_history=result.cost_history,
             rmse_history=result.rmse_history, iterations=result.iterations,
             converged=result.converged, stop_reason=result.stop_reason, at_bound=at_bound,

@@ -26,8 +26,20 @@ from rotorid.simulation.simulator import lagged_sources
 from .riccati import SteadyStateFilter
 from .system import CompanionSystem
 
-#: Time samples per block handed to the caller.
-BLOCK = 128
+#: Values of one (L, M, D, S) block array of the sensitivity pass: 1 MB, so that a block's
+#: arrays stay in cache (the block-wide products are memory-bound: on the paper-size problem
+#: a Gauss-Newton pass took 0.06 s of CPU with 1 MB blocks, 0.10 s with 2 MB and 0.13–0.4 s
+#: with 128 samples per block, 20 MB).
+BLOCK_VALUES = 2**17
+#: Time samples per block: at least (the Python overhead per block), and at most.
+BLOCK_LIMITS = (4, 256)
+
+
+def block_length(count: int, directions: int, size: int) -> int:
+    """Time samples per block for ``count`` maneuvers, ``directions`` parameter directions
+    and ``size`` companion states (:data:`BLOCK_VALUES`, within :data:`BLOCK_LIMITS`)."""
+    low, high = BLOCK_LIMITS
+    return int(np.clip(BLOCK_VALUES // max(count * directions * size, 1), low, high))
 
 
 @attrs.frozen(eq=False)
@@ -105,17 +117,19 @@ def _run(start: np.ndarray, transition_t: np.ndarray, forcing: np.ndarray) -> np
     return states
 
 
-def innovation_blocks(system: CompanionSystem, steady: SteadyStateFilter,
-                      records: Records) -> Iterator[tuple[int, np.ndarray, np.ndarray | None]]:
+def innovation_blocks(system: CompanionSystem, steady: SteadyStateFilter, records: Records,
+                      weight: np.ndarray | None = None
+                      ) -> Iterator[tuple[int, np.ndarray, np.ndarray | None]]:
     """Yield ``(first, ν, ∂ν)`` for samples first … first+L−1: innovations ν (L, M, p) and,
     when ``system`` and ``steady`` hold complex-step directions, their derivatives ∂ν
-    (L, M, D, p) (else None).
+    (L, M, p, D) (else None); with ``weight`` W (p, p) both multiplied by it, ν W.
 
     The step runs in closed-loop form x̃_n+1 = A x̃_n + e_n with A = Φ(I − KH) and
     e_n = Σ Pu u + ΦK (z_n − Σ Du u). The sensitivities ∂x̃ obey the same A, forced by ∂A x̃_n
-    + ∂e_n, in real arithmetic: per block the predicted states are run first, then every
-    forcing term and every output product is one large product over the block, and only the
-    step ∂x̃ @ Aᵀ of all maneuvers and directions stays inside the time loop.
+    + ∂e_n, in real arithmetic: per block the predicted states are run first, then the
+    forcing of every direction and the direct part of ∂ν are each one product of the block's
+    regressors [u, z − Du u, x̃] with a weight matrix built once, and only the step ∂x̃ @ Aᵀ of
+    all maneuvers and directions stays inside the time loop.
     """
     lagged = lagged_sources(records.inputs, system.taps)                           # (N, M, T)
     n, count = records.mask.shape
@@ -125,40 +139,40 @@ def innovation_blocks(system: CompanionSystem, steady: SteadyStateFilter,
     k, d_k = _nominal_and_derivative(correction)
     pu, d_pu = _nominal_and_derivative(system.state_forcing)
     du, d_du = _nominal_and_derivative(system.output_forcing)
-    size, n_y, n_x = a.shape[0], records.outputs.shape[2], records.x0.shape[1]
+    size, n_y = a.shape[0], h.shape[0]
+    weight = np.eye(n_y) if weight is None else weight
     a_t = np.ascontiguousarray(a.T)
     state = np.zeros((count, size))
-    state[:, :n_x] = records.x0
+    state[:, :system.states.size] = records.x0[:, system.states]
+    n_dir = 1 if d_a is None else d_a.shape[0]
     if d_a is not None:
-        n_dir = d_a.shape[0]
-        # (x̃ @ coupling)[m, d] = ((∂H x̃)ᵀ, (∂A x̃)ᵀ) of maneuver m and direction d
-        coupling = np.concatenate([d_h, d_a], axis=1).transpose(2, 0, 1).reshape(size, -1)
         sens = np.zeros((count * n_dir, size))                     # rows (maneuver, direction)
-        # inputs (…, T) @ these give the directions' forcing side by side, (…, D·S) / (…, D·p)
-        d_state_forcing = d_pu.transpose(1, 0, 2).reshape(d_pu.shape[1], -1)
-        d_output_forcing = d_du.transpose(1, 0, 2).reshape(d_du.shape[1], -1)
-        d_gain = d_k.transpose(2, 0, 1).reshape(n_y, -1)           # ∂(ΦK) applied to z − Du u
-    for first in range(0, n, BLOCK):
-        stop = min(first + BLOCK, n)
+        # regressors [u (T), z − Du u (p), x̃ (S)] @ drive = ∂e + ∂A x̃, columns (direction, S)
+        drive = np.concatenate([d_pu - d_du @ k.T, np.swapaxes(d_k, 1, 2),
+                                np.swapaxes(d_a, 1, 2)], axis=1)
+        drive = np.ascontiguousarray(np.moveaxis(drive, 0, 1).reshape(drive.shape[1], -1))
+        # regressors @ direct = (∂(z − Du u) − ∂H x̃) W, columns (output, direction)
+        direct = np.concatenate([-d_du, np.zeros((n_dir, n_y, n_y)),
+                                 -np.swapaxes(d_h, 1, 2)], axis=1) @ weight
+        direct = np.ascontiguousarray(np.moveaxis(direct, 0, 2).reshape(direct.shape[1], -1))
+        output_weight = weight.T @ h                                               # Wᵀ H
+    block = block_length(count, n_dir, size)
+    for first in range(0, n, block):
+        stop = min(first + block, n)
         length = stop - first
         inputs = lagged[first:stop]                                                # (L, M, T)
         mask = records.mask[first:stop, :, None]
         corrected = records.outputs[first:stop] - inputs @ du                      # (L, M, p)
         states = _run(state, a_t, inputs @ pu + corrected @ k.T)                   # (L, M, S)
-        innovations = (corrected - states @ h.T) * mask
+        innovations = ((corrected - states @ h.T) * mask) @ weight
         if d_a is None:
             yield first, innovations, None
             continue
-        rows = length * count
-        products = (states.reshape(rows, size) @ coupling).reshape(length, count, n_dir, -1)
-        flat_inputs = inputs.reshape(rows, -1)
-        d_corrected = -(flat_inputs @ d_output_forcing).reshape(length, count, n_dir, n_y)
-        d_drive = ((flat_inputs @ d_state_forcing + corrected.reshape(rows, n_y) @ d_gain)
-                   .reshape(length, count, n_dir, size)
-                   + (d_corrected.reshape(-1, n_y) @ k.T).reshape(length, count, n_dir, size)
-                   + products[..., n_y:])
-        d_states = _run(sens, a_t, d_drive.reshape(length, count * n_dir, size))
-        d_innovations = (d_corrected - products[..., :n_y]
-                         - (d_states.reshape(-1, size) @ h.T).reshape(length, count, n_dir, n_y)
-                         ) * mask[..., None]
+        regressors = np.concatenate([inputs, corrected, states], axis=2).reshape(
+            length * count, -1)
+        d_states = _run(sens, a_t, (regressors @ drive).reshape(length, count * n_dir, size))
+        d_innovations = ((regressors @ direct).reshape(length, count, n_y, n_dir)
+                         - (output_weight @ np.swapaxes(
+                             d_states.reshape(length * count, n_dir, size), 1, 2)
+                            ).reshape(length, count, n_y, n_dir)) * mask[..., None]
         yield first, innovations, d_innovations

@@ -8,6 +8,8 @@ delayed model between samples (delays as lags plus fractional-interval integrals
 Stacking x_n with the delayed state samples the maps read gives the delay-free companion system
 z_n+1 = Φ z_n + Σ_j Pu[j] u_n−j, y_n = H z_n + Σ_j Du[j] u_n−j, on which the Kalman filter runs
 unchanged: the delays are states of the filter. Process noise enters the physical states only.
+States the outputs cannot see (:func:`seen_states`) are left out: they change no output, and
+an unobserved mode that is not stable would leave the filter without a steady state.
 
 For sensitivities the system is built for complex parameter vectors θ + i·h·e_k, one per
 direction k, from the maps' derivatives (the complex step of the discretisation itself).
@@ -21,18 +23,33 @@ from rotorid.model.structure import ModelStructure
 from rotorid.simulation.discretisation import COMPLEX_STEP, discrete_maps
 
 
+def seen_states(structure: ModelStructure) -> np.ndarray:
+    """(n,) True for the states the outputs see, directly or through other states, in the
+    structure's pattern (every free parameter taken as non-zero)."""
+    a, _, c, _ = structure.matrices(np.ones(structure.n_parameters))
+    seen = np.any(c != 0, axis=0)
+    while True:
+        wider = seen | np.any(a[seen] != 0, axis=0)
+        if np.array_equal(wider, seen):
+            return seen
+        seen = wider
+
+
 @attrs.frozen(eq=False)
 class CompanionSystem:
     """Per direction (leading axis D), S companion states, T input taps.
 
     Attributes:
-        transition: Φ (D, S, S); the first n companion states are the structure's states.
+        states: indices of the structure's states the system keeps (the seen ones); they are
+            its first companion states.
+        transition: Φ (D, S, S).
         output: H (D, p, S), p the structure's outputs.
         taps: ((lag, control column), …) the inputs u_n−lag the forcing reads.
         state_forcing: (D, T, S) weights: the state forcing at n is lagged(u)[n] @ weights.
         output_forcing: (D, T, p) the same for the outputs' direct terms.
     """
 
+    states: np.ndarray
     transition: np.ndarray
     output: np.ndarray
     taps: tuple
@@ -60,8 +77,9 @@ def _columns(stack: np.ndarray) -> np.ndarray:
 
 def companion_system(structure: ModelStructure, values, dt: float, hold: str,
                      extra_directions: int | None = None) -> CompanionSystem:
-    """The companion system at ``values`` (structure parameters); with ``extra_directions``
-    (an int ≥ 0) one complex direction per structure parameter, then that many nominal ones."""
+    """The companion system of the states the outputs see at ``values`` (structure
+    parameters); with ``extra_directions`` (an int ≥ 0) one complex direction per structure
+    parameter, then that many nominal ones."""
     varied = extra_directions is not None
     maps = discrete_maps(structure, values, dt, hold, with_derivatives=varied)
     extra = extra_directions or 0
@@ -99,5 +117,10 @@ def companion_system(structure: ModelStructure, values, dt: float, hold: str,
             state_forcing[:, t, :n_x] = pu[lag][:, :, c]
         if lag in du:
             output_forcing[:, t, :] = du[lag][:, :, c]
-    return CompanionSystem(transition, output, tuple(taps), state_forcing, output_forcing)
+    seen = seen_states(structure)
+    keep = np.concatenate([np.flatnonzero(seen),
+                           [slot for (c, _), slot in slots.items() if seen[c]]]).astype(int)
+    return CompanionSystem(np.flatnonzero(seen), transition[:, keep][:, :, keep],
+                           output[:, :, keep], tuple(taps), state_forcing[:, :, keep],
+                           output_forcing)
 

@@ -48,6 +48,7 @@ class Settings:
     factor: float = 10.0
     noise: str = "full"              # "full" or "diagonal" R
     max_tries: int = 12              # λ increases per iteration before giving up
+    shorten_steps: bool = True       # bounded_step's rule at the bounds (False: projection)
 
 
 @attrs.frozen
@@ -156,9 +157,10 @@ class Problem:
         return gauss_newton_products(self.model, values, self.maneuvers, residuals, weighting)
 
 
-def predicted_change(f, g, values, bounds, n_samples: int) -> float:
-    """Relative decrease of det R predicted by the Gauss-Newton model for the bounded full step."""
-    step = bounded_step(f, g, 0.0, values, *bounds)
+def predicted_change(f, g, values, bounds, n_samples: int, shorten: bool = True) -> float:
+    """Relative decrease of det R predicted by the Gauss-Newton model for the bounded full step
+    (``shorten`` as :func:`~rotorid.estimation.steps.bounded_step`'s)."""
+    step = bounded_step(f, g, 0.0, values, *bounds, shorten=shorten)
     return float(-(2.0 * g @ step + step @ f @ step) / n_samples)
 
 
@@ -190,7 +192,7 @@ def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | Non
     while iteration < settings.max_iterations:
         accepted = False
         for _ in range(settings.max_tries):
-            step = bounded_step(f, g, lam, values, lower, upper)
+            step = bounded_step(f, g, lam, values, lower, upper, settings.shorten_steps)
             trial = np.clip(values + step, lower, upper)
             trial_cost, trial_r, trial_residuals, trial_rmse = problem.evaluate(trial)
             if trial_cost < cost:
@@ -220,7 +222,8 @@ def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | Non
             break
         f, g = problem.gauss_newton(values, r, residuals)
         current = True
-        if predicted_change(f, g, values, bounds, problem.n_samples) < settings.cost_tolerance:
+        if predicted_change(f, g, values, bounds, problem.n_samples,
+                            settings.shorten_steps) < settings.cost_tolerance:
             reason, converged = "predicted cost change below tolerance", True
             break
     if final_information and not current:

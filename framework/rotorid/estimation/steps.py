@@ -5,14 +5,16 @@ from __future__ import annotations
 import numpy as np
 
 
-def bounded_step(f, g, lam, values, lower, upper):
+def bounded_step(f, g, lam, values, lower, upper, shorten: bool = True):
     """Solve (F + λ·diag F) Δ = −G within bounds; returns Δ (P,).
 
     F (P, P) is a Gauss-Newton information matrix, G (P,) the gradient, ``values`` (P,) the
     current parameters and ``lower``/``upper`` (P,) their bounds. Parameters at a bound whose
     step points outward are frozen and the step is solved again for the others; the step is
-    then shortened so that no parameter crosses its bound. Diagonal (Marquardt) scaling lets
-    parameters of very different magnitudes converge together.
+    then shortened so that no parameter crosses its bound (``shorten``), or else each
+    parameter that would cross stops at its bound (a projection: a parameter just inside its
+    bound and heading for it then does not shrink the whole step). Diagonal (Marquardt)
+    scaling lets parameters of very different magnitudes converge together.
     """
     p = values.size
     scale = np.sqrt(np.maximum(np.diag(f), 1e-12 * max(np.max(np.diag(f)), 1e-300)))
@@ -30,6 +32,8 @@ def bounded_step(f, g, lam, values, lower, upper):
         if not np.any(blocked):
             break
         free &= ~blocked
+    if not shorten:
+        return np.clip(values + step, lower, upper) - values
     with np.errstate(divide="ignore", invalid="ignore"):
         room = np.where(step > 0, (upper - values) / step,
                         np.where(step < 0, (lower - values) / step, np.inf))
