@@ -78,6 +78,26 @@ def test_one_parameter_by_name():
         estimate["M_w"]
 
 
+def test_restricted_keeps_the_full_fits_statistics_of_the_named_parameters():
+    # F couples M_q with tau_L_lat.
+    information = np.array([[4.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.5],
+                            [0.0, 0.0, 16.0, 0.0], [0.0, 0.5, 0.0, 1.0]])
+    estimate = Estimate.from_fit(STRUCTURE, [0.5, -2.0, 0.25, 0.04], information, RESIDUALS,
+                                 estimator="hand")
+    part = estimate.restricted(("M_q", "L_p"))
+    assert part.parameter_names == ("M_q", "L_p")
+    assert part.values.tolist() == [-2.0, 0.5] and part.start.tolist() == [-1.5, 0.0]
+    # the M_q–tau block [[1, 0.5], [0.5, 1]] has inverse diagonal 1/0.75: the bound of the
+    # fit with every parameter, not of the 2×2 block kept
+    assert part.cramer_rao.tolist() == pytest.approx([math.sqrt(1 / 0.75), 0.5])
+    assert part.insensitivity.tolist() == [1.0, 0.5]
+    assert part.information.tolist() == [[1.0, 0.0], [0.0, 4.0]]
+    assert part.sign_violations == ("L_p",) and part.cost == estimate.cost
+    assert estimate.restricted(estimate.parameter_names) is estimate
+    with pytest.raises(EstimationError, match="no estimated parameter 'F_q'"):
+        estimate.restricted(("F_q",))
+
+
 def test_the_record_round_trips_through_json():
     estimate = fitted(notes=("a note",), at_bound=("M_q",))
     record = json.loads(json.dumps(estimate.as_dict()))

@@ -139,6 +139,35 @@ def test_criteria_are_asked_in_order_the_first_proposal_wins():
     assert _reduction([cramer_rao, insensitivity], False)[0] == "M_q"
 
 
+class WithNoiseParameters(ConstructedEstimator):
+    """Adds an estimator's own parameters to every estimate, as filter error adds F_* and R_*:
+    far worse determined than any derivative."""
+
+    def estimate(self, structure, maneuvers, *, start=None):
+        own = super().estimate(structure, maneuvers, start=start)
+        names = own.parameter_names + ("F_q", "R_q")
+        information = np.zeros((len(names), len(names)))
+        information[:-2, :-2] = own.information
+        information[-2:, -2:] = np.eye(2) * 1e-6
+        return estimate_of(information, np.ones(len(names)), names, rmse=own.rmse)
+
+
+def test_reduction_removes_only_the_structures_derivatives():
+    """Criteria see the structure's parameters only: an estimator's own parameters are never
+    proposed, even by a criterion that takes any name, and their presence changes nothing."""
+    plain = _reduction([rotorid.create("reduction-criteria", "cramer-rao")], True)
+    assert _reduction([rotorid.create("reduction-criteria", "cramer-rao")], True,
+                      estimator=WithNoiseParameters()) == plain
+
+    class AnyName:
+        def propose(self, estimate):
+            worst = int(np.argmax(estimate.cramer_rao_pct))
+            return rotorid.Removal(estimate.parameter_names[worst], "any", 1.0, 0.0, "worst")
+
+    removed = _reduction([AnyName()], False, estimator=WithNoiseParameters())
+    assert sorted(removed) == sorted(NAMES)
+
+
 def test_continue_to_zero_removes_by_the_last_criteria_ranking():
     lenient = [rotorid.create("reduction-criteria", "insensitivity", threshold=1e6),
                rotorid.create("reduction-criteria", "cramer-rao", threshold=1e6)]

@@ -263,6 +263,26 @@ class Estimate:
         """Name → value of the estimated parameters."""
         return dict(zip(self.parameter_names, self.values.tolist()))
 
+    def restricted(self, names) -> "Estimate":
+        """This estimate seen on some of its parameters, ``names`` in that order (e.g. a
+        structure's ``parameter_names``, leaving out filter error's noise parameters ``F_*``
+        and ``R_*``): their values, start values, Cramér-Rao bounds, insensitivities and
+        correlations as estimated with every parameter, and their block of the information
+        matrix. Returns this estimate itself when ``names`` are all of its parameters."""
+        names = tuple(names)
+        if names == self.parameter_names:
+            return self
+        index = [self.index(n) for n in names]
+        block = np.ix_(index, index)
+        kept = set(names)
+        return attrs.evolve(
+            self, parameter_names=names, values=self.values[index], start=self.start[index],
+            cramer_rao=self.cramer_rao[index], insensitivity=self.insensitivity[index],
+            correlation=self.correlation[block], information=self.information[block],
+            sign_violations=[n for n in self.sign_violations if n in kept],
+            at_bound=[n for n in self.at_bound if n in kept],
+            unidentifiable=[c for c in self.unidentifiable if kept.intersection(c)])
+
     @property
     def cramer_rao_pct(self) -> np.ndarray:
         """Normalised Cramér-Rao bounds |CR/Θ|·100 (inf where Θ = 0)."""

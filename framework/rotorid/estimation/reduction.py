@@ -172,7 +172,10 @@ def reduce(structure: ModelStructure, maneuvers, estimator, criteria: Sequence, 
             record(ReductionStep(0, None, estimator.estimate(structure, maneuvers), structure))
         while steps[-1].structure.free_derivatives:
             last = steps[-1]
-            removal = _propose(criteria, last.estimate, continue_to_zero)
+            # the criteria see the structure's derivatives only, never an estimator's own
+            # parameters (filter error's noise F_* and R_*)
+            removal = _propose(criteria, last.estimate.restricted(last.structure.parameter_names),
+                               continue_to_zero)
             if removal is None:
                 break
             reduced = last.structure.without(removal.parameter)

@@ -7,7 +7,9 @@ Per case (``<out>/<case>/``):
   ``tables/verification.csv`` and, for a case with a truth model, ``tables/checks.csv`` (the
   paper's claims, measured); with ``[compare] frequency`` ``tables/comparison_costs.csv``
   and ``tables/comparison_parameters.csv`` (the frequency-domain fit beside the time-domain
-  fit); every column states its unit;
+  fit); with ``[compare] estimators`` ``tables/estimators.csv`` and
+  ``tables/estimator_fits.csv`` (the estimators' fits of the model with delays side by side);
+  every column states its unit;
 * ``report.html`` linking all of it: a table of contents, a summary (selected structure,
   verdicts, what fails), captions under every figure and one section (anchor
   ``pair-<out>-<in>``) per verified pair.
@@ -42,6 +44,7 @@ from rotorid.report.figures import (
 from rotorid.study.claims import PAPER_SOURCES, claims_tally, mean_phase_error, paper_claims
 from rotorid.study.expectations import check_signs, derivative_unit
 from rotorid.study.result import KEY_DERIVATIVES, MODELS
+from rotorid.units import CHANNEL_KINDS, unit_system
 from rotorid.verification.compare import COHERENCE_THRESHOLD
 from rotorid.verification.envelopes import MISMATCH_COST_GUIDELINE_TEXT
 
@@ -63,8 +66,16 @@ def _number(value, digits: int = 4) -> str:
 
 
 def parameter_unit(name: str, units: str) -> str:
-    """Unit of an estimated parameter: s for a delay, else the derivative's unit."""
-    return "s" if delayed_derivative(name) else derivative_unit(name, units)
+    """Unit of an estimated parameter: s for a delay, the state's unit for filter error's
+    process noise ``F_<state>`` (per sample), the output's unit squared for its measurement
+    noise ``R_<output>``, else the derivative's unit."""
+    if delayed_derivative(name):
+        return "s"
+    kind, _, signal = name.partition("_")
+    if kind in ("F", "R") and signal in CHANNEL_KINDS:
+        label = unit_system(units).label(signal)
+        return label if kind == "F" else f"({label})²"
+    return derivative_unit(name, units)
 
 
 def removed_rows(result) -> list[list[str]]:
@@ -176,7 +187,7 @@ def comparison_parameter_rows(result) -> list[list[str]]:
              "frequency: CR"]]
     for label, comparison in result.frequency_comparison.items():
         fits = (result.estimates[label], comparison.frequency_estimate)
-        for name in fits[0].parameter_names:
+        for name in fits[1].parameter_names:
             row = [label, name]
             for estimate in fits:
                 i = estimate.index(name)
@@ -206,6 +217,69 @@ def comparison_html(result) -> str:
         _html_table(comparison_cost_rows(result)),
         "<h3>Estimates with Cramér-Rao bounds</h3>",
         _html_table(comparison_parameter_rows(result))])
+
+
+def estimator_rows(result) -> list[list[str]]:
+    """With ``[compare] estimators``: every estimator's values and Cramér-Rao bounds of the
+    model with delays, side by side (and the truth linearisation when there is one)."""
+    comparison = result.estimator_comparison
+    estimates = comparison.estimates
+    truth = result.truth_derivatives if has_truth_model(result) else None
+    units = result.estimates["with delays"].units
+    header = ["parameter", "unit"]
+    for name in estimates:
+        header += [f"{name}: value", f"{name}: CR"]
+    rows = [header + ([] if truth is None else ["truth linearisation"])]
+    names = list(dict.fromkeys(n for e in estimates.values() for n in e.parameter_names))
+    for parameter in names:
+        row = [parameter, parameter_unit(parameter, units)]
+        for estimate in estimates.values():
+            if parameter in estimate:
+                item = estimate[parameter]
+                row += [_number(item.value), _number(item.cramer_rao, 3)]
+            else:
+                row += ["", ""]
+        if truth is not None:
+            row.append(_number(truth.get(parameter)))
+        rows.append(row)
+    return rows
+
+
+def estimator_fit_rows(result) -> list[list[str]]:
+    """With ``[compare] estimators``: each fit's iterations, its own cost and RMSE, and its
+    model's simulation of the identification maneuvers (RMSE, det R), and its time."""
+    rows = [["estimator", "iterations [-]", "converged", "own cost [-]",
+             "own RMSE [mixed units]", "simulation RMSE [mixed units]",
+             "simulation det R [mixed units]", "fit time [s]"]]
+    comparison = result.estimator_comparison
+    for name, estimate in comparison.estimates.items():
+        simulation = comparison.simulation[name]
+        rows.append([name, str(estimate.iterations), "yes" if estimate.converged else "no",
+                     _number(estimate.cost), _number(estimate.rmse),
+                     "diverges" if simulation is None else _number(simulation.metrics.rmse),
+                     "diverges" if simulation is None else _number(simulation.det_r),
+                     "the case's fit" if name == result.case.estimator
+                     else f"{comparison.seconds[name]:.1f}"])
+    return rows
+
+
+def estimators_html(result) -> str:
+    """The case report's section on the estimators side by side (empty unless the case ran
+    them)."""
+    if result.estimator_comparison is None:
+        return ""
+    return "\n".join([
+        '<h2 id="estimators">Estimators side by side</h2>',
+        f"<p>The model with delays, chosen with <code>{html.escape(result.case.estimator)}"
+        "</code>, fitted by each estimator to the same identification maneuvers from that "
+        "estimator's values (an estimator's own parameters, such as filter error's process "
+        "noise F and measurement noise R, from their defaults). Own cost and RMSE are each "
+        "estimator's (filter error: exp(2L/N) and the RMSE of the innovations); the "
+        "simulation columns judge every fitted model alike: its simulation of the "
+        "identification maneuvers, the RMSE and det R of those residuals.</p>",
+        _html_table(estimator_fit_rows(result)),
+        "<h3>Estimates with Cramér-Rao bounds</h3>",
+        _html_table(estimator_rows(result))])
 
 
 def _csv(rows: Sequence[Sequence[str]]) -> str:
@@ -382,7 +456,10 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
                     for t in ("removed", "parameters", "key_derivatives", "verification",
                               *(("checks",) if claims else ()),
                               *(("comparison_costs", "comparison_parameters")
-                                if result.frequency_comparison else ()))) + ".</p>",
+                                if result.frequency_comparison else ()),
+                              *(("estimator_fits", "estimators")
+                                if result.estimator_comparison is not None else ())))
+        + ".</p>",
         '<h2 id="summary">Summary</h2>', summary_html(result, claims)]
     if claims:
         contents.append(("claims", "The paper's claims, measured"))
@@ -428,6 +505,9 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
     if result.frequency_comparison:
         contents.append(("comparison", "Frequency-domain fit"))
         body.append(comparison_html(result))
+    if result.estimator_comparison is not None:
+        contents.append(("estimators", "Estimators side by side"))
+        body.append(estimators_html(result))
     return _page(f"rotorid study — case {result.name}", "\n".join(body), contents)
 
 
@@ -450,6 +530,9 @@ def write_case_outputs(result, directory: str | Path) -> Path:
         atomic_write(tables / "comparison_costs.csv", _csv(comparison_cost_rows(result)))
         atomic_write(tables / "comparison_parameters.csv",
                      _csv(comparison_parameter_rows(result)))
+    if result.estimator_comparison is not None:
+        atomic_write(tables / "estimator_fits.csv", _csv(estimator_fit_rows(result)))
+        atomic_write(tables / "estimators.csv", _csv(estimator_rows(result)))
     return atomic_write(directory / "report.html", case_html(result, figures, claims))
 
 

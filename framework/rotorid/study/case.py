@@ -46,7 +46,7 @@ _TABLES = {
     "delays": {"derivatives", "initial", "upper", "threshold", "starts", "seed",
                "profile_points"},
     "quick": {"duration_scale", "continue_to_zero", "warm_start", "delay_profile_points"},
-    "compare": {"frequency", "pairs", "band_max"},
+    "compare": {"frequency", "pairs", "band_max", "estimators"},
 }
 _TOP_LEVEL = {"name", "description", *_TABLES}
 #: Case settings by table and key: the :class:`FlightCase` field and its converter.
@@ -67,6 +67,7 @@ _FIELDS = {
     ("compare", "frequency"): ("compare_frequency", bool),
     ("compare", "pairs"): ("compare_pairs", tuple),
     ("compare", "band_max"): ("compare_band_max", float),
+    ("compare", "estimators"): ("compare_estimators", tuple),
 }
 
 #: What each converter of :data:`_FIELDS` reads, for the error messages.
@@ -84,7 +85,8 @@ class FlightCase:
     With ``compare_frequency`` each identified model is also fitted to the verification
     sweeps' frequency responses (:mod:`rotorid.study.comparison`) on ``compare_pairs``
     (default: the verification pairs) up to ``compare_band_max`` rad/s (default: each pair's
-    coherent range).
+    coherent range). With ``compare_estimators`` each listed estimator also fits the model
+    with delays to the identification data (:mod:`rotorid.study.estimator_comparison`).
     ``delay_profile_points`` is the number of grid values in [0, ``delay_upper``] of each kept
     delay's profile (0: no profiles).
     """
@@ -114,6 +116,7 @@ class FlightCase:
     compare_frequency: bool = False
     compare_pairs: tuple[str, ...] = ()
     compare_band_max: float | None = None
+    compare_estimators: tuple[str, ...] = ()
     quick_settings: Mapping = attrs.field(factory=dict, converter=dict)
     is_quick: bool = False
 
@@ -194,8 +197,10 @@ class FlightCase:
         return attrs.evolve(self, data={**self.data, "seed": int(seed)})
 
     def as_dict(self) -> dict:
-        """Plain settings, as recorded in ``result.json``."""
-        return attrs.asdict(self)
+        """Plain settings, as recorded in ``result.json``; ``compare_estimators`` only when
+        set, so that cases without it keep the record they had before it existed."""
+        return attrs.asdict(self, filter=lambda a, v: not (a.name == "compare_estimators"
+                                                           and not v))
 
 
 def _tables(mapping: Mapping, source: str) -> dict[str, dict]:

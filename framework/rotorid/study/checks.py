@@ -62,7 +62,8 @@ def check_case(case, where: str) -> None:
 
 
 def _check_compare(case, where: str) -> None:
-    """The ``[compare]`` settings: the frequency-domain estimator, the pairs and the band."""
+    """The ``[compare]`` settings: the frequency-domain estimator, the pairs and the band,
+    and the estimators compared on the identification data."""
     if case.compare_frequency:
         check_registered("estimators", FREQUENCY_ESTIMATOR, where, "[compare] frequency needs "
                          "the estimator")
@@ -75,6 +76,27 @@ def _check_compare(case, where: str) -> None:
     if band_max is not None and not (math.isfinite(band_max) and band_max > 0):
         raise DataFileError(f"{where}: [compare] band_max must be a positive frequency in "
                             f"rad/s (e.g. 10.0), got {band_max!r}")
+    _check_compared_estimators(case, where)
+
+
+def _check_compared_estimators(case, where: str) -> None:
+    names = case.compare_estimators
+    if not names:
+        return
+    key = "[compare] estimators"
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise DataFileError(f"{where}: {key} names {', '.join(twice)} twice; name each once")
+    for name in names:
+        check_registered("estimators", name, where, key)
+    if FREQUENCY_ESTIMATOR in names:
+        raise DataFileError(f"{where}: {key}: {FREQUENCY_ESTIMATOR} fits the sweeps' "
+                            f"frequency responses, not the identification time histories; "
+                            f"use [compare] frequency = true for it")
+    if set(names) <= {case.estimator}:
+        raise DataFileError(f"{where}: {key} names only the case's own estimator "
+                            f"({case.estimator}); add another, e.g. estimators = "
+                            f"[\"output-error\", \"filter-error\"]")
 
 
 def _check_name(name: str, where: str) -> None:

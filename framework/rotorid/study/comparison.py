@@ -100,7 +100,8 @@ def compare_frequency_fit(structure: ModelStructure, time_estimate: Estimate,
         fitted = estimator.estimate(structure, fit_data,
                                     start=equation_error_start(structure, sweeps))
     seconds = time.perf_counter() - clock
-    estimates = {"time": time_estimate.as_mapping(), "frequency": fitted.values}
+    estimates = {"time": time_estimate.restricted(structure.parameter_names).values,
+                 "frequency": fitted.values}
     return FrequencyComparison(
         fitted,
         {m: estimator.pair_costs(structure, estimates[m], fit_data) for m in METHODS},

@@ -7,6 +7,7 @@ For every :class:`~rotorid.study.case.FlightCase`::
     + delays on the surviving rotor-affected derivatives ─► re-estimation ─► delay profiles
     verification: time-domain metrics and sweep frequency responses of both models
     (+ with [compare] frequency: each model's structure fitted to the sweeps' responses)
+    (+ with [compare] estimators: the model with delays fitted by each listed estimator)
     ─► CaseResult ─► result.json, figures, report
 
 Results live in ``<out>/<case>/``: ``data/`` (what the data source stores), ``steps/`` (one
@@ -47,6 +48,7 @@ from rotorid.study.case import FlightCase
 from rotorid.study.checks import check_case, check_cases
 from rotorid.study.comparison import compare_frequency_fit
 from rotorid.study.delays import delay_profiles, with_delays
+from rotorid.study.estimator_comparison import EstimatorComparison, compare_estimators
 from rotorid.study.persistence import load_steps, prepare_directory, save_result, save_step
 from rotorid.study.result import MODELS, CaseResult
 from rotorid.study.truth import truth_derivatives, truth_equivalent_delays
@@ -181,19 +183,21 @@ def _verify(case: FlightCase, structures, estimates, ident: ManeuverSet,
     """Time-domain metrics on the identification data and sweep verification (when there
     are verification data) of both models, by model label. Pairs the data or the model cannot
     produce are skipped, with the reason in a progress line and in the verification's notes."""
-    metrics = {label: time_domain_metrics(ident, simulate(structures[label],
-                                                          estimates[label].values, ident))
+    values = {label: estimates[label].restricted(structures[label].parameter_names).values
+              for label in MODELS}
+    metrics = {label: time_domain_metrics(ident, simulate(structures[label], values[label],
+                                                          ident))
                for label in MODELS}
     if verif is None:
         return metrics, {}
-    selection = producible_pairs(structures["with delays"], estimates["with delays"].values,
-                                 verif, case.pairs)
+    selection = producible_pairs(structures["with delays"], values["with delays"], verif,
+                                 case.pairs)
     skipped = [f"{pair} not verified: {reason}" for pair, reason in selection.skipped.items()]
     for note in skipped:
         report(case.name, note)
     verification = {}
     for label in MODELS if selection.pairs else ():
-        checked = verify_model(structures[label], estimates[label].values, verif,
+        checked = verify_model(structures[label], values[label], verif,
                                selection.pairs, case.envelopes)
         verification[label] = attrs.evolve(checked, notes=[*checked.notes, *skipped])
     return metrics, verification
@@ -220,6 +224,24 @@ def _compare(case: FlightCase, structures, estimates, metrics, ident: ManeuverSe
         report(case.name, f"frequency-domain fit ({label}): {iterations} iter, J "
                           f"{costs['frequency']:.1f} (time-domain fit's {costs['time']:.1f})")
     return comparisons
+
+
+def _compare_estimators(case: FlightCase, structure: ModelStructure, estimate,
+                        ident: ManeuverSet, report: Progress) -> EstimatorComparison | None:
+    """The model with delays fitted by every estimator of ``[compare] estimators`` (``None``
+    unless the case asks for it)."""
+    if not case.compare_estimators:
+        return None
+    comparison = compare_estimators(case.compare_estimators, case.estimator, structure,
+                                    estimate, ident)
+    for name, fitted in comparison.estimates.items():
+        simulation = comparison.simulation[name]
+        rmse = "diverges" if simulation is None else f"{simulation.metrics.rmse:.4f}"
+        fit = ("the case's own fit" if name == case.estimator
+               else f"{fitted.iterations} iter, {comparison.seconds[name]:.1f} s")
+        report(case.name, f"{name} fit of the model with delays: {fit}; simulation RMSE "
+                          f"{rmse}")
+    return comparison
 
 
 def _durations(clock: dict) -> dict:
@@ -278,13 +300,16 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     comparison = _compare(case, structures, estimates, metrics, ident, verif, report)
     if comparison:
         clock["frequency comparison"] = time.perf_counter()
+    estimators = _compare_estimators(case, delayed, delayed_estimate, ident, report)
+    if estimators is not None:
+        clock["estimator comparison"] = time.perf_counter()
     truth = data.truth
     result = CaseResult(
         case, condition, ident, verif, path, structures, estimates, metrics, verification,
         None if truth is None else truth_derivatives(truth, condition, structure),
         _durations(clock), dropped, resumed,
         None if truth is None else truth_equivalent_delays(truth, condition, delayed),
-        comparison, profiles)
+        comparison, profiles, estimators)
     save_result(directory, result)
     if report_writer is not None:
         report(case.name, "figures and report")

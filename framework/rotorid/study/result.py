@@ -16,6 +16,7 @@ from rotorid.notebook import case_result_html, case_result_summary
 from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase
 from rotorid.study.comparison import FrequencyComparison
+from rotorid.study.estimator_comparison import EstimatorComparison
 from rotorid.study.claims import paper_claims
 from rotorid.verification.compare import VerificationResult
 from rotorid.verification.equivalent_delays import EquivalentDelays
@@ -48,6 +49,8 @@ class CaseResult:
     # by model label, with [compare] frequency: the frequency-domain fit beside the model's
     frequency_comparison: Mapping[str, FrequencyComparison] = attrs.field(factory=dict)
     delay_profiles: tuple[DelayProfile, ...] = ()  # of each kept delay (estimation.profiles)
+    # with [compare] estimators: the model with delays fitted by each listed estimator
+    estimator_comparison: EstimatorComparison | None = None
 
     @property
     def name(self) -> str:
@@ -62,7 +65,9 @@ class CaseResult:
     def simulated(self, model: str, maneuvers: ManeuverSet | None = None) -> list[np.ndarray]:
         """Outputs of one identified model on ``maneuvers`` (default: identification data)."""
         data = self.identification if maneuvers is None else maneuvers
-        return simulate(self.structures[model], self.estimates[model].values, data)
+        structure = self.structures[model]
+        values = self.estimates[model].restricted(structure.parameter_names).values
+        return simulate(structure, values, data)
 
     def key_derivatives(self) -> dict:
         """Identified key derivatives of the delayed model, and the truth's linearisation."""
@@ -75,8 +80,10 @@ class CaseResult:
         return table
 
     def as_dict(self) -> dict:
-        """The ``result.json`` record."""
+        """The ``result.json`` record (``estimator_comparison`` only when the case ran it)."""
         path = self.path
+        comparison = ({} if self.estimator_comparison is None
+                      else {"estimator_comparison": self.estimator_comparison.summary()})
         return {
             "case": self.case.as_dict(),
             "condition": attrs.asdict(self.condition),
@@ -99,6 +106,7 @@ class CaseResult:
             "delay_profiles": [p.as_dict() for p in self.delay_profiles],
             "truth_equivalent_delays": (None if self.truth_delays is None
                                         else self.truth_delays.as_dict()),
+            **comparison,
             # What differs between an uninterrupted and a resumed run of the same case, and
             # nothing else: compare result files without this key.
             "timing": {"seconds": dict(self.seconds), "resumed_steps": self.resumed_steps},
