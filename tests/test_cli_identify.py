@@ -109,6 +109,8 @@ def test_identify_recovers_the_truth_and_writes_the_json(case, tmp_path, capsys)
     assert np.allclose(noise, NOISE, rtol=0.1)
     assert (out.parent / record["structure"]).resolve() == model.resolve()
     assert "[[Parameters]]" in captured.out and "M_long" in captured.out
+    assert record["data_warnings"] == []
+    assert "Data checks before the fit: no warning" in captured.out
     assert f"estimate written to {out}" in captured.out
     assert "[full] iteration" in captured.err and "RMSE" in captured.err
     assert not list(tmp_path.glob(".*.tmp"))
@@ -167,10 +169,19 @@ def test_warnings_are_one_line_each(case, tmp_path, capsys):
     out = tmp_path / "long_only.json"
     status = cli.main(["identify", str(model), str(data / "doublet_long.csv"), "--out", str(out),
                        "--quiet"])
-    err = capsys.readouterr().err
+    captured = capsys.readouterr()
+    err = captured.err
     assert status == 0, err
     lines = err.strip().splitlines()
     assert lines and all(line.startswith("rotorid identify: warning: ") for line in lines)
+    # the data checks' warnings (printed before the fit's own) are recorded and end the
+    # report, word for word
+    recorded = json.loads(out.read_text(encoding="utf-8"))["data_warnings"]
+    assert sum("never moves" in m for m in recorded) == 3
+    assert lines[:len(recorded)] == [f"rotorid identify: warning: {m}" for m in recorded]
+    report = captured.out.split("Data checks before the fit: ")[1].splitlines()
+    assert report[0] == f"{len(recorded)} warning(s)"
+    assert report[1:1 + len(recorded)] == [f"    {m}" for m in recorded]
     # only long moves: the derivatives of the other inputs are dropped before the fit
     for control, dropped in (("lat", "L_lat"), ("coll", "Z_coll"), ("ped", "N_ped")):
         assert any(line.startswith(

@@ -4,8 +4,11 @@ closed-loop data stay silent."""
 
 from __future__ import annotations
 
+import html
+import json
 import math
 import warnings
+from pathlib import Path
 
 import attrs
 import numpy as np
@@ -16,9 +19,13 @@ from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS
 from rotorid.errors import DataWarning
 from rotorid.estimation.kinematics import kinematic_fits
 from rotorid.estimation.sanity import check_before_fit, check_data
+from rotorid.model.modelfile import parse_model
+from rotorid.report.html import case_html, write_study_report
+from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase
-from rotorid.study.pipeline import checked_structure
+from rotorid.study.pipeline import Study, checked_structure
 from rotorid.units import FLIGHT_TEST
+from rotorid_files.formats import write_maneuver
 
 
 @pytest.fixture(scope="module")
@@ -194,8 +201,41 @@ def test_a_study_drops_unexcited_derivatives_and_reports_each_warning(model, cle
     structure, _ = model
     still = ManeuverSet([attrs.evolve(m, inputs=m.inputs * [1, 1, 0, 1]) for m in clean])
     lines = []
-    checked = checked_structure(FlightCase.load("hover"), structure, still,
-                                lambda case, message: lines.append((case, message)))
+    checked, messages = checked_structure(FlightCase.load("hover"), structure, still,
+                                          lambda case, message: lines.append((case, message)))
     assert {"Z_coll", "M_coll"}.isdisjoint(checked.names) and "Z_w" in checked.names
     assert lines == [("hover", line) for _, line in lines]
     assert any(line.startswith("warning: input 'coll' never moves") for _, line in lines)
+    assert [f"warning: {m}" for m in messages] == [line for _, line in lines]
+
+
+def test_a_study_records_its_data_warnings_and_its_report_shows_them(tmp_path):
+    """A files case whose structure has Z_coll while its doublets move long only: the warning
+    that drops Z_coll is in result.json and in the report's summary (the case page and the
+    study page), word for word."""
+    structure = parse_model({"units": "flight-test", "condition": {"airspeed_kt": 0.0},
+                             "structure": {"populate": "none"},
+                             "derivatives": {"M_q": {}, "M_long": {}}}, "model")
+    n = 500
+    inputs = np.zeros((n, 4))
+    inputs[25:75, 0], inputs[75:125, 0] = 4.0, -4.0
+    blank = ManeuverSet([Maneuver("doublet_long", np.arange(n) * 0.02, inputs,
+                                  np.zeros((n, 8)))])
+    [outputs] = simulate(structure, structure.as_vector({"M_q": -2.0, "M_long": 0.8}), blank)
+    noise = np.random.default_rng(0).normal(size=outputs.shape) * 0.05
+    (tmp_path / "ident").mkdir()
+    write_maneuver(blank[0].with_outputs(outputs + noise), tmp_path / "ident" / "doublet.csv")
+    case = tmp_path / "mine.toml"
+    case.write_text('name = "mine"\n[data]\nsource = "files"\nidentification = "ident"\n'
+                    '[condition]\nairspeed_kt = 0.0\n[structure]\npopulate = "none"\n'
+                    '[derivatives]\nM_q = {}\nM_long = {}\nZ_coll = {}\n'
+                    '[delays]\nderivatives = []\n')
+    result = Study([FlightCase.load(case)], tmp_path / "out", progress=None).run()["mine"]
+    [warning] = [w for w in result.data_warnings if "'coll' never moves" in w]
+    assert warning.startswith("input 'coll' never moves (constant 0 in every maneuver)")
+    assert "drops Z_coll before the first fit" in warning
+    record = json.loads((tmp_path / "out" / "mine" / "result.json").read_text())
+    assert record["data_warnings"] == list(result.data_warnings)
+    shown = "".join(f"<li>{html.escape(w)}</li>" for w in result.data_warnings)
+    assert shown in case_html(result, {}, [])
+    assert shown in write_study_report({"mine": result}, tmp_path / "out").read_text()

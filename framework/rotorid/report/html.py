@@ -421,6 +421,10 @@ def summary_html(result, claims) -> str:
     items.append(f"Frequency-domain verification, model with delays: {len(passed)} of "
                  f"{len(passed) + len(failed)} checked pairs inside MUAD"
                  + (f"; outside: {html.escape('; '.join(failed))}" if failed else "") + ".")
+    if result.data_warnings:
+        items.append(f"The checks of the identification data before the fit warned "
+                     f"{len(result.data_warnings)} time(s): <ul>" + "".join(
+                         f"<li>{html.escape(w)}</li>" for w in result.data_warnings) + "</ul>")
     if claims:
         decided, not_holding = claims_tally(claims)
         items.append(f"The paper's claims: {len(decided) - len(not_holding)} of {len(decided)} "

@@ -118,16 +118,18 @@ def base_structure(case: FlightCase, condition: FlightCondition, units: str) -> 
 
 
 def checked_structure(case: FlightCase, structure: ModelStructure, ident: ManeuverSet,
-                      report: Progress) -> ModelStructure:
+                      report: Progress) -> tuple[ModelStructure, tuple[str, ...]]:
     """``structure`` after the sanity checks of the identification data
-    (:func:`~rotorid.estimation.sanity.check_before_fit`): each warning becomes a progress
-    line, and the derivatives of inputs that never move are dropped before the first fit."""
+    (:func:`~rotorid.estimation.sanity.check_before_fit`), and the text of each warning they
+    gave (it also becomes a progress line); the derivatives of inputs that never move are
+    dropped before the first fit."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", DataWarning)
         checked = check_before_fit(ident, structure)
-    for warning in caught:
-        report(case.name, f"warning: {warning.message}")
-    return checked
+    messages = tuple(str(warning.message) for warning in caught)
+    for message in messages:
+        report(case.name, f"warning: {message}")
+    return checked, messages
 
 
 def _reduce(case: FlightCase, structure: ModelStructure, ident: ManeuverSet, estimator,
@@ -277,7 +279,7 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
                       f"verification maneuvers; trim {condition.describe()}")
     structure = base_structure(case, condition, ident.units)
     check_fit_data(ident, case.estimator_options.get("outputs"), structure)
-    structure = checked_structure(case, structure, ident, report)
+    structure, data_warnings = checked_structure(case, structure, ident, report)
     estimator = create("estimators", case.estimator, **case.estimator_options)
     path, resumed = _reduce(case, structure, ident, estimator, directory, resume, report)
     clock["reduction"] = time.perf_counter()
@@ -309,7 +311,7 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
         None if truth is None else truth_derivatives(truth, condition, structure),
         _durations(clock), dropped, resumed,
         None if truth is None else truth_equivalent_delays(truth, condition, delayed),
-        comparison, profiles, estimators)
+        comparison, profiles, estimators, data_warnings)
     save_result(directory, result)
     if report_writer is not None:
         report(case.name, "figures and report")

@@ -51,6 +51,8 @@ class CaseResult:
     delay_profiles: tuple[DelayProfile, ...] = ()  # of each kept delay (estimation.profiles)
     # with [compare] estimators: the model with delays fitted by each listed estimator
     estimator_comparison: EstimatorComparison | None = None
+    # what the sanity checks of the identification data warned about (estimation.sanity)
+    data_warnings: tuple[str, ...] = ()
 
     @property
     def name(self) -> str:
@@ -100,6 +102,7 @@ class CaseResult:
                                        for label, v in self.verification.items()},
             "key_derivatives": self.key_derivatives(),
             "claims": [claim.as_dict() for claim in paper_claims(self)],
+            "data_warnings": list(self.data_warnings),
             "dropped_delays": list(self.dropped_delays),
             "frequency_comparison": {label: c.summary()
                                      for label, c in self.frequency_comparison.items()},

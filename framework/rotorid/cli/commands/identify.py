@@ -21,8 +21,10 @@ accepted iteration (unless ``--quiet``; an observer plugin of the
 ``rotorid_estimation_iteration`` hook, so it works with any estimator that reports through
 it), the kinematic consistency fits and one line per warning: the sanity checks of the data
 before the fit (:mod:`rotorid.estimation.sanity`; the derivatives of an input that never moves
-are dropped before the fit), an unidentifiable parameter combination. The estimate is written atomically as JSON (the format of
-:meth:`rotorid.estimation.estimate.Estimate.as_dict`, plus ``structure``: the model file's path relative
+are dropped before the fit), an unidentifiable parameter combination. The report ends with the
+data checks' warnings again. The estimate is written atomically as JSON (the format of
+:meth:`rotorid.estimation.estimate.Estimate.as_dict`, plus ``data_warnings``: the text of each
+warning about the data before the fit, and ``structure``: the model file's path relative
 to the JSON file, so that ``rotorid verify RESULT.json SWEEPS...`` finds it; for a reference,
 ``model``: the reference, a file's path made relative the same way).
 """
@@ -143,12 +145,13 @@ def _estimator(name: str, options: dict):
                               f"{', '.join(sorted(options))}: {error}") from None
 
 
-def _record(estimate, model: str, out: Path) -> dict:
-    """The estimate's record and where its model came from, paths relative to the JSON file:
+def _record(estimate, model: str, out: Path, data_warnings: list[str]) -> dict:
+    """The estimate's record, the warnings of the checks of the data before the fit
+    (``data_warnings``) and where its model came from, paths relative to the JSON file:
     ``structure`` (a model file) or ``model`` (a reference)."""
     from rotorid.model.reference import is_model_reference
 
-    record = estimate.as_dict()
+    record = {**estimate.as_dict(), "data_warnings": data_warnings}
     if not is_model_reference(model):
         record["structure"] = os.path.relpath(Path(model).resolve(), out.resolve().parent)
         return record
@@ -176,6 +179,15 @@ def _checks_log(quiet: bool):
 def _print_warnings(caught) -> None:
     for warning in caught:
         print(f"rotorid identify: warning: {warning.message}", file=sys.stderr, flush=True)
+
+
+def data_warnings_report(messages: list[str]) -> str:
+    """The report's section on the checks of the data before the fit: each warning, or that
+    there was none."""
+    if not messages:
+        return "Data checks before the fit: no warning"
+    return "\n".join([f"Data checks before the fit: {len(messages)} warning(s)",
+                      *(f"    {message}" for message in messages)])
 
 
 def run(args) -> int:
@@ -219,8 +231,10 @@ def run(args) -> int:
             warnings.simplefilter("always", RotoridWarning)
             estimate = estimator.estimate(model, maneuvers)
     _print_warnings(caught)
-    atomic_write(out, json.dumps(_record(estimate, args.model, out), indent=2))
+    data_warnings = [str(warning.message) for warning in found]
+    atomic_write(out, json.dumps(_record(estimate, args.model, out, data_warnings), indent=2))
     print(estimate.report())
+    print(data_warnings_report(data_warnings))
     print(f"estimate written to {out}")
     if estimate.converged:
         return ExitStatus.OK
