@@ -48,7 +48,7 @@ from rotorid_output_error.levenberg_marquardt import Settings, run
 
 from .kalman import Records, innovation_blocks
 from .riccati import steady_state_filter
-from .system import companion_system, seen_states
+from .system import companion_system, seen_states, with_disturbances
 
 NAME = "filter-error"
 #: Default start of F relative to the measurement-noise size of the state's output: small,
@@ -59,6 +59,10 @@ _VARIANCE_FLOOR = 1e-8
 #: Passes of the measurement-noise start matched to the start innovations (B depends on R
 #: through the filter's P, so R and B are matched alternately; three passes settle it).
 _MATCH_PASSES = 3
+#: Start of a disturbance's correlation time, s.
+_CORRELATION_START = 1.0
+#: Longest correlation time of a disturbance, s (a random walk for the record lengths flown).
+_LONGEST_CORRELATION = 1000.0
 #: Lowest matched R, relative to the output's mean square innovation.
 _MATCH_FLOOR = 0.05
 
@@ -72,22 +76,23 @@ def _names(value) -> tuple[str, ...] | None:
     return states
 
 
-def process_noise_states(structure: ModelStructure, names: tuple[str, ...] | None
-                         ) -> tuple[str, ...]:
-    """The states the process noise enters, in the structure's state order: ``names``, or by
-    default the states of the structure's force and moment equations that the outputs see
-    (:func:`seen_states`; noise on a state they cannot see changes no innovation, and leaves
-    the filter without a steady state when that state's mode is not stable)."""
+def process_noise_states(structure: ModelStructure, names: tuple[str, ...] | None,
+                         option: str = "process_noise") -> tuple[str, ...]:
+    """The states the process noise (or the disturbances) enter, in the structure's state
+    order: ``names``, or by default the states of the structure's force and moment equations
+    that the outputs see (:func:`seen_states`; noise on a state they cannot see changes no
+    innovation, and leaves the filter without a steady state when that state's mode is not
+    stable); ``option`` names the setting in errors."""
     seen = seen_states(structure)
     if names is None:
         return tuple(structure.states[i] for i in structure.equation_rows if seen[i])
     unknown = [s for s in names if s not in structure.states]
     if unknown:
-        raise EstimationError(f"process_noise names {', '.join(unknown)}, not states of the "
+        raise EstimationError(f"{option} names {', '.join(unknown)}, not states of the "
                               f"structure ({', '.join(structure.states)}); choose among those")
     unseen = [s for s in names if not seen[structure.states.index(s)]]
     if unseen:
-        raise EstimationError(f"process_noise names {', '.join(unseen)}, which no output of "
+        raise EstimationError(f"{option} names {', '.join(unseen)}, which no output of "
                               f"the structure sees (noise there changes no innovation); leave "
                               f"{'it' if len(unseen) == 1 else 'them'} out")
     return tuple(s for s in structure.states if s in names)
@@ -158,12 +163,26 @@ def _start_choice(instance, attribute, value):
                               f"got {value!r}")
 
 
+@attrs.frozen(eq=False)
+class NoiseParameters:
+    """A filter-error parameter vector in parts: the structure's parameters, the white
+    process noise F (one per process-noise state), the disturbances' stationary standard
+    deviations D and correlation times T (s), and the measurement-noise variances R."""
+
+    structure: np.ndarray
+    process: np.ndarray
+    disturbance: np.ndarray
+    correlation_time: np.ndarray
+    measurement: np.ndarray
+
+
 class FilterErrorProblem:
     """Cost, innovations and Fisher information of one structure on one maneuver set, in the
     form :func:`rotorid_output_error.levenberg_marquardt.run` drives."""
 
     def __init__(self, structure: ModelStructure, maneuvers: ManeuverSet,
-                 process_noise: tuple[str, ...], settings: Settings):
+                 process_noise: tuple[str, ...], settings: Settings,
+                 disturbances: tuple[str, ...] = ()):
         self.structure = structure
         self.hold = maneuvers.hold
         self.records = Records.from_maneuvers(maneuvers, structure)
@@ -172,36 +191,56 @@ class FilterErrorProblem:
         self.process_noise = process_noise
         kept = [structure.states[i] for i in np.flatnonzero(seen_states(structure))]
         self.noise_rows = [kept.index(s) for s in process_noise]
+        self.disturbances = disturbances
+        self.disturbance_rows = [kept.index(s) for s in disturbances]
         self.n_structure = structure.n_parameters
         self.output_names = structure.outputs
         self.parameter_names = (tuple(structure.parameter_names)
                                 + tuple(f"F_{s}" for s in process_noise)
+                                + tuple(f"D_{s}" for s in disturbances)
+                                + tuple(f"T_{s}" for s in disturbances)
                                 + tuple(f"R_{o}" for o in structure.outputs))
 
-    def split(self, values) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(structure parameters, F (n_F,), R diagonal (p,)) of a parameter vector."""
-        values = np.asarray(values)
-        k, n_f = self.n_structure, len(self.noise_rows)
-        return values[:k], values[k:k + n_f], values[k + n_f:]
+    def split(self, values) -> NoiseParameters:
+        """The parts of a parameter vector."""
+        sizes = np.cumsum([self.n_structure, len(self.noise_rows),
+                           len(self.disturbance_rows), len(self.disturbance_rows)])
+        return NoiseParameters(*np.split(np.asarray(values), sizes))
 
     def filter(self, values, directions: bool = False):
-        """The companion system and its steady-state filter at ``values``; with
-        ``directions`` one complex-step direction per parameter (leading axis)."""
-        theta, f, r = self.split(np.asarray(values, dtype=float))
-        n_f = f.size
-        system = companion_system(self.structure, theta, self.records.dt, self.hold,
-                                  n_f + r.size if directions else None)
+        """The companion system (with its disturbance states) and its steady-state filter at
+        ``values``; with ``directions`` one complex-step direction per parameter (leading
+        axis)."""
+        parts = self.split(np.asarray(values, dtype=float))
+        f, sigma, tau, r = (parts.process, parts.disturbance, parts.correlation_time,
+                            parts.measurement)
+        n_f, n_d = f.size, sigma.size
+        system = companion_system(self.structure, parts.structure, self.records.dt, self.hold,
+                                  n_f + 2 * n_d + r.size if directions else None)
         n_dir = system.transition.shape[0]
-        q_dir = np.repeat((f**2)[None].astype(system.transition.dtype), n_dir, axis=0)
-        r_dir = np.repeat(r[None].astype(system.transition.dtype), n_dir, axis=0)
+        dtype = system.transition.dtype
+        q_dir = np.repeat((f**2)[None].astype(dtype), n_dir, axis=0)
+        tau_dir = np.repeat(tau[None].astype(dtype), n_dir, axis=0)
+        r_dir = np.repeat(r[None].astype(dtype), n_dir, axis=0)
+        k = self.n_structure
         if directions:
-            k = self.n_structure
             # ∂(F²)/∂F = 2F as the imaginary part, the real part left exactly F² (the complex
             # square (F + ih)² would add −h², a negative variance where F = 0)
             q_dir[k + np.arange(n_f), np.arange(n_f)] += 2j * COMPLEX_STEP * f
-            r_dir[k + n_f + np.arange(r.size), np.arange(r.size)] += 1j * COMPLEX_STEP
+            tau_dir[k + n_f + n_d + np.arange(n_d), np.arange(n_d)] += 1j * COMPLEX_STEP
+            r_dir[k + n_f + 2 * n_d + np.arange(r.size), np.arange(r.size)] += 1j * COMPLEX_STEP
+        decay = np.exp(-self.records.dt / tau_dir)
+        # stationary standard deviation D: driving variance D²(1 − a²), its D-derivative
+        # 2D(1 − a²) added the same way as F's
+        d_dir = (sigma**2 * (1 - decay**2)).astype(dtype)
+        if directions:
+            d_dir[k + n_f + np.arange(n_d), np.arange(n_d)] += (
+                2j * COMPLEX_STEP * sigma * (1 - decay[0].real**2))
+        system = with_disturbances(system, self.disturbance_rows, decay, self.records.dt)
         process = np.zeros((n_dir, system.size, system.size), dtype=system.transition.dtype)
         process[:, self.noise_rows, self.noise_rows] = q_dir
+        extra = system.size - n_d + np.arange(n_d)
+        process[:, extra, extra] = d_dir
         return system, steady_state_filter(system.transition, system.output, process, r_dir)
 
     def innovations(self, values) -> tuple[np.ndarray, np.ndarray]:
@@ -276,6 +315,11 @@ class FilterErrorEstimator:
             by default F starts at a tenth of the noise size of an output measuring the state
             (:func:`process_noise_start`): a large start lets the filter follow the data and
             end in a poor local minimum.
+        disturbances: states whose equations get a coloured disturbance (default none): a
+            first-order Gauss-Markov acceleration with stationary standard deviation
+            ``D_<state>`` (structure units per s) and correlation time ``T_<state>`` (s),
+            both estimated; for turbulence, whose gusts are far from white at the sample rate.
+            D starts at the process-noise start per second, T at 1 s.
         enforce_signs: use the sign priors as bounds.
         start: ``"auto"`` (equation error when every derivative's initial value is zero, else
             the initial values), ``"initial"`` or ``"equation-error"`` for the derivatives and delays.
@@ -288,6 +332,7 @@ class FilterErrorEstimator:
     step_tolerance: float = 1e-9
     process_noise: tuple[str, ...] | None = attrs.field(default=None, converter=_names)
     process_noise_start: Mapping[str, float] | None = None
+    disturbances: tuple[str, ...] = attrs.field(default=(), converter=_names)
     enforce_signs: bool = False
     start: str = attrs.field(default="auto", validator=_start_choice)
     callback: Callable | None = None
@@ -308,9 +353,9 @@ class FilterErrorEstimator:
             # it would otherwise shorten every step (the fit then stalls far from the optimum)
             settings = Settings(self.max_iterations, self.cost_tolerance, self.step_tolerance,
                                 shorten_steps=False)
-            problem = FilterErrorProblem(structure, maneuvers,
-                                         process_noise_states(structure, self.process_noise),
-                                         settings)
+            problem = FilterErrorProblem(
+                structure, maneuvers, process_noise_states(structure, self.process_noise),
+                settings, process_noise_states(structure, self.disturbances, "disturbances"))
             values, note, kept = self._start_values(problem, maneuvers, start)
             values = matched_measurement_noise(problem, values, kept)
             bounds = self._bounds(problem, values)
@@ -349,9 +394,14 @@ class FilterErrorEstimator:
             raise EstimationError(f"process_noise_start for unknown parameters {sorted(unknown)}; "
                                   f"the process noise is {', '.join(f'F_{s}' for s in states)}")
         missing = tuple(s for s in states if f"F_{s}" not in given)
-        steps = {**process_noise_start(structure, missing, variance, problem.records.dt),
+        dt = problem.records.dt
+        steps = {**process_noise_start(structure, missing, variance, dt),
                  **{name[2:]: float(value) for name, value in given.items()}}
-        values = np.concatenate([initial, [steps[s] for s in states], variance])
+        disturbances = process_noise_start(structure, problem.disturbances, variance, dt)
+        values = np.concatenate([initial, [steps[s] for s in states],
+                                 [disturbances[s] / dt for s in problem.disturbances],
+                                 np.full(len(problem.disturbances), _CORRELATION_START),
+                                 variance])
         if start is None:
             return values, note, ()
         if isinstance(start, Mapping):
@@ -378,9 +428,13 @@ class FilterErrorEstimator:
 
     def _bounds(self, problem, values):
         lower, upper = problem.structure.bounds(enforce_signs=self.enforce_signs)
-        _, f, r = problem.split(values)
-        return (np.concatenate([lower, np.zeros(f.size), _VARIANCE_FLOOR * r]),
-                np.concatenate([upper, np.full(f.size + r.size, np.inf)]))
+        parts = problem.split(values)
+        n_f, n_d = parts.process.size, parts.disturbance.size
+        return (np.concatenate([lower, np.zeros(n_f + n_d), np.full(n_d, problem.records.dt),
+                                _VARIANCE_FLOOR * parts.measurement]),
+                np.concatenate([upper, np.full(n_f + n_d, np.inf),
+                                np.full(n_d, _LONGEST_CORRELATION),
+                                np.full(parts.measurement.size, np.inf)]))
 
     def _estimate(self, problem, result, start, bounds, note) -> Estimate:
         lower, upper = bounds
@@ -393,7 +447,7 @@ class FilterErrorEstimator:
             "noise_covariance is the measurement noise R"]
         return Estimate.from_fit(
             problem, values, information, estimator=NAME, start=start,
-            noise_covariance=np.diag(problem.split(values)[-1]), cost=result.cost,
+            noise_covariance=np.diag(problem.split(values).measurement), cost=result.cost,
             rmse=result.rmse, n_samples=problem.n_samples, cost_history=result.cost_history,
             rmse_history=result.rmse_history, iterations=result.iterations,
             converged=result.converged, stop_reason=result.stop_reason, at_bound=at_bound,
