@@ -786,18 +786,27 @@ def test_dask_workers_write_nothing_after_the_study_is_killed(tmp_path):
 
 # ----------------------------------------------------------------- kill and resume
 @pytest.mark.slow
-def test_a_study_killed_after_its_first_step_resumes_to_the_same_files(tmp_path):
-    """`rotorid study` of the tiny case, SIGKILLed once its first reduction step is written,
-    then resumed: every file equals the uninterrupted run's byte for byte, result.json apart
-    from its timing key, and no temporary file is left."""
-    case = Path(__file__).parent / "cases" / "tiny.toml"
-    command = ["study", str(case), "--no-figures", "--executor", "serial"]
+@pytest.mark.parametrize("written, figures", [
+    ("data/manifest.json", False), ("steps/step_000.json", False),
+    ("steps/step_004.json", False), ("result.json", True)],
+    ids=["while-fitting-step-0", "after-the-first-step", "mid-reduction", "while-drawing"])
+def test_a_killed_study_resumes_to_the_same_files(tmp_path, written, figures):
+    """`rotorid study` of the tiny case reduced to its last parameter, SIGKILLed once
+    ``written`` appears (during the first fit, after the first step, in the middle of the
+    reduction, while the figures are drawn), then resumed: every file equals the uninterrupted
+    run's byte for byte (figures included), result.json apart from its timing key and the
+    HTML reports apart from the timings they state; no temporary file is left."""
+    case = tmp_path / "tiny.toml"
+    case.write_text((Path(__file__).parent / "cases" / "tiny.toml").read_text().replace(
+        "continue_to_zero = false", "continue_to_zero = true"))
+    command = ["study", str(case), "--executor", "serial",
+               *(() if figures else ("--no-figures",))]
     assert _run([*command, "--out", str(tmp_path / "whole")]) == ExitStatus.OK
     killed = subprocess.Popen([sys.executable, "-m", "rotorid.cli.main", *command, "--out",
                                str(tmp_path / "killed")], stderr=subprocess.DEVNULL)
-    first_step = tmp_path / "killed" / "tiny" / "steps" / "step_000.json"
+    trigger = tmp_path / "killed" / "tiny" / written
     deadline = time.monotonic() + 120
-    while not first_step.exists() and killed.poll() is None and time.monotonic() < deadline:
+    while not trigger.exists() and killed.poll() is None and time.monotonic() < deadline:
         time.sleep(0.01)
     killed.kill()
     assert killed.wait() == -signal.SIGKILL, "the run ended before it could be killed"
@@ -805,10 +814,12 @@ def test_a_study_killed_after_its_first_step_resumes_to_the_same_files(tmp_path)
     whole, resumed = tmp_path / "whole" / "tiny", tmp_path / "killed" / "tiny"
     names = sorted(p.relative_to(whole) for p in _files_under(whole))
     assert names == sorted(p.relative_to(resumed) for p in _files_under(resumed))
+    assert len([n for n in names if n.parts[0] == "steps"]) == 9
     for name in names:
         if name.name == "result.json":
             records = [json.loads((root / name).read_text()) for root in (whole, resumed)]
             assert records[0].pop("timing") != records[1].pop("timing")
             assert records[0] == records[1]
-        else:
+        elif name.name != "report.html":
             assert (whole / name).read_bytes() == (resumed / name).read_bytes(), name
+    assert (Path("figures/rmse.svg") in names) == figures
