@@ -28,8 +28,7 @@ from .system import CompanionSystem
 
 #: Values of one (L, M, D, S) block array of the sensitivity pass: 1 MB, so that a block's
 #: arrays stay in cache (the block-wide products are memory-bound: on the paper-size problem
-#: a Gauss-Newton pass took 0.06 s of CPU with 1 MB blocks, 0.10 s with 2 MB and 0.13–0.4 s
-#: with 128 samples per block, 20 MB).
+#: a Gauss-Newton pass took 0.06 s of CPU with 1 MB blocks and 0.10 s with 2 MB ones).
 BLOCK_VALUES = 2**17
 #: Time samples per block: at least (the Python overhead per block), and at most.
 BLOCK_LIMITS = (4, 256)
