@@ -386,9 +386,18 @@ def test_a_study_of_the_longitudinal_files_skips_the_pairs_it_cannot_verify(flig
                     '[structure]\npopulate = "none"\n'
                     '[derivatives]\n' + "".join(f"{n} = {{}}\n" for n in TRUTH if "tau" not in n)
                     + '[delays]\nderivatives = ["M_long"]\n', encoding="utf-8")
-    assert main(["study", str(case), "--out", str(root / "study"), "--no-figures"]) == (
-        ExitStatus.OK)
-    assert "[my-hover] q/lat not verified: no sweep excites 'lat'" in capsys.readouterr().err
+    assert main(["study", str(case), "--out", str(root / "study")]) == ExitStatus.OK
+    err = capsys.readouterr().err
+    assert "[my-hover] q/lat not verified: no sweep excites 'lat'" in err
+    assert "Traceback" not in err
+    # the reports speak about this aircraft only: no paper, truth model or Bo-105
+    for page in (root / "study" / "report.html", root / "study" / "my-hover" / "report.html"):
+        text = page.read_text(encoding="utf-8")
+        for word in ("paper's claims", "Bo-105", "Helisim", "Padfield", "truth"):
+            assert word not in text, (page, word)
+    assert "measured" in (root / "study" / "my-hover" / "report.html").read_text()
+    drawn = sorted(p.name for p in (root / "study" / "my-hover" / "figures").glob("time_*.png"))
+    assert drawn == ["time_doublet_coll.png", "time_doublet_long.png"]
     record = _strict_json(root / "study" / "my-hover" / "result.json")
     verified = record["frequency_verification"]["with delays"]
     assert [p["pair"] for p in verified["pairs"]] == ["q/long", "az/coll"]
