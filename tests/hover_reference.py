@@ -46,7 +46,8 @@ def true_structure() -> tuple[ModelStructure, np.ndarray]:
     return structure, structure.as_vector(values)
 
 
-def _multistep(kind: str, direction: int, n: int, dt: float, amplitude: float, width: float):
+def multistep(kind: str, direction: int, n: int, dt: float, amplitude: float, width: float):
+    """A 3211 or 2311 of ``amplitude`` and unit ``width`` (s) starting at 1 s, (n,) at ``dt``."""
     pattern = {"3211": (3, -2, 1, -1), "2311": (2, -3, 1, -1)}[kind]
     signal = np.zeros(n)
     start = int(round(1.0 / dt))
@@ -79,7 +80,7 @@ def closed_loop_maneuvers(structure, values, seed: int = 0, duration: float = 15
         for kind in ("3211", "2311"):
             for direction in (1, -1):
                 pilot = np.zeros((n, 4))
-                pilot[:, axis] = _multistep(kind, direction, n, dt, 6.0, 0.3)
+                pilot[:, axis] = multistep(kind, direction, n, dt, 6.0, 0.3)
                 x = np.zeros((n, 8))
                 u = np.zeros((n, 4))
                 for k in range(n):

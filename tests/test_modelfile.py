@@ -137,7 +137,7 @@ def test_out_of_order_structures_are_written_explicitly():
     ('[condition]\n[structure]\npopulate = "full"\n', "populate = 'full'; use 'all' or"),
     ('[condition]\n[structure]\ntemplate = "vertical"\n',
      "template = 'vertical'; use 'six-dof' or 'longitudinal' or 'lateral' or "
-     "'fixed-wing-longitudinal' or 'fixed-wing-lateral'"),
+     "'fixed-wing-longitudinal' or 'fixed-wing-lateral' or 'hybrid'"),
     ('[condition]\n[structure]\ntemplate = "longitudinal"\nremove = ["L_p"]\n',
      "derivative L_p does not fit the longitudinal template"),
     ('[condition]\n[structure]\ntemplate = "longitudinal"\n[derivatives.Y_v]\n',

@@ -25,7 +25,10 @@ in the structure's unit system, :func:`rigid_body_terms`):
 * ``fixed-wing-longitudinal``: states ``u w q theta``, controls ``elevator throttle``, outputs
   ``u alpha q theta q_dot ax az`` (α = w/U0), 15 derivatives;
 * ``fixed-wing-lateral``: states ``v p phi r``, controls ``aileron rudder``, outputs
-  ``beta p phi r ay`` (β = v/U0), 15 derivatives.
+  ``beta p phi r ay`` (β = v/U0), 15 derivatives;
+* ``hybrid``: the six-dof model plus the rotor's tip-path-plane tilts ``beta1c beta1s`` as
+  first-order states driven by the equations ``Bc`` and ``Bs``, with the known rate feedback
+  β̇1c = q, β̇1s = p (docs/hybrid.md); 96 derivatives.
 
 A subset's known terms are the six-dof's rows and columns of its states, so a subset is the
 six-dof model with the other axes' states held at trim. A model file may also declare a template
@@ -295,8 +298,42 @@ FIXED_WING_LATERAL = _rigid_body_template(
     "fixed-wing-lateral", ("v", "p", "phi", "r"), ("aileron", "rudder"),
     ("beta", "p", "phi", "r", "ay"),
     "fixed-wing lateral-directional small perturbations (beta = v/U0)")
+
+
+# ----------------------------------------------------------------- hybrid rotor-body model
+#: Tip-path-plane tilts of the ``hybrid`` template (docs/hybrid.md): β1c forward, β1s left.
+FLAP_STATES = ("beta1c", "beta1s")
+#: Letters of the flap equations: ``Bc`` drives β̇1c, ``Bs`` drives β̇1s.
+FLAP_EQUATIONS = (("Bc", "beta1c"), ("Bs", "beta1s"))
+#: Known rate feedback: the disc keeps its orientation in space, so relative to the shaft it
+#: tilts at the body rate, β̇1c = q + …, β̇1s = p + … (derived in docs/hybrid.md).
+RATE_FEEDBACK = (("beta1c", "q"), ("beta1s", "p"))
+
+
+def hybrid_terms(template: StructureTemplate, condition, units: UnitSystem) -> KnownTerms:
+    """The six-dof rigid body's known terms (its outputs, flap states unmeasured) plus the
+    flap's rate feedback."""
+    body = rigid_body_terms(SIX_DOF, condition, units)
+    states = template.states
+    n, p = len(states), len(OUTPUTS)
+    rows = [states.index(s) for s in STATES]
+    a, c, measured = np.zeros((n, n)), np.zeros((p, n)), np.zeros((p, n))
+    a[np.ix_(rows, rows)] = body.a
+    c[:, rows], measured[:, rows] = body.c, body.measured
+    for flap, rate in RATE_FEEDBACK:
+        a[states.index(flap), states.index(rate)] = 1.0
+    return KnownTerms(a, c, np.zeros((p, len(template.controls))), measured)
+
+
+HYBRID = StructureTemplate(
+    "hybrid", STATES + FLAP_STATES, CONTROLS, OUTPUTS,
+    "six-dof rigid body with first-order tip-path-plane flapping (docs/hybrid.md)",
+    SIX_DOF.equations + FLAP_EQUATIONS,
+    STATE_VARIABLES + FLAP_STATES + CONTROLS,
+    SIX_DOF.kinds + tuple((s, "angle") for s in FLAP_STATES), hybrid_terms)
+
 TEMPLATES = {t.name: t for t in (SIX_DOF, LONGITUDINAL, LATERAL, FIXED_WING_LONGITUDINAL,
-                                 FIXED_WING_LATERAL)}
+                                 FIXED_WING_LATERAL, HYBRID)}
 
 
 # ----------------------------------------------------------------- declared templates

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from rotorid.model.residualisation import residualise
 from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.plugin.contracts import TruthModel
 from rotorid.verification.equivalent_delays import (
@@ -13,26 +14,41 @@ from rotorid.verification.equivalent_delays import (
     equivalent_delays,
 )
 
-#: Rows of the 6-DoF derivatives: force or moment letter and the state it drives.
-_ROWS = (("X", "u"), ("Y", "v"), ("Z", "w"), ("L", "p"), ("M", "q"), ("N", "r"))
-_VELOCITIES = ("u", "v", "w", "p", "q", "r")
+
+def derivatives_of(structure: ModelStructure, a, b) -> dict[str, float]:
+    """Every derivative of ``structure``'s template (each equation letter over each variable)
+    read from a linear model over its states and controls, by name.
+
+    Args:
+        a: (n, n) and b: (n, m), known terms included, in the structure's units.
+    """
+    coefficients = np.hstack([np.asarray(a) - structure.known_state_matrix(), np.asarray(b)])
+    columns = structure.states + structure.controls
+    return {f"{letter}_{variable}": float(coefficients[structure.states.index(state),
+                                                       columns.index(variable)])
+            for letter, state in structure.template.equations
+            for variable in structure.template.variables}
 
 
 def truth_derivatives(truth: TruthModel, condition: FlightCondition,
                       structure: ModelStructure) -> dict[str, float]:
-    """The truth model's residualised 6-DoF derivatives in the structure's units, by name."""
-    linear = truth.linearize(condition.airspeed_kt, units=structure.units.name)
-    a = np.asarray(linear.A) - structure.known_state_matrix()
-    b = np.asarray(linear.B)
-    values = {}
-    for letter, row in _ROWS:
-        i = structure.states.index(row)
-        for j, state in enumerate(structure.states):
-            if state in _VELOCITIES:
-                values[f"{letter}_{state}"] = float(a[i, j])
-        for j, control in enumerate(structure.controls):
-            values[f"{letter}_{control}"] = float(b[i, j])
-    return values
+    """The truth model's derivatives in the structure's units, by name.
+
+    A rigid-body structure reads its states' rows and columns of the truth's 6-DoF
+    linearisation (rotor and inflow residualised); a structure with rotor states (``hybrid``)
+    reads the full linearisation with every state it lacks residualised: the flap-coupled
+    model, not the 6-DoF one (docs/hybrid.md).
+    """
+    units = structure.units.name
+    linear = truth.linearize(condition.airspeed_kt, units=units)
+    states = list(linear.states)
+    if set(structure.states) <= set(states):
+        rows = [states.index(name) for name in structure.states]
+        a, b = np.asarray(linear.A)[np.ix_(rows, rows)], np.asarray(linear.B)[rows]
+    else:
+        full = truth.linearize(condition.airspeed_kt, full=True, units=units)
+        a, b = residualise(full.A, full.B, full.states, structure.states)
+    return derivatives_of(structure, a, b)
 
 
 def truth_equivalent_delays(truth: TruthModel, condition: FlightCondition,
