@@ -17,6 +17,7 @@ from hover_reference import multistep
 from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
 from rotorid.errors import IdentifiabilityWarning, StructureError
 from rotorid.model.hybrid import (
+    DIRECT_DERIVATIVES,
     DISC_MOMENTS,
     FLAP_CONTROL_DELAYS,
     FLAP_DERIVATIVES,
@@ -94,16 +95,16 @@ def test_hybrid_start_has_the_six_dof_model_as_its_quasi_steady_form(reference_7
     assert a_q == pytest.approx(a_6, abs=1e-9)
     assert b_q == pytest.approx(b_6, abs=1e-9)
     assert hybrid.derivative("Bc_beta1c").initial == pytest.approx(-1.0 / 0.09)
-    for name in ("L_lat", "M_long"):
-        assert hybrid.derivative(name).initial == 0.0
-    assert not {"L_p", "L_q", "M_p", "M_q"} & set(hybrid.names)
+    assert not set(DIRECT_DERIVATIVES) & set(hybrid.names)
+    assert hybrid.derivative("L_coll").initial == values[six_dof.parameter_names.index("L_coll")]
+    assert hybrid.derivative("Bc_coll").initial == 0.0
 
 
 def test_hybrid_start_refuses_what_it_cannot_map():
     with pytest.raises(StructureError, match="singular"):
-        hybrid_start({"L_p": -10.0}, ("long", "lat"))
+        hybrid_start({"L_p": -10.0})
     with pytest.raises(StructureError, match="positive"):
-        hybrid_start({"L_p": -10.0, "M_q": -3.0}, ("long",), flap_time_constant=0.0)
+        hybrid_start({"L_p": -10.0, "M_q": -3.0}, flap_time_constant=0.0)
 
 
 def _maneuvers(structure, values, seed, duration=10.0, dt=0.02) -> ManeuverSet:
@@ -130,9 +131,9 @@ def test_every_hybrid_parameter_recovered_within_3_cramer_rao_bounds(reference_7
     controls into flapping); the fit starts from the hybrid start of the quasi-steady 6-DoF
     model with τ = 0.12 s and zero delays.
 
-    Over noise seeds 1–6 the errors in Cramér-Rao bounds had an RMS of 0.97–1.02 (the bounds
-    are honest) and a largest of 2.3–3.1 among the 76 parameters (seed 1: X_w at 3.07), as
-    expected of 76 normal draws; the test uses seed 2."""
+    Over noise seeds 1–6 the errors in Cramér-Rao bounds had an RMS of 0.90–1.09 (the bounds
+    are honest) and a largest of 2.4–3.1 among the 72 parameters (seed 1: X_w at 3.07), as
+    expected of 72 normal draws; the test uses seed 2."""
     condition, a, b = reference_70kt
     six_dof, six_values = _six_dof_of(condition, a, b)
     structure = hybrid_from_six_dof(six_dof, six_values, flap_time_constant=0.12)

@@ -2,11 +2,11 @@
 
 With the flap equations β̇1c = q − β1c/τ + ΣBc·u and β̇1s = p − β1s/τ + ΣBs·u (no
 cross-coupling), the disc settles quasi-statically at β1c = τ·(q + ΣBc·u) and
-β1s = τ·(p + ΣBs·u). Moving the 6-DoF model's roll and pitch rate and control derivatives onto
-the disc tilt,
+β1s = τ·(p + ΣBs·u). Moving the 6-DoF model's roll and pitch rate derivatives and its cyclic
+controls' roll and pitch derivatives onto the disc tilt,
 
     L_beta1c = L_q/τ   L_beta1s = L_p/τ   M_beta1c = M_q/τ   M_beta1s = M_p/τ
-    [[L_q, L_p], [M_q, M_p]]·[Bc_c, Bs_c]ᵀ = [L_c, M_c]ᵀ   for each control c
+    [[L_q, L_p], [M_q, M_p]]·[Bc_c, Bs_c]ᵀ = [L_c, M_c]ᵀ   for each cyclic control c
 
 therefore gives a hybrid model whose quasi-steady form is the 6-DoF model itself: a hybrid
 fit started there begins where the 6-DoF fit ended.
@@ -14,12 +14,15 @@ fit started there begins where the 6-DoF fit ended.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 
+import attrs
 import numpy as np
 
+from rotorid.data import ManeuverSet
 from rotorid.errors import StructureError
 from rotorid.model.structure import ModelStructure
+from rotorid.model.templates import FLAP_STATES, STATES
 
 #: What the hybrid model adds to a 6-DoF structure: the flap equations' own damping and
 #: cross-coupling, the hub moments per disc tilt, and (:func:`hybrid_from_six_dof`) the
@@ -29,48 +32,47 @@ DISC_MOMENTS = ("L_beta1c", "L_beta1s", "M_beta1c", "M_beta1s")
 #: Sign priors of the flap damping and the on-axis hub moments (docs/hybrid.md).
 SIGNS = {"Bc_beta1c": "negative", "Bs_beta1s": "negative", "L_beta1s": "negative",
          "M_beta1c": "negative"}
-#: The body's direct roll and pitch rate derivatives, which the hybrid model leaves out: the
-#: disc tilt carries the rotor's rate damping, and with a direct M_q beside it q/δ_long
-#: determines only M_beta1c·Bc_long, 1/τ − M_q and M_q/τ + M_beta1c, so τ trades with M_q.
-RATE_DERIVATIVES = ("L_p", "L_q", "M_p", "M_q")
+#: The cyclic controls: they tilt the disc, and act on roll and pitch only through it.
+CYCLIC = ("long", "lat")
+#: The body's direct roll and pitch derivatives the hybrid model leaves out: the rates' (the
+#: disc tilt carries the rotor's rate damping; with a direct M_q beside it, q/δ_long determines
+#: only M_beta1c·Bc_long, 1/τ − M_q and M_q/τ + M_beta1c, so τ trades with M_q) and the cyclic
+#: controls' (they trade with the controls into flapping and the actuator delays).
+DIRECT_DERIVATIVES = ("L_p", "L_q", "M_p", "M_q", "L_long", "L_lat", "M_long", "M_lat")
 #: Derivatives that carry a delay for the actuators between stick and blade angle.
 FLAP_CONTROL_DELAYS = ("Bc_long", "Bc_lat", "Bs_long", "Bs_lat")
 #: Start of the flap time constant when nothing better is known, s (hingeless rotors: 0.05–0.1).
 DEFAULT_FLAP_TIME_CONSTANT = 0.07
 
 
-def hybrid_start(six_dof: Mapping[str, float], controls: Iterable[str],
+def hybrid_start(six_dof: Mapping[str, float],
                  flap_time_constant: float = DEFAULT_FLAP_TIME_CONSTANT) -> dict[str, float]:
     """Hybrid derivative values whose quasi-steady model is ``six_dof``.
 
     Args:
         six_dof: 6-DoF derivative values by name (absent names are 0), in the hybrid's units.
-        controls: the control names (e.g. long lat coll ped).
         flap_time_constant: τ in s, > 0.
     Returns:
-        Values by hybrid derivative name: the 6-DoF's other derivatives unchanged, the roll
-        and pitch control derivatives 0, the disc-tilt terms above; L_p L_q M_p M_q are
-        left out (:data:`RATE_DERIVATIVES`).
+        Values by hybrid derivative name: the 6-DoF's derivatives but
+        :data:`DIRECT_DERIVATIVES` unchanged, and the disc-tilt terms above.
     """
     tau = float(flap_time_constant)
     if not np.isfinite(tau) or tau <= 0.0:
         raise StructureError(f"flap time constant must be a positive number of seconds, "
                              f"got {flap_time_constant!r}")
-    controls = tuple(controls)
     value = lambda name: float(six_dof.get(name, 0.0))  # noqa: E731
     rates = np.array([[value("L_q"), value("L_p")], [value("M_q"), value("M_p")]])
     if abs(np.linalg.det(rates)) < 1e-12 * max(np.abs(rates).max() ** 2, 1e-300):
         raise StructureError(
             "hybrid start: the 6-DoF model's roll and pitch rate derivatives [[L_q, L_p], "
-            "[M_q, M_p]] are singular, so its control derivatives cannot be moved onto the "
+            "[M_q, M_p]] are singular, so its cyclic derivatives cannot be moved onto the "
             "disc tilt; keep L_p and M_q in the 6-DoF model the start comes from")
-    start = {n: v for n, v in six_dof.items() if n not in RATE_DERIVATIVES}
+    start = {n: v for n, v in six_dof.items() if n not in DIRECT_DERIVATIVES}
     start.update({"L_beta1c": rates[0, 0] / tau, "L_beta1s": rates[0, 1] / tau,
                   "M_beta1c": rates[1, 0] / tau, "M_beta1s": rates[1, 1] / tau,
                   "Bc_beta1c": -1.0 / tau, "Bs_beta1s": -1.0 / tau})
-    for control in controls:
+    for control in CYCLIC:
         flap = np.linalg.solve(rates, [value(f"L_{control}"), value(f"M_{control}")])
-        start[f"L_{control}"] = start[f"M_{control}"] = 0.0
         start[f"Bc_{control}"], start[f"Bs_{control}"] = float(flap[0]), float(flap[1])
     return start
 
@@ -81,12 +83,11 @@ def hybrid_from_six_dof(structure: ModelStructure, values,
     """The hybrid structure of a 6-DoF structure and its estimate, started at
     :func:`hybrid_start`.
 
-    It holds the 6-DoF structure's derivatives but :data:`RATE_DERIVATIVES` (delays dropped),
-    :data:`FLAP_DERIVATIVES` and
-    :data:`DISC_MOMENTS` with the :data:`SIGNS` priors, both flap equations' derivative on each
-    control that has a roll or pitch derivative in ``structure``, and, unless ``delay_upper``
-    is ``None``, a free delay (0 … ``delay_upper`` s) on each of :data:`FLAP_CONTROL_DELAYS`
-    the structure has.
+    It holds the 6-DoF structure's derivatives but :data:`DIRECT_DERIVATIVES` (delays
+    dropped), :data:`FLAP_DERIVATIVES` and :data:`DISC_MOMENTS` with the :data:`SIGNS` priors,
+    both flap equations' derivative on each control that has a roll or pitch derivative in
+    ``structure`` (the collective's and the pedal's start at 0), and, unless ``delay_upper`` is
+    ``None``, a free delay (0 … ``delay_upper`` s) on each of :data:`FLAP_CONTROL_DELAYS`.
 
     Args:
         structure: a ``six-dof`` structure; values: its parameter vector or mapping.
@@ -99,16 +100,28 @@ def hybrid_from_six_dof(structure: ModelStructure, values,
     six_dof.update(structure.as_mapping(values))
     controls = [c for c in structure.controls
                 if {f"L_{c}", f"M_{c}"} & set(structure.names)]
-    keep = ((set(structure.names) - set(RATE_DERIVATIVES)) | set(FLAP_DERIVATIVES)
+    keep = ((set(structure.names) - set(DIRECT_DERIVATIVES)) | set(FLAP_DERIVATIVES)
             | set(DISC_MOMENTS)
             | {f"{letter}_{c}" for letter in ("Bc", "Bs") for c in controls})
     populated = ModelStructure.populated(structure.condition, "hybrid", structure.units, SIGNS)
     hybrid = populated.without(*(n for n in populated.names if n not in keep))
     for derivative in structure.derivatives:
-        if derivative.fixed:
+        if derivative.fixed and derivative.name in hybrid.names:
             hybrid = hybrid.fixing(derivative.name, derivative.initial)
-    start = hybrid_start(six_dof, controls, flap_time_constant)
+    start = hybrid_start(six_dof, flap_time_constant)
     hybrid = hybrid.with_initial({n: v for n, v in start.items() if n in hybrid.parameter_names})
     if delay_upper is None:
         return hybrid
     return hybrid.with_delays(FLAP_CONTROL_DELAYS, upper=delay_upper, missing="skip")
+
+
+def with_disc_at_trim(maneuvers: ManeuverSet) -> ManeuverSet:
+    """The records with each 6-DoF initial state (u w q θ v p φ r) extended by the disc at
+    trim (β1c = β1s = 0), as the hybrid model's initial state; records without one keep none."""
+    extended = []
+    for m in maneuvers:
+        state = m.initial_state
+        if state is not None and state.shape == (len(STATES),):
+            m = attrs.evolve(m, initial_state=np.concatenate([state, np.zeros(len(FLAP_STATES))]))
+        extended.append(m)
+    return ManeuverSet(extended, hold=maneuvers.hold)
