@@ -1,13 +1,14 @@
 """The filter-error estimator: steady-state gain, sensitivities, recovery with process and
 measurement noise, and reduction to output error in still air."""
 
+import math
 import warnings
 
 import numpy as np
 import pytest
 import rotorid
 import scipy.linalg
-from rotorid import Derivative, ModelStructure
+from rotorid import Derivative, FlightCondition, ModelStructure
 from rotorid.errors import DataError, EstimationError, IdentifiabilityWarning
 from rotorid_filter_error.estimator import FilterErrorProblem
 from rotorid_filter_error.kalman import innovation_blocks
@@ -32,12 +33,26 @@ def structure(delays=()):
 def noisy_data(process, seed=1, dt=0.02, model=None, truth=SMALL_TRUTH, variance=VARIANCE,
                disturbances=None):
     """Doublet maneuvers of ``model`` (default the small six-dof hover model) in its own
-    channels, simulated independently of the estimator (zero-order-hold discretisation by one
-    matrix exponential), with white process noise added to the states each sample and white
-    measurement noise; ``disturbances`` (state → (σ, τ s)) adds to that state's equation a
-    first-order Gauss-Markov acceleration of stationary standard deviation σ, held over each
-    sample and started at zero."""
+    channels, simulated by :func:`noisy_outputs`."""
     model = structure() if model is None else model
+    controls = [rotorid.CONTROLS.index(u) for u in model.controls]
+    records = [r for r in doublet_maneuvers(dt=dt) if np.any(r.inputs[:, controls])]
+    inputs = [r.inputs[:, controls] for r in records]
+    outputs = noisy_outputs(model, truth, inputs, dt, process, variance,
+                            np.random.default_rng(seed), disturbances)
+    return rotorid.ManeuverSet([
+        rotorid.Maneuver(r.name, r.time, u, y, input_names=model.controls,
+                         output_names=model.outputs)
+        for r, u, y in zip(records, inputs, outputs)])
+
+
+def noisy_outputs(model, truth, inputs, dt, process, variance, rng, disturbances=None):
+    """The outputs (N_i, p) of ``model`` at ``truth`` for each input record (N_i, m),
+    simulated independently of the estimator (zero-order-hold discretisation by one matrix
+    exponential) from trim, with white process noise (state → σ per sample) added to the
+    states each sample and white measurement noise of ``variance`` (p,); ``disturbances``
+    (state → (σ, τ s)) adds to that state's equation a first-order Gauss-Markov acceleration
+    of stationary standard deviation σ, held over each sample and started at zero."""
     a, b, c, d = model.matrices(model.as_vector(truth))
     n, m = b.shape
     block = np.zeros((n + m, n + m))
@@ -50,26 +65,18 @@ def noisy_data(process, seed=1, dt=0.02, model=None, truth=SMALL_TRUTH, variance
     coloured_rows = [model.states.index(s) for s in coloured]
     decay = np.array([np.exp(-dt / tau) for _, tau in coloured.values()])
     drive = np.array([size for size, _ in coloured.values()]) * np.sqrt(1 - decay**2)
-    rng = np.random.default_rng(seed)
-    controls = [rotorid.CONTROLS.index(u) for u in model.controls]
-    maneuvers = []
-    for record in doublet_maneuvers(dt=dt):
-        inputs = record.inputs[:, controls]
-        if not np.any(inputs):
-            continue
-        x, outputs = np.zeros(n), np.empty((record.n_samples, len(model.outputs)))
+    records = []
+    for record in inputs:
+        x, outputs = np.zeros(n), np.empty((len(record), len(model.outputs)))
         acceleration = np.zeros(len(coloured))
-        for k, u in enumerate(inputs):
+        for k, u in enumerate(record):
             outputs[k] = c @ x + d @ u
             x = phi @ x + gamma @ u
             x[rows] += sigma * rng.standard_normal(len(rows))
             x[coloured_rows] += dt * acceleration
             acceleration = decay * acceleration + drive * rng.standard_normal(len(coloured))
-        outputs += rng.standard_normal(outputs.shape) * np.sqrt(variance)
-        maneuvers.append(rotorid.Maneuver(record.name, record.time, inputs, outputs,
-                                          input_names=model.controls,
-                                          output_names=model.outputs))
-    return rotorid.ManeuverSet(maneuvers)
+        records.append(outputs + rng.standard_normal(outputs.shape) * np.sqrt(variance))
+    return records
 
 
 @pytest.mark.parametrize("unstable", [False, True])
@@ -187,6 +194,44 @@ def test_longitudinal_template_recovers_derivatives_and_noise_within_3_cr():
     expected = np.concatenate([model.as_vector(truth), list(process.values()), variance])
     error = np.abs(result.values - expected) / result.cramer_rao
     assert np.all(error < 3.0), dict(zip(result.parameter_names, error.round(2)))
+
+
+def test_a_fixed_wing_template_with_its_own_signals_recovers_within_3_cr():
+    """The fixed-wing longitudinal template (controls elevator and throttle; outputs u, alpha,
+    q, theta, q_dot, ax, az, the last three with direct control terms) in SI units, on
+    records holding its signals as named channels, simulated here with process noise on u, w
+    and q: every derivative, F and R within 3 CR."""
+    condition = FlightCondition(u0=50.0, w0=2.0, theta0=math.atan2(2.0, 50.0))
+    truth = {"X_u": -0.04, "X_w": 0.08, "X_elevator": 0.5, "X_throttle": 2.0, "Z_u": -0.3,
+             "Z_w": -2.0, "Z_q": -1.5, "Z_elevator": -6.0, "M_u": 0.01, "M_w": -0.08,
+             "M_q": -2.5, "M_elevator": -12.0}
+    model = ModelStructure.populated(condition, "fixed-wing-longitudinal", "si")
+    model = model.without(*[n for n in model.names if n not in truth])
+    process = {"u": 0.01, "w": 0.02, "q": 0.004}
+    sigma = np.array(list(process.values()))
+    variance = np.array([0.05, 0.002, 0.003, 0.002, 0.01, 0.1, 0.1]) ** 2
+    t = np.arange(0.0, 10.0, 0.02)
+    inputs = [np.column_stack([
+        np.where((t > 1) & (t < 2), elevator, 0.0) - np.where((t > 2) & (t < 3), elevator, 0.0),
+        np.where((t > 4) & (t < 7), throttle, 0.0)
+        + np.where((t > 5) & (t < 6), 0.5 * elevator, 0.0)])
+        for elevator, throttle in [(0.02, 0.0), (-0.02, 0.0), (0.0, 0.1), (0.015, -0.1)]]
+    outputs = noisy_outputs(model, truth, inputs, 0.02, process, variance,
+                            np.random.default_rng(4))
+    records = [rotorid.Maneuver(f"record {k}", t, np.zeros((t.size, 0)), np.zeros((t.size, 0)),
+                                input_names=(), output_names=(), units="si",
+                                extra_channels={**dict(zip(model.controls, u.T)),
+                                                **dict(zip(model.outputs, y.T))})
+               for k, (u, y) in enumerate(zip(inputs, outputs))]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
+        result = estimator().estimate(model, rotorid.ManeuverSet(records))
+    assert result.parameter_names[len(truth):] == (
+        "F_u", "F_w", "F_q", "R_u", "R_alpha", "R_q", "R_theta", "R_q_dot", "R_ax", "R_az")
+    expected = np.concatenate([model.as_vector(truth), sigma, variance])
+    error = np.abs(result.values - expected) / result.cramer_rao
+    assert result.converged and np.all(error < 3.0), dict(zip(result.parameter_names,
+                                                              error.round(2)))
 
 
 def test_output_error_is_biased_on_the_same_data():
