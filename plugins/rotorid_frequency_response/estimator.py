@@ -102,7 +102,7 @@ class FrequencyResponseEstimator:
     n_points: int = 20
     threshold: float = COST_THRESHOLD
     band: tuple[float, float] = attrs.field(default=(0.0, np.inf), converter=tuple)
-    max_iterations: int = 200
+    max_iterations: int = 500
     cost_tolerance: float = 1e-6
     step_tolerance: float = 1e-10
     enforce_signs: bool = False

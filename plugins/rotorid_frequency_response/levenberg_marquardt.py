@@ -37,7 +37,7 @@ _MIN_LAMBDA = 1e-12
 class Settings:
     """Stopping rules and LM constants of one run."""
 
-    max_iterations: int = 200
+    max_iterations: int = 500
     cost_tolerance: float = 1e-6     # relative change of J between accepted steps
     step_tolerance: float = 1e-10    # relative parameter change
     initial_lambda: float = 1e-3
