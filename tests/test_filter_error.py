@@ -52,7 +52,8 @@ def noisy_outputs(model, truth, inputs, dt, process, variance, rng, disturbances
     exponential) from trim, with white process noise (state → σ per sample) added to the
     states each sample and white measurement noise of ``variance`` (p,); ``disturbances``
     (state → (σ, τ s)) adds to that state's equation a first-order Gauss-Markov acceleration
-    of stationary standard deviation σ, held over each sample and started at zero."""
+    of stationary standard deviation σ, held over each sample and started at zero, which the
+    accelerometer reading that equation measures too."""
     a, b, c, d = model.matrices(model.as_vector(truth))
     n, m = b.shape
     block = np.zeros((n + m, n + m))
@@ -65,12 +66,17 @@ def noisy_outputs(model, truth, inputs, dt, process, variance, rng, disturbances
     coloured_rows = [model.states.index(s) for s in coloured]
     decay = np.array([np.exp(-dt / tau) for _, tau in coloured.values()])
     drive = np.array([size for size, _ in coloured.values()]) * np.sqrt(1 - decay**2)
+    accelerometer = {"u": "ax", "w": "az", "v": "ay"}
+    sensed = np.zeros((len(model.outputs), len(coloured)))
+    for j, state in enumerate(coloured):
+        if accelerometer.get(state) in model.outputs:
+            sensed[model.outputs.index(accelerometer[state]), j] = 1.0
     records = []
     for record in inputs:
         x, outputs = np.zeros(n), np.empty((len(record), len(model.outputs)))
         acceleration = np.zeros(len(coloured))
         for k, u in enumerate(record):
-            outputs[k] = c @ x + d @ u
+            outputs[k] = c @ x + d @ u + sensed @ acceleration
             x = phi @ x + gamma @ u
             x[rows] += sigma * rng.standard_normal(len(rows))
             x[coloured_rows] += dt * acceleration
@@ -152,15 +158,16 @@ def test_disturbance_sensitivities_match_finite_differences():
 
 
 def test_recovers_derivatives_and_coloured_disturbances_within_3_cr():
-    """Gauss-Markov disturbance accelerations on the pitch and roll equations (correlation
-    times of 1.5 and 0.8 s, far from white at 50 Hz): with disturbances on q and p and no
-    white process noise, every derivative, D, T and R is recovered within 3 CR."""
-    disturbances = {"q": (2.0, 1.5), "p": (5.0, 0.8)}
+    """Gauss-Markov disturbance accelerations on the heave, pitch and roll equations
+    (correlation times of 2, 1.5 and 0.8 s, far from white at 50 Hz; the heave one also in
+    az): with disturbances on w, q and p and no white process noise, every derivative, D, T
+    and R is recovered within 3 CR."""
+    disturbances = {"w": (0.5, 2.0), "q": (2.0, 1.5), "p": (5.0, 0.8)}
     data = noisy_data({}, disturbances=disturbances)
     result = estimator(process_noise=(), disturbances=tuple(disturbances)).estimate(
         structure(), data)
     assert result.converged, result.stop_reason
-    truth = np.concatenate([structure().as_vector(SMALL_TRUTH), [2.0, 5.0, 1.5, 0.8],
+    truth = np.concatenate([structure().as_vector(SMALL_TRUTH), [0.5, 2.0, 5.0, 2.0, 1.5, 0.8],
                             VARIANCE])
     error = np.abs(result.values - truth) / result.cramer_rao
     assert np.all(error < 3.0), dict(zip(result.parameter_names, error.round(2)))

@@ -59,10 +59,17 @@ _VARIANCE_FLOOR = 1e-8
 #: Passes of the measurement-noise start matched to the start innovations (B depends on R
 #: through the filter's P, so R and B are matched alternately; three passes settle it).
 _MATCH_PASSES = 3
+#: Lower bound of a disturbance's size relative to its start: at zero its driving variance
+#: D²(1 − a²) has zero gradient in D, so a fit that reached zero could never leave it.
+_SIZE_FLOOR = 1e-4
 #: Start of a disturbance's correlation time, s.
 _CORRELATION_START = 1.0
 #: Longest correlation time of a disturbance, s (a random walk for the record lengths flown).
 _LONGEST_CORRELATION = 1000.0
+#: Ratio of an output's mean square innovation to its predicted variance up to which the
+#: process noise start of the state it measures is left as it is, and the most doublings.
+_SCALE_RATIO = 2.0
+_SCALE_DOUBLINGS = 12
 #: Lowest matched R, relative to the output's mean square innovation.
 _MATCH_FLOOR = 0.05
 
@@ -107,23 +114,70 @@ def process_noise_start(structure: ModelStructure, states: tuple[str, ...],
 
     ``variance`` (p,) is the start of R over the structure's outputs.
     """
-    known = structure.known_terms()
     starts = {}
     for state in states:
-        column = structure.states.index(state)
-        direct = np.flatnonzero(known.c[:, column])
-        rate = np.flatnonzero(known.measured[:, column])
-        if direct.size:
-            size = np.sqrt(variance[direct[0]])
-        elif rate.size:
-            size = np.sqrt(variance[rate[0]]) * dt
-        else:
+        output, reads_rate = measuring_output(structure, state)
+        if output is None:
             raise EstimationError(
                 f"no output measures state {state} or its rate, so F_{state} has no default "
                 f"start; give process_noise_start = {{F_{state} = ...}} (structure units per "
                 f"sample) or leave {state} out of process_noise")
+        size = np.sqrt(variance[output]) * (dt if reads_rate else 1.0)
         starts[state] = _PROCESS_START * float(size)
     return starts
+
+
+def measuring_output(structure: ModelStructure, state: str) -> tuple[int | None, bool]:
+    """(index of the output that measures ``state``, whether it reads the state's equation
+    rather than the state): the state itself if an output does, else an output reading its
+    equation's derivative terms (a velocity's specific force); (None, False) if none."""
+    known = structure.known_terms()
+    column = structure.states.index(state)
+    direct = np.flatnonzero(known.c[:, column])
+    rate = np.flatnonzero(known.measured[:, column])
+    if direct.size:
+        return int(direct[0]), False
+    return (int(rate[0]), True) if rate.size else (None, False)
+
+
+def _innovation_ratio(problem: "FilterErrorProblem", values: np.ndarray):
+    """(mean square innovation (p,), B (p, p)) at ``values``; None when the filter does not
+    exist or the innovations overflow there."""
+    try:
+        innovations, b = problem.innovations(values)
+    except (EstimationError, np.linalg.LinAlgError):
+        return None
+    mean_square = np.einsum("nmi,nmi->i", innovations, innovations) / problem.n_samples
+    return (mean_square, b) if np.all(np.isfinite(mean_square)) else None
+
+
+def scaled_process_noise(problem: "FilterErrorProblem", values: np.ndarray,
+                         keep: tuple[str, ...] = ()) -> np.ndarray:
+    """``values`` with each process noise and disturbance size (``F_<state>``, ``D_<state>``,
+    except those in ``keep``) doubled while the output measuring its state
+    (:func:`measuring_output`) has a mean square innovation above :data:`_SCALE_RATIO` times
+    its predicted variance B_ii (at most :data:`_SCALE_DOUBLINGS` doublings).
+
+    From the small default start, data flown in turbulence leave innovations tens of times
+    the filter's B; matching them with R alone would explain the disturbances' response as
+    measurement noise, a poor local minimum (on data with a Gauss-Markov heave disturbance
+    the fit then ended with R_az four times the truth and Z_w 9 CR off). In still air the
+    ratio is near one and nothing changes.
+    """
+    values = np.array(values, dtype=float)
+    rows = [i for i, n in enumerate(problem.parameter_names)
+            if n.startswith(("F_", "D_")) and n not in keep]
+    outputs = np.array([measuring_output(problem.structure, problem.parameter_names[i][2:])[0]
+                        for i in rows], dtype=int)
+    for _ in range(_SCALE_DOUBLINGS if rows else 0):
+        found = _innovation_ratio(problem, values)
+        if found is None:
+            break
+        high = (found[0] / np.diag(found[1]))[outputs] > _SCALE_RATIO
+        if not high.any():
+            break
+        values[np.array(rows)[high]] *= 2.0
+    return values
 
 
 def matched_measurement_noise(problem: "FilterErrorProblem", values: np.ndarray,
@@ -144,15 +198,11 @@ def matched_measurement_noise(problem: "FilterErrorProblem", values: np.ndarray,
             if n.startswith("R_") and n not in keep]
     outputs = [problem.output_names.index(problem.parameter_names[i][2:]) for i in rows]
     for _ in range(_MATCH_PASSES if rows else 0):
-        try:
-            innovations, b = problem.innovations(values)
-        except (EstimationError, np.linalg.LinAlgError):
+        found = _innovation_ratio(problem, values)
+        if found is None:
             return values
-        mean_square = (np.einsum("nmi,nmi->i", innovations, innovations)[outputs]
-                       / problem.n_samples)
-        if not np.all(np.isfinite(mean_square)):
-            return values
-        predicted = np.diag(b)[outputs] - values[rows]                    # (HPHᵀ)_ii
+        mean_square = found[0][outputs]
+        predicted = np.diag(found[1])[outputs] - values[rows]            # (HPHᵀ)_ii
         values[rows] = np.maximum(mean_square - predicted, _MATCH_FLOOR * mean_square)
     return values
 
@@ -193,6 +243,8 @@ class FilterErrorProblem:
         self.noise_rows = [kept.index(s) for s in process_noise]
         self.disturbances = disturbances
         self.disturbance_rows = [kept.index(s) for s in disturbances]
+        self.disturbance_reading = structure.known_terms().measured[
+            :, [structure.states.index(s) for s in disturbances]]
         self.n_structure = structure.n_parameters
         self.output_names = structure.outputs
         self.parameter_names = (tuple(structure.parameter_names)
@@ -236,7 +288,8 @@ class FilterErrorProblem:
         if directions:
             d_dir[k + n_f + np.arange(n_d), np.arange(n_d)] += (
                 2j * COMPLEX_STEP * sigma * (1 - decay[0].real**2))
-        system = with_disturbances(system, self.disturbance_rows, decay, self.records.dt)
+        system = with_disturbances(system, self.disturbance_rows, self.disturbance_reading,
+                                   decay, self.records.dt)
         process = np.zeros((n_dir, system.size, system.size), dtype=system.transition.dtype)
         process[:, self.noise_rows, self.noise_rows] = q_dir
         extra = system.size - n_d + np.arange(n_d)
@@ -318,7 +371,8 @@ class FilterErrorEstimator:
         disturbances: states whose equations get a coloured disturbance (default none): a
             first-order Gauss-Markov acceleration with stationary standard deviation
             ``D_<state>`` (structure units per s) and correlation time ``T_<state>`` (s),
-            both estimated; for turbulence, whose gusts are far from white at the sample rate.
+            both estimated, which the outputs reading that equation (the accelerometers) see
+            too; for turbulence, whose gusts are far from white at the sample rate.
             D starts at the process-noise start per second, T at 1 s.
         enforce_signs: use the sign priors as bounds.
         start: ``"auto"`` (equation error when every derivative's initial value is zero, else
@@ -356,8 +410,9 @@ class FilterErrorEstimator:
             problem = FilterErrorProblem(
                 structure, maneuvers, process_noise_states(structure, self.process_noise),
                 settings, process_noise_states(structure, self.disturbances, "disturbances"))
-            values, note, kept = self._start_values(problem, maneuvers, start)
-            values = matched_measurement_noise(problem, values, kept)
+            values, note, given = self._start_values(problem, maneuvers, start)
+            values = matched_measurement_noise(
+                problem, scaled_process_noise(problem, values, given), given)
             bounds = self._bounds(problem, values)
 
             def progress(record):
@@ -410,12 +465,12 @@ class FilterErrorEstimator:
                 raise EstimationError(f"start values for unknown parameters {sorted(unknown)}")
             for name, value in start.items():
                 values[names.index(name)] = float(value)
-            return values, None, tuple(n for n in names if n.startswith("R_") and n in start)
+            return values, None, tuple(start)
         vector = np.asarray(start, dtype=float)
         if vector.shape != values.shape:
             raise EstimationError(f"start has shape {vector.shape}; the filter-error estimate "
                                   f"has {values.size} parameters ({', '.join(names)})")
-        return vector.copy(), None, tuple(n for n in names if n.startswith("R_"))
+        return vector.copy(), None, names
 
     @staticmethod
     def _noise_start(records) -> np.ndarray:
@@ -430,7 +485,8 @@ class FilterErrorEstimator:
         lower, upper = problem.structure.bounds(enforce_signs=self.enforce_signs)
         parts = problem.split(values)
         n_f, n_d = parts.process.size, parts.disturbance.size
-        return (np.concatenate([lower, np.zeros(n_f + n_d), np.full(n_d, problem.records.dt),
+        return (np.concatenate([lower, np.zeros(n_f), _SIZE_FLOOR * parts.disturbance,
+                                np.full(n_d, problem.records.dt),
                                 _VARIANCE_FLOOR * parts.measurement]),
                 np.concatenate([upper, np.full(n_f + n_d, np.inf),
                                 np.full(n_d, _LONGEST_CORRELATION),

@@ -125,13 +125,15 @@ def companion_system(structure: ModelStructure, values, dt: float, hold: str,
                            output_forcing)
 
 
-def with_disturbances(system: CompanionSystem, rows, decay: np.ndarray,
+def with_disturbances(system: CompanionSystem, rows, reading: np.ndarray, decay: np.ndarray,
                       dt: float) -> CompanionSystem:
     """``system`` with one first-order Gauss-Markov disturbance state d_j per entry of
-    ``rows`` appended: d_j,n+1 = decay[:, j]·d_j,n (plus its driving noise, which the caller
-    puts in Q) and x_rows[j],n+1 gains dt·d_j,n, so d_j is an acceleration of that state's
-    equation held over the sample. ``decay`` (D, m) per direction (complex directions carry
-    the derivatives of a correlation time). ``rows`` index the system's states."""
+    ``rows`` (indices of the system's states) appended: d_j,n+1 = decay[:, j]·d_j,n (plus its
+    driving noise, which the caller puts in Q) and x_rows[j],n+1 gains dt·d_j,n, so d_j is an
+    acceleration of that state's equation held over the sample; the outputs that read that
+    equation's terms (the accelerometers) read d_j too, with weights ``reading`` (p, m).
+    ``decay`` (D, m) per direction (complex directions carry the derivatives of a
+    correlation time)."""
     if not len(rows):
         return system
     n_dir, size = system.transition.shape[:2]
@@ -141,7 +143,8 @@ def with_disturbances(system: CompanionSystem, rows, decay: np.ndarray,
     transition[:, :size, :size] = system.transition
     transition[:, list(rows), size + np.arange(m)] = dt
     transition[:, size + np.arange(m), size + np.arange(m)] = decay
-    output = np.concatenate([system.output, np.zeros(system.output.shape[:2] + (m,))], axis=2)
+    output = np.concatenate([system.output, np.broadcast_to(
+        reading, system.output.shape[:2] + (m,))], axis=2)
     state_forcing = np.concatenate(
         [system.state_forcing, np.zeros(system.state_forcing.shape[:2] + (m,))], axis=2)
     return CompanionSystem(system.states, transition, output, system.taps, state_forcing,
