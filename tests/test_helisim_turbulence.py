@@ -113,8 +113,19 @@ def test_zero_intensity_turbulence_flies_as_still_air():
     assert all(a.outputs.tobytes() == b.outputs.tobytes() for a, b in zip(still, calm_set))
 
 
-def test_turbulent_monte_carlo_realisations_are_refused(tmp_path):
-    with pytest.raises(DataError, match="own gusts"):
-        settings = {k: v for k, v in SMALL.items() if k != "kinds"}
-        HelisimSource().noise_realisations({**settings, "identification": ["3211"],
-                                            "turbulence": "light"}, tmp_path)
+def test_monte_carlo_flights_in_turbulence_fly_each_seed(tmp_path):
+    """In turbulence the Monte Carlo data of a seed are that seed's own flight (gusts and
+    noise drawn anew): equal to the case data flown with the seed, different between seeds,
+    and read back from the store the second time."""
+    settings = {"condition": "hover", "quick": True, "axes": ["lat"], "turbulence": "light",
+                "identification": ["3211"], "verification": []}
+    source = HelisimSource()
+    flights = source.noise_realisations(settings, tmp_path / "runs")
+    for seed in (3, 4):
+        case = source.case_data({**settings, "seed": seed}, tmp_path / f"case-{seed}")
+        flown = flights(seed)
+        assert [m.name for m in flown] == [m.name for m in case.identification]
+        assert all(a.outputs.tobytes() == b.outputs.tobytes()
+                   for a, b in zip(flown, case.identification))
+    assert not np.allclose(flights(3)[0].outputs, flights(4)[0].outputs)
+    assert (tmp_path / "runs" / "seed-3").is_dir()

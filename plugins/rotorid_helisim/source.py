@@ -149,14 +149,16 @@ class HelisimSource:
         return CaseData(_of_kinds(flown, identification), _of_kinds(flown, verification),
                         condition, self)
 
-    def noise_realisations(self, settings: Mapping, directory) -> NoiseRealisations:
-        """A case's identification maneuvers for any noise seed, for Monte Carlo runs: the
-        noise-free set is flown once (stored in ``directory``) and each seed adds its own
-        noise (equal to :meth:`case_data`'s for the same seed)."""
+    def noise_realisations(self, settings: Mapping, directory
+                           ) -> NoiseRealisations | TurbulentFlights:
+        """A case's identification maneuvers for any noise seed, for Monte Carlo runs, equal
+        to :meth:`case_data`'s for the same seed. In still air the noise-free set is flown
+        once (stored in ``directory``) and each seed adds its own noise; in turbulence each
+        seed flies its own gusts (:class:`TurbulentFlights`)."""
         config, identification, _ = case_config(settings)
         if config.turbulence is not None:
-            raise DataError("noise realisations share one flight, but in turbulence every seed "
-                            "flies its own gusts; generate each seed's set instead")
+            return TurbulentFlights(self, attrs.evolve(config, kinds=identification),
+                                    Path(directory))
         quiet = attrs.evolve(config, kinds=identification,
                              noise=SensorNoise({c: 0.0 for c in config.noise.sigma}))
         clean, _ = self.generate_into(quiet, directory)
@@ -164,6 +166,23 @@ class HelisimSource:
 
     def _directory(self, config: DataSetConfig) -> Path:
         return Path(self.cache_dir) / config.condition
+
+
+@attrs.frozen(eq=False)
+class TurbulentFlights:
+    """Data sets in turbulence for any seed: ``flights(seed)`` flies ``config`` with that
+    seed, so gusts and sensor noise are both drawn anew, and stores the set in
+    ``directory/seed-<seed>`` (read back from there when it is already flown)."""
+
+    source: HelisimSource
+    config: DataSetConfig
+    directory: Path
+
+    def __call__(self, seed: int) -> ManeuverSet:
+        """The data set flown with ``seed``."""
+        flown, _ = self.source.generate_into(attrs.evolve(self.config, seed=int(seed)),
+                                             self.directory / f"seed-{int(seed)}")
+        return flown
 
 
 def case_config(settings: Mapping) -> tuple[DataSetConfig, tuple[str, ...], tuple[str, ...]]:

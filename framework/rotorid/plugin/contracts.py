@@ -209,7 +209,8 @@ class DataSource(Protocol):
         ``path_settings``, the names of settings that hold file paths (relative ones in a
         case file are resolved against its folder), and ``noise_realisations(settings,
         directory)``, a picklable ``data(seed) -> ManeuverSet`` of the identification
-        maneuvers with that noise seed (``rotorid montecarlo``).
+        maneuvers with that seed (its noise, and its gusts in turbulence; ``rotorid
+        montecarlo``).
         """
 
 

@@ -174,13 +174,14 @@ def _cell(value, width: int, spec: str = ".4g") -> str:
 # ----------------------------------------------------------------- runs
 def estimate_run(structure: ModelStructure, data: Callable[[int], ManeuverSet], seed: int,
                  estimator: str, options: Mapping, start) -> tuple:
-    """One Monte Carlo run (a task): ``(values, cramer_rao, converged)`` on ``data(seed)``."""
+    """One Monte Carlo run (a task): ``(parameter names, values, cramer_rao, converged)`` on
+    ``data(seed)``."""
     maneuvers = data(seed)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IdentifiabilityWarning)
         result = create("estimators", estimator, **options).estimate(structure, maneuvers,
                                                                      start=start)
-    return result.values, result.cramer_rao, result.converged
+    return result.parameter_names, result.values, result.cramer_rao, result.converged
 
 
 def monte_carlo(structure: ModelStructure, data: Callable[[int], ManeuverSet],
@@ -200,20 +201,21 @@ def monte_carlo(structure: ModelStructure, data: Callable[[int], ManeuverSet],
         reference: the estimate being checked (vector), e.g. the study's; NaN if ``None``.
         executor: ``None``, ``"process"`` or an Executor (see :mod:`rotorid.executors`).
 
-    Failed runs are recorded in ``failures`` and left out of the statistics; if every run
-    fails, :class:`~rotorid.errors.StudyError` names them.
+    The result covers every parameter the estimator estimates (the filter error's noise
+    parameters too). Failed runs are recorded in ``failures`` and left out of the statistics;
+    if every run fails, :class:`~rotorid.errors.StudyError` names them.
     """
-    names = structure.parameter_names
     options = dict(estimator_options or {})
     tasks = {int(s): ((structure, data, int(s), estimator, options, start), {}) for s in seeds}
     results, failures = run_tasks(estimate_run, tasks, executor,
                                   label=lambda s: f"case {case} run with seed {s}")
     if not results:
         raise failure_error("Monte Carlo runs", results, failures, "no directory")
+    names = next(iter(results.values()))[0]
     truth_vector = [float((truth or {}).get(n, np.nan)) for n in names]
     return MonteCarloResult(
-        case, names, tuple(results), [r[0] for r in results.values()],
-        [r[1] for r in results.values()], [r[2] for r in results.values()], truth_vector,
+        case, names, tuple(results), [r[1] for r in results.values()],
+        [r[2] for r in results.values()], [r[3] for r in results.values()], truth_vector,
         np.full(len(names), np.nan) if reference is None else reference, failures,
         structure.units.name)
 

@@ -1,0 +1,150 @@
+"""Monte Carlo of output error and filter error in turbulence: Cramér-Rao bounds against spread.
+
+Every run flies the hover case's longitudinal identification multisteps (3211 and 2311 on the
+longitudinal stick and the collective, both directions) with its own seed, so gusts and sensor
+noise are both drawn anew (``HelisimSource.noise_realisations`` in turbulence, the data factory
+``rotorid montecarlo`` uses), and fits the fully populated longitudinal structure (15
+derivatives, states u w q θ, outputs ax az q θ) with both estimators through
+:func:`rotorid.study.montecarlo.monte_carlo`, the engine of ``rotorid montecarlo``. Per key
+derivative it prints the runs' mean and standard deviation, the mean Cramér-Rao bound and their
+ratio (1 for honest bounds), writes ``<out>/<estimator>.json`` and the figure
+``<out>/turbulence_montecarlo.png``.
+
+This is the reduced problem: the six-dof structure with delays takes minutes per filter-error
+fit on a shared 2-core machine, 30 runs of it hours. Run from the repository root::
+
+    python docs/examples/turbulence_montecarlo.py [--runs 30] [--turbulence moderate]
+        [--duration-scale 1.0] [--executor process] [--out montecarlo-turbulence]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections.abc import Callable
+from pathlib import Path
+
+import attrs
+import numpy as np
+import rotorid
+from rotorid import FlightCondition, ManeuverSet, ModelStructure
+from rotorid.study.montecarlo import monte_carlo
+
+KEY = ("M_q", "M_long", "Z_w", "Z_coll")
+ESTIMATORS = ("output-error", "filter-error")
+
+
+@attrs.frozen
+class StartInTrim:
+    """``data(seed)`` without the maneuvers' initial states: the flights start in trim (the
+    recorded six-dof initial state is zero), which the longitudinal structure takes as its
+    own zero initial state."""
+
+    data: Callable[[int], ManeuverSet]
+
+    def __call__(self, seed: int) -> ManeuverSet:
+        flown = self.data(seed)
+        assert all(not np.any(m.initial_state) for m in flown)
+        return ManeuverSet([attrs.evolve(m, initial_state=None) for m in flown],
+                           hold=flown.hold)
+
+
+def flights(turbulence: str, duration_scale: float, directory: Path):
+    """``data(seed)`` of the longitudinal identification maneuvers, the source and the trim
+    condition."""
+    source = rotorid.create("data-sources", "helisim")
+    settings = {"condition": "hover", "axes": ["long", "coll"], "turbulence": turbulence,
+                "identification": ["3211", "2311"], "verification": [],
+                "duration_scale": duration_scale}
+    data = StartInTrim(source.noise_realisations(settings, directory))
+    first = data(0)[0].metadata
+    condition = FlightCondition.from_airspeed(0.0, first["trim_theta_deg"],
+                                              first["trim_phi_deg"])
+    return data, source, condition
+
+
+def truth_values(source, structure: ModelStructure) -> dict[str, float]:
+    """The truth model's residualised linearisation as the structure's derivatives."""
+    linear = source.linearize(0.0, units=structure.units.name)
+    rows = [linear.states.index(s) for s in structure.states]
+    a = np.asarray(linear.A)[np.ix_(rows, rows)] - structure.known_state_matrix()
+    values = {}
+    for d in structure.derivatives:
+        row = structure.states.index(structure.equation_of(d))
+        values[d.name] = float(
+            linear.B[rows[row], linear.controls.index(d.variable)] if structure.is_control(d)
+            else a[row, structure.states.index(d.variable)])
+    return values
+
+
+def main(argv=None) -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=30)
+    parser.add_argument("--turbulence", default="moderate", choices=("light", "moderate"))
+    parser.add_argument("--duration-scale", type=float, default=1.0)
+    parser.add_argument("--executor", default=None, choices=(None, "process"))
+    parser.add_argument("--out", type=Path, default=Path("montecarlo-turbulence"))
+    args = parser.parse_args(argv)
+
+    args.out.mkdir(parents=True, exist_ok=True)
+    data, source, condition = flights(args.turbulence, args.duration_scale,
+                                      args.out / "data")
+    structure = ModelStructure.populated(condition, "longitudinal")
+    truth = truth_values(source, structure)
+    results = {}
+    for name in ESTIMATORS:
+        result = monte_carlo(structure, data, range(args.runs), estimator=name, truth=truth,
+                             executor=args.executor, case=f"hover-{args.turbulence}-{name}")
+        (args.out / f"{name}.json").write_text(json.dumps(result.as_dict(), indent=1))
+        results[name] = result
+    table = {}
+    print(f"{args.runs} runs, {args.turbulence} turbulence, duration scale "
+          f"{args.duration_scale}")
+    print(f"{'':8}{'truth':>9}" + "".join(f"{n:>44}" for n in ESTIMATORS))
+    print(f"{'':17}" + f"{'mean':>11}{'std':>11}{'mean CR':>11}{'std/CR':>11}" * 2)
+    for key in KEY:
+        row = f"{key:8}{truth[key]:9.3f}"
+        for name, result in results.items():
+            i = result.parameter_names.index(key)
+            entry = {"mean": float(result.mean[i]), "std": float(result.std[i]),
+                     "mean_cr": float(result.mean_cramer_rao[i]),
+                     "ratio": float(result.ratio[i]), "truth": truth[key]}
+            table[(name, key)] = entry
+            row += (f"{entry['mean']:11.3f}{entry['std']:11.4f}{entry['mean_cr']:11.4f}"
+                    f"{entry['ratio']:11.2f}")
+        print(row)
+    for name, result in results.items():
+        finite = np.isfinite(result.ratio)
+        print(f"{name}: median std/CR over all {int(finite.sum())} parameters "
+              f"{np.median(result.ratio[finite]):.2f}, converged {int(result.converged.sum())}"
+              f" of {result.runs}")
+    _figure(results, args.out / "turbulence_montecarlo.png")
+    return table
+
+
+def _figure(results, path: Path) -> None:
+    """std/CR per derivative of the longitudinal structure, one bar per estimator."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = [n for n in next(iter(results.values())).parameter_names if "_" in n
+             and n.split("_")[0] in "XZM"]
+    figure, axis = plt.subplots(figsize=(9, 3.6), layout="constrained")
+    width = 0.4
+    for k, (name, result) in enumerate(results.items()):
+        ratio = [result.ratio[result.parameter_names.index(n)] for n in names]
+        axis.bar(np.arange(len(names)) + (k - 0.5) * width, ratio, width, label=name)
+    axis.axhline(1.0, color="k", lw=0.8)
+    axis.axhspan(0.7, 1.3, color="0.85", zorder=0, label="within 30 %")
+    axis.set_yscale("log")
+    axis.set_xticks(np.arange(len(names)), names, rotation=45)
+    axis.set_ylabel("std of the runs / mean CR bound")
+    axis.legend(loc="upper left", fontsize=8)
+    figure.savefig(path, dpi=110)
+    plt.close(figure)
+
+
+if __name__ == "__main__":
+    main()
