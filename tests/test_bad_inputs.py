@@ -403,6 +403,12 @@ COMMANDS = [
      ExitStatus.USAGE, ["RESULT.json"]),
     ("verify-missing-result", _plain("verify", "{tmp}/r.json", "{tmp}/sweeps", "--out",
                                      "{tmp}/out"), ExitStatus.ERROR, ["r.json", "does not exist"]),
+    ("verify-band-not-three-numbers", _plain("verify", "{tmp}/r.json", "{tmp}/sweeps", "--band",
+                                             "0.8,1", "--out", "{tmp}/out"),
+     ExitStatus.USAGE, ["--band needs COHERENCE,OMEGA_MIN,OMEGA_MAX", "'0.8,1'"]),
+    ("verify-band-coherence-above-one", _plain("verify", "{tmp}/r.json", "{tmp}/sweeps",
+                                               "--band", "1.5,0.1,10", "--out", "{tmp}/out"),
+     ExitStatus.USAGE, ["--band: verification band: coherence must be a γ² in (0, 1]"]),
     # --out of the wrong kind
     *[(f"{command[0]}-out-is-a-file", _with_out(command, _regular_file), ExitStatus.USAGE,
        ["--out", "taken", "not a directory"])

@@ -5,6 +5,8 @@ import pytest
 from rotorid.errors import DataFileError
 from rotorid.study.case import FlightCase
 from rotorid.study.pipeline import Study, run_case
+from rotorid.study.reference import ReferenceValue
+from rotorid.verification.band import VerificationBand
 
 FILES = {"source": "files", "identification": "flight/*.csv"}
 
@@ -37,6 +39,17 @@ def case_file(tmp_path, text: str):
     ('[structure]\npopulate = "none"\n[derivatives]\nM_q = { fixed = -1.0 }\n'
      '[delays]\nderivatives = []\n', r"no free derivative to estimate"),
     ('[identification]\nkinds = ["3211"]\n', r"unknown key\(s\) \['identification'\]"),
+    ('[verification]\ncoherence = 1.5\n', r"\[verification\].*coherence must be a γ² in "
+                                           r"\(0, 1\]"),
+    ('[verification]\ncoherence = "high"\n', r"\[verification\]: coherence must be a number"),
+    ('[verification]\nomega_min = 12.0\n', r"\[verification\].*0 < omega_min < omega_max"),
+    ('[reference]\nM_qq = -3.9\n', r"\[reference\] M_qq are not derivatives of the case's "
+                                    r"structure"),
+    ('[reference]\nM_q = "-3.9"\n', r"\[reference\] M_q must be a finite number"),
+    ('[reference]\nM_q = { value = -3.9, sigma = 1 }\n',
+     r"\[reference\] M_q: give a number or a table with value"),
+    ('[reference]\nM_q = { value = -3.9, uncertainty = -1 }\n',
+     r"\[reference\] M_q.uncertainty must be a positive number"),
 ])
 def test_a_bad_setting_names_the_file_and_the_key(tmp_path, text, message):
     path = case_file(tmp_path, text)
@@ -84,3 +97,19 @@ def test_run_case_refuses_a_name_that_leaves_the_results_directory(tmp_path):
     with pytest.raises(DataFileError, match="cannot name a results directory"):
         run_case(escaping, tmp_path / "a" / "b" / "out")
     assert not any(tmp_path.rglob("escaped*")) and not (tmp_path / "a").exists()
+
+
+def test_the_verification_band_is_read_from_the_case_file(tmp_path):
+    path = case_file(tmp_path, "[verification]\ncoherence = 0.6\nomega_max = 20\n")
+    band = FlightCase.load(path).band
+    assert (band.coherence, band.omega_min, band.omega_max) == (0.6, 0.1, 20.0)
+    assert FlightCase.load(case_file(tmp_path, "")).band == VerificationBand(0.8, 0.1, 10.0)
+
+
+def test_reference_values_are_read_from_the_case_file(tmp_path):
+    path = case_file(tmp_path, '[reference]\nsource = "previous model"\nM_q = -3.9\n'
+                               'L_v = { value = -0.41, uncertainty = 0.05, source = "tunnel" }\n')
+    assert FlightCase.load(path).reference == {
+        "M_q": ReferenceValue(-3.9, None, "previous model"),
+        "L_v": ReferenceValue(-0.41, 0.05, "tunnel")}
+    assert FlightCase.load(case_file(tmp_path, "")).reference == {}

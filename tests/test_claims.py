@@ -5,6 +5,7 @@ import types
 
 import numpy as np
 from rotorid.study.claims import claims_tally, paper_claims, sign_claim
+from rotorid.verification.band import DEFAULT_BAND
 
 
 def _estimate(values: dict, bounds: dict, rmse: float = 0.3):
@@ -16,7 +17,7 @@ def _estimate(values: dict, bounds: dict, rmse: float = 0.3):
 
 
 def _result(source="helisim", airspeed_kt=70.0, truth=None, **estimates):
-    case = types.SimpleNamespace(data_source=source)
+    case = types.SimpleNamespace(data_source=source, band=DEFAULT_BAND)
     return types.SimpleNamespace(
         case=case, condition=types.SimpleNamespace(airspeed_kt=airspeed_kt),
         estimates=estimates, verification={}, truth_derivatives=truth)

@@ -10,6 +10,7 @@ import xml.etree.ElementTree as ElementTree
 import numpy as np
 import pytest
 from rotorid.study.claims import mean_phase_error, paper_claims
+from rotorid.verification.band import VerificationBand
 from rotorid.study.expectations import (
     check_signs,
     derivative_scale,
@@ -52,13 +53,15 @@ def test_sign_check_verdicts():
     assert forward[0].reference == pytest.approx(0.018 * 180 / math.pi * 0.3048)
 
 
-def test_mean_phase_error_uses_the_coherent_points_only():
-    omega = np.geomspace(1, 10, 6)
+def test_mean_phase_error_uses_the_band_points_only():
+    omega = np.geomspace(1, 20, 7)
+    band = VerificationBand()
     item = types.SimpleNamespace(
-        error=np.exp(1j * np.radians([10, -10, 10, -10, 90, 90])),
-        coherence=np.array([0.9, 0.95, 0.8, 0.99, 0.5, np.nan]), omega=omega)
+        error=np.exp(1j * np.radians([10, -10, 10, -10, 90, 90, 90])),
+        checked=band.selects(omega, [0.9, 0.95, 0.8, 0.99, 0.5, np.nan, 1.0]))
+    assert item.checked[-1] == False and omega[-1] > 10      # noqa: E712 (outside the range)
     assert mean_phase_error(item) == pytest.approx(10.0)
-    item.coherence = np.zeros(6)
+    item.checked = np.zeros(7, bool)
     assert mean_phase_error(item) is None
 
 
@@ -102,6 +105,18 @@ def test_the_quick_hover_study_writes_a_complete_linked_report(quick_study):
                 assert (page.parent / target).is_file(), f"{page.name} links missing {target}"
     figures = sorted(p.name for p in (case / "figures").glob("*.png"))
     assert "rmse.png" in figures
+    # The delay profiles stored in result.json are drawn in the delays section, captioned.
+    assert "delay_profiles.png" in figures
+    report = (case / "report.html").read_text()
+    delays_section = report.split('<h2 id="delays">')[1].split("<h2")[0]
+    assert 'src="figures/delay_profiles.png"' in delays_section
+    assert "<figcaption>Delay profiles of the model with delays" in delays_section
+    # One verification band, stated beside the verdicts.
+    assert "verification band γ² ≥ 0.8 over 0.1–10 rad/s" in report
+    band_column = [row[2] for row in _read_csv(case / "tables" / "verification.csv")[1:]]
+    assert set(band_column) == {"γ² ≥ 0.8 over 0.1–10 rad/s"}
+    assert record["frequency_verification"]["with delays"]["band"] == {
+        "coherence": 0.8, "omega_min": 0.1, "omega_max": 10.0}
     # Every identification maneuver: 3211 and 2311 per control, ± direction.
     assert sorted(f for f in figures if f.startswith("time_")) == sorted(
         f"time_hover_{kind}_{axis}_{sign}.png" for kind in ("3211", "2311")

@@ -22,6 +22,7 @@ from rotorid.report.plots.frequency import (  # noqa: E402
 )
 from rotorid.study.case import FlightCase  # noqa: E402
 from rotorid.study.pipeline import run_case  # noqa: E402
+from rotorid.study.reference import ReferenceValue  # noqa: E402
 from rotorid.study.result import MODELS  # noqa: E402
 from rotorid.verification.compare import envelopes_by_name  # noqa: E402
 from rotorid.verification.envelopes import error_db_deg  # noqa: E402
@@ -114,21 +115,30 @@ def test_error_plot_limits_counts_and_legend(hover):
     mag, phase, coherence = figure.axes[:3]
     for axis, part in ((mag, 0), (phase, 1)):
         values = np.concatenate([
-            error_db_deg(item.error)[part][item.coherence >= 0.8] for item in errors.values()])
+            error_db_deg(item.error)[part][item.checked] for item in errors.values()])
+        bounds = np.concatenate([line.get_ydata() for line in axis.get_lines()
+                                 if line.get_linestyle() == "--"])     # the checked range's
         low, high = axis.get_ylim()
-        span = values.max() - values.min()
-        # From the coherent points: they all show, with little more than a margin around.
+        held = np.concatenate([values, bounds[np.isfinite(bounds)]])
+        span = held.max() - held.min()
+        # From the checked points and bounds: they all show, with little more than a margin.
         assert low <= values.min() and high >= values.max()
-        assert (high - low) < max(span, 10.0) * 1.6 + 1.0
+        assert (high - low) < max(span, 10.0) * 1.2 + 1.0
     labels = [t.get_text() for t in figure.legends[0].get_texts()]
     assert not any("not available" in label for label in labels)
     for label, item in errors.items():
         check = item.checks["muad"]
         assert f"{label}: MUAD {check.n_inside}/{check.n_used} inside, {check.n_outside} " \
                "outside" in labels
-    assert any(label.startswith("filled: γ² ≥ 0.8") for label in labels)
-    assert any(label.startswith("open: 0.6 ≤ γ² < 0.8") for label in labels)
+    assert "filled: in the verification band, γ² ≥ 0.8 over 0.1–10 rad/s (checked)" in labels
+    assert "open: γ² ≥ 0.6 outside the band (shown, not checked)" in labels
+    assert "outside the band's frequency range" in labels
     assert len(coherence.get_lines()) == 2          # the truth's coherence once, the threshold
+    assert coherence.get_lines()[1].get_ydata()[0] == 0.8
+    # The grid runs past the band's 10 rad/s: that part is shaded on every panel.
+    for axis in (mag, phase, coherence):
+        (shaded,) = axis.patches                   # a Rectangle in data coordinates
+        assert shaded.get_x() == 10.0 and axis.get_xlim()[1] > 10.0
     # MUAD drawn over the points' range: checked part dashed, extrapolated part dotted.
     muad = [line for line in mag.get_lines() if line.get_label().startswith("MUAD")]
     drawn = np.concatenate([line.get_xdata()[np.isfinite(line.get_ydata())] for line in muad])
@@ -202,6 +212,34 @@ def test_a_report_about_measured_data_only(hover, tmp_path):
     figures = sorted(p.name for p in (tmp_path / "own" / "figures").glob("time_*.png"))
     assert figures == sorted(f"time_{m.name}.png" for m in maneuvers)
     assert not (tmp_path / "own" / "tables" / "checks.csv").exists()
+    assert 'id="reference"' not in page                  # no [reference]: no reference rows
     for table in re.findall(r"<table>.*?</table>", page, flags=re.DOTALL):
         header = re.search(r"<thead>(.*?)</thead>", table)[1]
         assert "[" in header or ">unit<" in header, header
+
+
+def test_a_files_case_is_compared_with_the_users_reference(hover, tmp_path):
+    """[reference] values: each beside the identified one, the verdict from two combined
+    bounds, a removed derivative named; table in the report, CSV and result.json."""
+    estimate = hover.estimates["with delays"]
+    m_q, bound = estimate.value("M_q"), float(estimate.cramer_rao[estimate.index("M_q")])
+    removed = hover.path.removed[0]
+    reference = {"M_q": ReferenceValue(m_q + 3.0 * bound, 2.0 * bound, "previous model"),
+                 "L_v": ReferenceValue(-2.0 * estimate.value("L_v"), None, "wind tunnel"),
+                 removed: ReferenceValue(1.0)}
+    case = attrs.evolve(hover.case, data={"source": "files", "identification": "f/*.csv"},
+                        reference=reference)
+    result = attrs.evolve(hover, case=case, truth_derivatives=None, truth_delays=None)
+    rows = {r["name"]: r for r in result.as_dict()["reference_comparison"]}
+    # 3 CR off with a reference uncertainty of 2 CR: √(1 + 4) = 2.24 CR combined, 1.34 < 2.
+    assert rows["M_q"]["difference"] == pytest.approx(-3.0 * bound)
+    assert rows["M_q"]["combined_bound"] == pytest.approx(5 ** 0.5 * bound)
+    assert rows["M_q"]["verdict"] == "agrees" and rows["M_q"]["source"] == "previous model"
+    assert rows["L_v"]["verdict"] == "differs"            # opposite sign, twice the size
+    assert rows[removed]["verdict"] == "removed" and rows[removed]["identified"] is None
+    page = write_case_outputs(result, tmp_path / "own").read_text(encoding="utf-8")
+    assert '<h2 id="reference">Reference values</h2>' in page
+    assert '<a href="#reference">Reference values</a>' in page
+    table = (tmp_path / "own" / "tables" / "reference.csv").read_text().splitlines()
+    assert table[0].startswith("derivative,unit,identified,CR bound,reference")
+    assert [line.split(",")[0] for line in table[1:]] == ["M_q", "L_v", removed]

@@ -11,7 +11,8 @@ from rotorid.data import Maneuver, ManeuverSet  # noqa: E402
 from rotorid.errors import ExitStatus, VerificationError  # noqa: E402
 from rotorid.plugin.manager import create, new_plugin_manager  # noqa: E402
 from rotorid.report.plots.frequency import plot_bode, plot_error  # noqa: E402
-from rotorid.verification.compare import compare_sweeps  # noqa: E402
+from rotorid.verification.band import VerificationBand  # noqa: E402
+from rotorid.verification.compare import compare_sweeps, envelopes_by_name  # noqa: E402
 from rotorid.verification.pairs import parse_pair  # noqa: E402
 from rotorid.verification.frequency import log_grid  # noqa: E402
 from sweeps import DT, analytic, log_sweep, respond  # noqa: E402
@@ -26,8 +27,7 @@ Q, P = 2, 5                       # output columns
 @pytest.fixture(scope="module")
 def envelopes():
     manager = new_plugin_manager([envelope_plugin], load_entry_points=False)
-    return {name: create("validation-envelopes", name, manager)
-            for name in ("muad", "aee", "mismatch-cost")}
+    return envelopes_by_name(("muad", "aee", "mismatch-cost"), manager)
 
 
 def _outputs(x, delay):
@@ -94,6 +94,47 @@ def test_missing_delay_fails_phase_envelope_and_delay_passes(case, envelopes):
     assert summary["pairs"][0]["checks"]["muad"]["passed"] is True
     assert summary["time_domain"]["rmse"] < no_delay.summary()["time_domain"]["rmse"]
     assert "q/long" in delayed.report() and "MUAD: pass" in delayed.report()
+
+
+def test_every_check_counts_the_points_of_one_band(case):
+    """MUAD, AEE, J and the analytic checks use only the band's points: in its frequency range
+    and at or above its coherence, and nothing else."""
+    sweeps, _, with_delay = case
+    band = VerificationBand(coherence=0.9, omega_min=0.5, omega_max=6.0)
+    result = compare_sweeps(sweeps, with_delay, ["q/long"], omega=OMEGA,
+                            analytic=_analytic(DELAY), band=band)
+    item = result["q/long"]
+    expected = (OMEGA >= 0.5) & (OMEGA <= 6.0) & (item.coherence >= 0.9)
+    assert 0 < expected.sum() < OMEGA.size
+    np.testing.assert_array_equal(item.checked, expected)
+    assert np.array_equal(item.checks["muad"].used, expected)
+    cost = item.checks["mismatch-cost"]
+    assert cost.threshold == 0.9 and cost.n_used > 0
+    assert cost.omega.min() >= OMEGA[expected].min() and cost.omega.max() <= 6.0
+    analytic = item.analytic_checks["muad"]
+    assert not np.any(analytic.used & ~band.in_range(OMEGA))
+    assert not np.any(analytic.used & ~(item.analytic_coherence >= 0.9))
+    assert result.summary()["band"] == {"coherence": 0.9, "omega_min": 0.5, "omega_max": 6.0}
+    assert "verification band (every check): γ² ≥ 0.9 over 0.5–6 rad/s" in result.report()
+
+
+def test_an_envelope_with_another_threshold_is_refused(case):
+    from rotorid_envelopes.cost import MismatchCost
+
+    sweeps, _, with_delay = case
+    with pytest.raises(VerificationError, match=r"'mismatch-cost' counts points with γ² ≥ "
+                                                r"0.6 but the verification band is γ² ≥ 0.8 "
+                                                r"over 0.1–10 rad/s: build it with "
+                                                r"threshold=0.8"):
+        compare_sweeps(sweeps, with_delay, ["q/long"], {"mismatch-cost": MismatchCost()},
+                       omega=OMEGA)
+
+
+def test_a_band_needs_a_coherence_and_an_increasing_positive_range():
+    with pytest.raises(VerificationError, match=r"coherence must be a γ² in \(0, 1\]"):
+        VerificationBand(coherence=0.0)
+    with pytest.raises(VerificationError, match=r"needs 0 < omega_min < omega_max"):
+        VerificationBand(omega_min=10.0, omega_max=1.0)
 
 
 def test_pairs_and_sweeps_are_matched_with_clear_errors(case, envelopes):

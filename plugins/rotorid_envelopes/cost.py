@@ -7,8 +7,10 @@ For one pair, with ``ε = H_model/H_truth`` (so ``|T̂_c|_dB − |T|_dB = −20 
     W_g = 1,  W_p = 0.01745,  W_γ = [1.58 (1 − exp(−γ²))]²
 
 over ``n_points`` (20) frequencies log-spaced across the coherent range [ω_min, ω_max] of the
-pair (γ² ≥ threshold, 0.6 by Tischler's rule); magnitude (dB), unwrapped phase and γ² are
-interpolated linearly in log ω to those points and points below the threshold are dropped
+pair (γ² ≥ threshold: 0.6 by Tischler's rule, which the frequency-response estimator fits
+with; as a verdict the verification builds it with its band's threshold and range, γ² ≥ 0.8
+over 0.1–10 rad/s by default, :mod:`rotorid.verification.band`); magnitude (dB), unwrapped
+phase and γ² are interpolated linearly in log ω to those points and points below the threshold are dropped
 (``n`` counts the kept points). ``J ≤ 100`` is acceptable (``J ≤ 50`` nearly
 indistinguishable); for multi-pair state-space fits ``J_ave ≤ 100`` with single ``J ≤ 200``.
 
@@ -32,7 +34,7 @@ from rotorid.verification.envelopes import (
 
 W_GAIN = 1.0
 W_PHASE = 0.01745
-#: Coherence that defines the J frequency range (Tischler).
+#: Coherence that defines the J frequency range of a fit (Tischler).
 COST_THRESHOLD = 0.6
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import attrs
 import numpy as np
-from rotorid.verification.compare import COHERENCE_THRESHOLD
+from rotorid.verification.band import DEFAULT_BAND
 from rotorid.verification.envelopes import EnvelopeBounds, check_bounds
 
 from .tomlfile import PACKAGE_DIR, load_definition, omega_range, require
@@ -73,12 +73,12 @@ class MuadEnvelope:
     omega_range: tuple[float, float] = (0.1, 10.0)
     provenance: str = ""
     verified: bool = False
-    threshold: float = COHERENCE_THRESHOLD
+    threshold: float = DEFAULT_BAND.coherence
     name: str = "MUAD"
     kind = "bounds"
 
     @classmethod
-    def from_definition(cls, definition: dict, *, threshold: float = COHERENCE_THRESHOLD,
+    def from_definition(cls, definition: dict, *, threshold: float = DEFAULT_BAND.coherence,
                         delay_terms: bool = True) -> "MuadEnvelope":
         phases = [_transfer_function(definition, k) for k in ("upper_phase", "lower_phase")]
         if not delay_terms:

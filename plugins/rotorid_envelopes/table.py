@@ -15,7 +15,7 @@ import attrs
 import numpy as np
 from rotorid.errors import VerificationError
 from rotorid.frozen import readonly_array
-from rotorid.verification.compare import COHERENCE_THRESHOLD
+from rotorid.verification.band import DEFAULT_BAND
 from rotorid.verification.envelopes import EnvelopeBounds, check_bounds
 
 from .tomlfile import PACKAGE_DIR, load_definition, omega_range, require
@@ -60,12 +60,12 @@ class TableEnvelope:
     mag_lower: np.ndarray = attrs.field(converter=_readonly)
     phase_upper: np.ndarray = attrs.field(converter=_readonly)
     phase_lower: np.ndarray = attrs.field(converter=_readonly)
-    threshold: float = COHERENCE_THRESHOLD
+    threshold: float = DEFAULT_BAND.coherence
     kind = "bounds"
 
     @classmethod
     def from_definition(cls, definition: dict, where: str = "envelope table", *,
-                        threshold: float = COHERENCE_THRESHOLD) -> "TableEnvelope":
+                        threshold: float = DEFAULT_BAND.coherence) -> "TableEnvelope":
         tables = [_breakpoints(definition.get(k, []), k, where) for k in BOUND_KEYS]
         sizes = {t.shape[0] > 0 for t in tables}
         if len(sizes) > 1:

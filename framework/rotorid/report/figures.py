@@ -1,7 +1,7 @@
 """The figures of a case report, each with the caption the report shows under it.
 
-:func:`case_figures` writes into ``<case>/figures/``: ``rmse``, ``time_<maneuver>`` for every
-identification maneuver, and ``error_<out>_<in>`` and ``bode_<out>_<in>`` for every verified
+:func:`case_figures` writes into ``<case>/figures/``: ``rmse``, ``delay_profiles`` (when the
+case profiled its delays), ``time_<maneuver>`` for every identification maneuver, and ``error_<out>_<in>`` and ``bode_<out>_<in>`` for every verified
 pair (PNG and SVG each); titles name the flight condition ("hover", "70 kt").
 """
 
@@ -14,7 +14,8 @@ from pathlib import Path
 import attrs
 
 from rotorid.report.plots.case import plot_rmse_path, plot_time_histories, save_figure
-from rotorid.report.plots.frequency import plot_bode, plot_error
+from rotorid.report.plots.frequency import RELAXED_THRESHOLD, plot_bode, plot_error
+from rotorid.report.plots.profiles import plot_delay_profiles
 from rotorid.study.result import MODELS
 from rotorid.units import unit_system
 from rotorid.verification.compare import envelopes_by_name
@@ -51,6 +52,17 @@ def rmse_caption(path) -> str:
             "look at; steps whose RMSE lies above it are drawn as open triangles at the top.")
 
 
+def _profiles_caption(profiles) -> str:
+    points = len(profiles[0].grid)
+    return ("Delay profiles of the model with delays: for each kept delay, the RMSE (eq. 18) "
+            f"with that delay fixed at each of {points} values from 0 s and every other "
+            "parameter (the other delays included) refitted, relative to the RMSE of the fit "
+            "with all delays free (%); the star marks the free fit's delay. A deep, narrow "
+            "minimum is a delay the data determine; a shallow one is a trade between the delay "
+            "and the gains, whatever its Cramér-Rao bound says. det R of every refit is in "
+            "result.json (delay_profiles).")
+
+
 def _time_caption(maneuver, models: Sequence[str]) -> str:
     kind = maneuver.metadata.get("kind", "maneuver")
     axis = maneuver.metadata.get("axis")
@@ -63,14 +75,16 @@ def _time_caption(maneuver, models: Sequence[str]) -> str:
             "window (shaded above).")
 
 
-def _error_caption(pair: str, muad_range: str) -> str:
+def _error_caption(pair: str, muad_range: str, band) -> str:
     return (f"{html.escape(pair)}: error ε = H_model/H_measured of each model's response on "
             "the sweeps (magnitude in dB, phase as principal value in deg) against the MUAD "
-            f"bounds (dashed over {muad_range}, where points are checked; dotted where "
-            "extrapolated, not checked). Filled markers: γ² ≥ 0.8 (checked); open: 0.6 ≤ γ² < "
-            "0.8 (shown, not checked); lower coherence hidden. The legend counts each model's "
+            f"bounds (dashed over {muad_range}; dotted where extrapolated, never checked). "
+            f"Filled markers: the verification band's points, {html.escape(band.describe())} "
+            "(checked by every verdict: MUAD, AEE, J); open: other points with γ² ≥ "
+            f"{min(RELAXED_THRESHOLD, band.coherence):g} (shown, not checked); lower "
+            "coherence hidden; frequencies outside the band's range shaded. The legend counts each model's "
             "checked points inside and outside the bounds; the bottom panel is the coherence of "
-            "the measured response.")
+            "the measured response with the band's threshold.")
 
 
 def _bode_caption(pair: str, item) -> str:
@@ -93,7 +107,7 @@ def _bode_caption(pair: str, item) -> str:
 
 
 def _muad_range(result) -> str:
-    envelopes = envelopes_by_name(result.case.envelopes)
+    envelopes = envelopes_by_name(result.case.envelopes, band=result.case.band)
     muad = envelopes.get("muad")
     if muad is None or getattr(muad, "omega_range", None) is None:
         return "the envelope's range"
@@ -106,12 +120,18 @@ def case_figures(result, figures_dir: Path) -> dict[str, list[ReportFigure]]:
 
     Every identification maneuver gets a time-history figure, whatever its kind."""
     figures_dir.mkdir(parents=True, exist_ok=True)
-    written = {"reduction": [], "time": [], "frequency": [], "bode": []}
+    written = {"reduction": [], "delays": [], "time": [], "frequency": [], "bode": []}
     units = unit_system(result.estimates["with delays"].units)
     flight = flight_label(result.condition)
     figure = plot_rmse_path(result.path, title=f"{flight}: RMSE versus removed parameters")
     save_figure(figure, figures_dir / "rmse")
     written["reduction"].append(ReportFigure("rmse.png", rmse_caption(result.path)))
+    if result.delay_profiles:
+        figure = plot_delay_profiles(result.delay_profiles,
+                                     title=f"{flight}: delay profiles (model with delays)")
+        save_figure(figure, figures_dir / "delay_profiles")
+        written["delays"].append(ReportFigure("delay_profiles.png",
+                                              _profiles_caption(result.delay_profiles)))
     maneuvers = list(result.identification)
     outputs = {label: result.simulated(label) for label in MODELS}
     for index, maneuver in enumerate(maneuvers):
@@ -123,7 +143,8 @@ def case_figures(result, figures_dir: Path) -> dict[str, list[ReportFigure]]:
         name = f"time_{file_stem(maneuver.name)}"
         save_figure(figure, figures_dir / name)
         written["time"].append(ReportFigure(f"{name}.png", _time_caption(maneuver, MODELS)))
-    envelopes = [e for e in envelopes_by_name(result.case.envelopes).values()
+    envelopes = [e for e in envelopes_by_name(result.case.envelopes,
+                                              band=result.case.band).values()
                  if e.kind == "bounds"]
     reference = result.verification.get("with delays")
     muad_range = _muad_range(result)
@@ -136,7 +157,8 @@ def case_figures(result, figures_dir: Path) -> dict[str, list[ReportFigure]]:
         stem = f"error_{output}_{control}"
         save_figure(figure, figures_dir / stem)
         written["frequency"].append(ReportFigure(f"{stem}.png",
-                                                 _error_caption(item.pair, muad_range),
+                                                 _error_caption(item.pair, muad_range,
+                                                                item.band),
                                                  item.pair))
         figure = plot_bode(item, output_unit=units.label(output),
                            title=f"{flight}: {item.pair} frequency responses "

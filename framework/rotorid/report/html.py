@@ -5,7 +5,7 @@ Per case (``<out>/<case>/``):
 * ``figures/``: the figures of :mod:`rotorid.report.figures`, each shown with its caption;
 * ``tables/removed.csv``, ``tables/parameters.csv`` (Appendix B), ``tables/key_derivatives.csv``,
   ``tables/verification.csv`` and, for a case with a truth model, ``tables/checks.csv`` (the
-  paper's claims, measured); with ``[compare] frequency`` ``tables/comparison_costs.csv``
+  paper's claims, measured); with ``[reference]`` values ``tables/reference.csv``; with ``[compare] frequency`` ``tables/comparison_costs.csv``
   and ``tables/comparison_parameters.csv`` (the frequency-domain fit beside the time-domain
   fit); with ``[compare] estimators`` ``tables/estimators.csv`` and
   ``tables/estimator_fits.csv`` (the estimators' fits of the model with delays side by side);
@@ -15,7 +15,8 @@ Per case (``<out>/<case>/``):
   ``pair-<out>-<in>``) per verified pair.
 
 A case about measured data only (``source = "files"``, no truth model) is reported about
-that aircraft alone: no paper claims, no truth or published Bo-105 values.
+that aircraft alone: no paper claims, no truth or published Bo-105 values; only the reference
+values its case file gives (``[reference]``).
 
 Per study: ``<out>/report.html``, a summary of every case linking the case reports.
 Every file is written atomically.
@@ -45,7 +46,7 @@ from rotorid.study.claims import PAPER_SOURCES, claims_tally, mean_phase_error, 
 from rotorid.study.expectations import check_signs, derivative_unit
 from rotorid.study.result import KEY_DERIVATIVES, MODELS
 from rotorid.units import CHANNEL_KINDS, unit_system
-from rotorid.verification.compare import COHERENCE_THRESHOLD
+from rotorid.verification.band import DEFAULT_BAND
 from rotorid.verification.envelopes import MISMATCH_COST_GUIDELINE_TEXT
 
 def key_derivative_checks(result):
@@ -137,16 +138,43 @@ def key_derivative_rows(result) -> list[list[str]]:
     return rows
 
 
+def reference_rows(result) -> list[list[str]]:
+    """The model with delays beside the case's ``[reference]`` values."""
+    rows = [["derivative", "unit", "identified", "CR bound", "reference",
+             "reference uncertainty", "identified − reference", "combined bound", "verdict",
+             "source"]]
+    for row in result.reference_comparison():
+        rows.append([row.name, row.unit, _number(row.identified), _number(row.cramer_rao, 3),
+                     _number(row.reference.value), _number(row.reference.uncertainty, 3),
+                     _number(row.difference, 3), _number(row.combined_bound, 3), row.verdict,
+                     row.reference.source])
+    return rows
+
+
+def reference_html(result) -> str:
+    """The case report's section on the user's reference values (empty without them)."""
+    if not result.case.reference:
+        return ""
+    return "\n".join([
+        '<h2 id="reference">Reference values</h2>',
+        "<p>The model with delays beside the reference values the case file gives "
+        "(<code>[reference]</code>), in the model's units. The verdict is <em>agrees</em> when "
+        "the difference is within two combined bounds √(CR² + uncertainty²), <em>differs</em> "
+        "beyond; a reference without uncertainty counts the Cramér-Rao bound only.</p>",
+        _html_table(reference_rows(result), 8)])
+
+
 def verification_rows(result) -> list[list[str]]:
-    """Per sweep pair and model: coherent points, MUAD/AEE status, worst margins, J."""
-    rows = [["pair", "model", f"points γ² ≥ {COHERENCE_THRESHOLD:g} [-]", "MUAD",
-             "worst margin [dB / deg]", "AEE", f"J (mismatch; guideline {MISMATCH_COST_GUIDELINE_TEXT}) [-]", "mean |∠ε| [deg]"]]
+    """Per sweep pair and model: the band, its points, MUAD/AEE status, worst margins, J."""
+    rows = [["pair", "model", "verification band", "points in band [-]", "MUAD",
+             "worst margin [dB / deg]", "AEE",
+             f"J (mismatch; guideline {MISMATCH_COST_GUIDELINE_TEXT}) [-]", "mean |∠ε| [deg]"]]
     for label in MODELS:
         verification = result.verification.get(label)
         for item in () if verification is None else verification.pairs:
             muad, aee = item.checks.get("muad"), item.checks.get("aee")
             cost = item.checks.get("mismatch-cost")
-            rows.append([item.pair, label, "" if muad is None else str(muad.n_used),
+            rows.append([item.pair, label, item.band.describe(), str(int(item.checked.sum())),
                          "" if muad is None else muad.status,
                          "" if muad is None else f"{_number(muad.worst_margin_db, 3)} / "
                                                  f"{_number(muad.worst_margin_deg, 3)}",
@@ -390,6 +418,14 @@ def _delays_text(result) -> str:
     return text
 
 
+def _band_source(band) -> str:
+    """Where the case's verification band comes from, in words."""
+    if band == DEFAULT_BAND:
+        return ("the default: the paper's MUAD practice, γ² > 0.8, on the range the MUAD "
+                "envelopes are defined on")
+    return "set by the case's [verification] table"
+
+
 def _kinds(maneuvers) -> list[str]:
     """The distinct maneuver kinds of a set (metadata ``kind``), in order of appearance."""
     return list(dict.fromkeys(str(m.metadata.get("kind", "unspecified")) for m in maneuvers))
@@ -418,7 +454,8 @@ def summary_html(result, claims) -> str:
              f"{estimates['with delays'].rmse:.4f} with delays "
              f"({html.escape(_delays_text(result).split('. ')[0])})."]
     passed, failed = _verification_verdicts(result)
-    items.append(f"Frequency-domain verification, model with delays: {len(passed)} of "
+    items.append(f"Frequency-domain verification, model with delays, in the verification band "
+                 f"{html.escape(result.case.band.describe())}: {len(passed)} of "
                  f"{len(passed) + len(failed)} checked pairs inside MUAD"
                  + (f"; outside: {html.escape('; '.join(failed))}" if failed else "") + ".")
     if result.data_warnings:
@@ -459,6 +496,7 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         + ", ".join(f'<a href="tables/{t}.csv">{t}.csv</a>'
                     for t in ("removed", "parameters", "key_derivatives", "verification",
                               *(("checks",) if claims else ()),
+                              *(("reference",) if result.case.reference else ()),
                               *(("comparison_costs", "comparison_parameters")
                                 if result.frequency_comparison else ()),
                               *(("estimator_fits", "estimators")
@@ -475,7 +513,8 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
     key_text = ("Identified (model with delays) beside the truth model's residualised 6-DoF "
                 "linearisation and the published Helisim Bo-105 values (Padfield 2007)."
                 if truth else "Identified values of the model with delays (measured data: "
-                              "no reference values were given).")
+                              "compared only with the reference values the case file gives, "
+                              "if any).")
     body += [
         '<h2 id="reduction">Model reduction</h2>',
         f"<p>Selected step {path.selected_index} of {len(path.steps) - 1} by rule "
@@ -488,14 +527,19 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         '<h2 id="delays">Time delays</h2>',
         f"<p>{html.escape(_delays_text(result))}. RMSE without delays "
         f"{estimates['no delays'].rmse:.4f}, with delays {estimates['with delays'].rmse:.4f}.</p>",
+        figures_html(figures.get("delays", [])),
         '<h2 id="parameters">Identified parameters (Appendix B)</h2>',
         "<p>CR: Cramér-Rao bound (in the parameter's unit); CR % and I %: Cramér-Rao bound and "
         "insensitivity relative to the value.</p>", _html_table(parameter_rows(result)),
         '<h2 id="key-derivatives">Key derivatives</h2>', f"<p>{key_text}</p>",
         _html_table(key_derivative_rows(result), None if not truth else 8),
+        reference_html(result),
         '<h2 id="time-histories">Time histories of the identification maneuvers</h2>',
         figures_html(figures.get("time", [])),
         '<h2 id="verification">Frequency-domain verification on the sweeps</h2>',
+        f"<p>Every verdict (MUAD, AEE, the mismatch cost J, and the analytic comparison in "
+        f"result.json) counts the same points: the verification band "
+        f"{html.escape(result.case.band.describe())} ({_band_source(result.case.band)}).</p>",
         _html_table(verification_rows(result))]
     if notes:
         body += ["<h3>Verification notes</h3>",
@@ -506,6 +550,9 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         contents.append((anchor, f"  {error.pair}"))
         shown = [error] + ([bode[error.pair]] if error.pair in bode else [])
         body += [f'<h3 id="{anchor}">{html.escape(error.pair)}</h3>', figures_html(shown)]
+    if result.case.reference:
+        contents.insert(contents.index(("key-derivatives", "Key derivatives")) + 1,
+                        ("reference", "Reference values"))
     if result.frequency_comparison:
         contents.append(("comparison", "Frequency-domain fit"))
         body.append(comparison_html(result))
@@ -528,6 +575,8 @@ def write_case_outputs(result, directory: str | Path) -> Path:
                ("verification", verification_rows(result))]
     if claims:
         written.append(("checks", claim_rows(claims)))
+    if result.case.reference:
+        written.append(("reference", reference_rows(result)))
     for name, rows in written:
         atomic_write(tables / f"{name}.csv", _csv(rows))
     if result.frequency_comparison:

@@ -29,11 +29,13 @@ from pathlib import Path
 
 import attrs
 
-from rotorid.errors import DataFileError, MissingFileError
+from rotorid.errors import DataFileError, MissingFileError, VerificationError
 from rotorid.io import require_file
 from rotorid.model.structure import PAPER_DELAYED
 from rotorid.plugin.manager import create
 from rotorid.study.checks import check_case, check_registered
+from rotorid.study.reference import ReferenceValue, parse_reference
+from rotorid.verification.band import BAND_KEYS, DEFAULT_BAND, VerificationBand
 from rotorid.verification.compare import PAPER_ENVELOPES
 from rotorid.verification.pairs import PAPER_PAIRS
 
@@ -41,12 +43,13 @@ BUILTIN = ("hover", "forward")
 #: Tables of a case file and the keys each may hold (``None``: checked where it is used).
 _TABLES = {
     "data": None, "condition": None, "structure": None, "derivatives": None, "estimator": None,
-    "verification": {"pairs", "envelopes"},
+    "verification": {"pairs", "envelopes", *BAND_KEYS},
     "reduction": {"criteria", "continue_to_zero", "rule", "rmse_tolerance", "warm_start"},
     "delays": {"derivatives", "initial", "upper", "threshold", "starts", "seed",
                "profile_points"},
     "quick": {"duration_scale", "continue_to_zero", "warm_start", "delay_profile_points"},
     "compare": {"frequency", "pairs", "band_max", "estimators"},
+    "reference": None,
 }
 _TOP_LEVEL = {"name", "description", *_TABLES}
 #: Case settings by table and key: the :class:`FlightCase` field and its converter.
@@ -80,7 +83,10 @@ class FlightCase:
     """One flight case of a study (see the module docstring for the file form).
 
     ``data`` is the ``[data]`` table: ``source`` names the data source, the other keys are
-    its settings. Delay bounds and the initial delay are in s; ``delay_threshold`` is the
+    its settings. ``band`` is the verification band every frequency-domain verdict counts
+    points in (``[verification] coherence``, ``omega_min``, ``omega_max`` in rad/s; default
+    γ² ≥ 0.8 over 0.1–10 rad/s). ``reference`` holds the user's reference values by
+    derivative name (``[reference]``, :mod:`rotorid.study.reference`). Delay bounds and the initial delay are in s; ``delay_threshold`` is the
     normalised Cramér-Rao bound (%) above which a delay counts as undetermined and is dropped.
     With ``compare_frequency`` each identified model is also fitted to the verification
     sweeps' frequency responses (:mod:`rotorid.study.comparison`) on ``compare_pairs``
@@ -97,6 +103,8 @@ class FlightCase:
     condition: Mapping = attrs.field(factory=dict, converter=dict)
     pairs: tuple[str, ...] = PAPER_PAIRS
     envelopes: tuple[str, ...] = PAPER_ENVELOPES
+    band: VerificationBand = DEFAULT_BAND
+    reference: Mapping[str, ReferenceValue] = attrs.field(factory=dict, converter=dict)
     structure: Mapping = attrs.field(factory=lambda: {"populate": "all"}, converter=dict)
     derivatives: Mapping = attrs.field(factory=dict, converter=dict)
     estimator: str = "output-error"
@@ -161,6 +169,7 @@ class FlightCase:
                    derivatives=tables["derivatives"],
                    estimator=str(estimator.pop("name", "output-error")),
                    estimator_options=estimator, quick_settings=tables["quick"],
+                   reference=parse_reference(tables["reference"], f"{source}: [reference]"),
                    **_settings(tables, source))
         check_case(case, source)
         return case
@@ -230,6 +239,12 @@ def _settings(tables: Mapping[str, dict], source: str) -> dict:
             fields[field] = _converted(tables[table][key], convert, source, f"[{table}] {key}")
     if "criteria" in tables["reduction"]:
         fields["criteria"] = _criteria(tables["reduction"]["criteria"], source)
+    if set(BAND_KEYS) & set(tables["verification"]):
+        try:
+            fields["band"] = VerificationBand.from_mapping(tables["verification"],
+                                                           f"{source}: [verification]")
+        except VerificationError as error:
+            raise DataFileError(str(error)) from None
     if fields.get("delay_starts", 1) < 1:
         raise DataFileError(f"{source}: [delays] starts must be at least 1 (the fit from the "
                             f"initial delays), got {fields['delay_starts']}")

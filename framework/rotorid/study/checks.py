@@ -18,6 +18,7 @@ from rotorid.model.modelfile import parse_model
 from rotorid.model.structure import FlightCondition
 from rotorid.plugin.manager import registry
 from rotorid.study.comparison import FREQUENCY_ESTIMATOR
+from rotorid.study.reference import check_reference_names
 from rotorid.verification.pairs import parse_pair
 
 #: A case name is a directory of the results: letters, digits and ``_ . + -``, never a path.
@@ -45,6 +46,7 @@ def check_case(case, where: str) -> None:
     check_registered("data-sources", case.data_source, where, "[data] source")
     names = _structure_names(case, where)
     _check_delays(case, names, where)
+    check_reference_names(case.reference, names, where)
     for pair in case.pairs:
         _wrapped(lambda: parse_pair(pair), where, "[verification] pairs")
     for envelope in case.envelopes:

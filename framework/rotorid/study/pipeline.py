@@ -200,7 +200,7 @@ def _verify(case: FlightCase, structures, estimates, ident: ManeuverSet,
     verification = {}
     for label in MODELS if selection.pairs else ():
         checked = verify_model(structures[label], values[label], verif,
-                               selection.pairs, case.envelopes)
+                               selection.pairs, case.envelopes, band=case.band)
         verification[label] = attrs.evolve(checked, notes=[*checked.notes, *skipped])
     return metrics, verification
 

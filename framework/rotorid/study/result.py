@@ -18,6 +18,7 @@ from rotorid.study.case import FlightCase
 from rotorid.study.comparison import FrequencyComparison
 from rotorid.study.estimator_comparison import EstimatorComparison
 from rotorid.study.claims import paper_claims
+from rotorid.study.reference import ReferenceComparison, compare_with_reference
 from rotorid.verification.compare import VerificationResult
 from rotorid.verification.equivalent_delays import EquivalentDelays
 from rotorid.verification.metrics import TimeDomainMetrics
@@ -81,6 +82,10 @@ class CaseResult:
             table[name] = {"identified": identified, "truth_linearisation": truth}
         return table
 
+    def reference_comparison(self) -> list[ReferenceComparison]:
+        """The model with delays beside the case's ``[reference]`` values (empty without)."""
+        return compare_with_reference(self.estimates["with delays"], self.case.reference)
+
     def as_dict(self) -> dict:
         """The ``result.json`` record (``estimator_comparison`` only when the case ran it)."""
         path = self.path
@@ -103,6 +108,7 @@ class CaseResult:
             "key_derivatives": self.key_derivatives(),
             "claims": [claim.as_dict() for claim in paper_claims(self)],
             "data_warnings": list(self.data_warnings),
+            "reference_comparison": [row.as_dict() for row in self.reference_comparison()],
             "dropped_delays": list(self.dropped_delays),
             "frequency_comparison": {label: c.summary()
                                      for label, c in self.frequency_comparison.items()},

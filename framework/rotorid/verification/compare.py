@@ -22,6 +22,7 @@ from rotorid.errors import VerificationError
 from rotorid.frozen import FrozenMapping, readonly_array
 from rotorid.plugin.contracts import ValidationEnvelope
 from rotorid.plugin.manager import create
+from rotorid.verification.band import DEFAULT_BAND, VerificationBand
 from rotorid.verification.envelopes import (
     MISMATCH_COST_GUIDELINE,
     MISMATCH_COST_GUIDELINE_TEXT,
@@ -40,8 +41,6 @@ from rotorid.verification.frequency import (
 from rotorid.verification.metrics import TimeDomainMetrics, time_domain_metrics
 from rotorid.verification.pairs import PAPER_PAIRS, parse_pair, primary_axis
 
-#: Default coherence threshold of the checks (the paper's and the project's strict value).
-COHERENCE_THRESHOLD = 0.8
 #: Coherence of a pair's input with the conditioning inputs above which its conditioned
 #: response is unreliable (Tischler & Remple): the analytic comparison skips such points.
 INPUT_COHERENCE_LIMIT = 0.5
@@ -53,11 +52,26 @@ PAPER_ENVELOPES = ("muad", "aee", "mismatch-cost")
 MODEL_RESPONSES = ("simulated", "apparent")
 
 
-def envelopes_by_name(names: Sequence[str], manager=None, **options
-                      ) -> dict[str, ValidationEnvelope]:
+def envelopes_by_name(names: Sequence[str], manager=None,
+                      band: VerificationBand = DEFAULT_BAND) -> dict[str, ValidationEnvelope]:
     """Build registered envelopes by name (``rotorid plugins --family validation-envelopes``)
-    from ``manager`` (default the current plugin manager)."""
-    return {name: create("validation-envelopes", name, manager, **options) for name in names}
+    from ``manager`` (default the current plugin manager), each counting the points of
+    ``band`` (its factory receives ``threshold=band.coherence``)."""
+    return {name: create("validation-envelopes", name, manager, threshold=band.coherence)
+            for name in names}
+
+
+def check_envelope_thresholds(envelopes: Mapping[str, ValidationEnvelope],
+                              band: VerificationBand) -> None:
+    """Refuse envelopes whose coherence threshold is not the band's: every verdict counts the
+    same points."""
+    for name, envelope in envelopes.items():
+        if envelope.threshold != band.coherence:
+            raise VerificationError(
+                f"envelope {name!r} counts points with γ² ≥ {envelope.threshold:g} but the "
+                f"verification band is {band.describe()}: build it with "
+                f"threshold={band.coherence:g}, or pass a band with coherence="
+                f"{envelope.threshold:g}")
 
 
 # ----------------------------------------------------------------- results
@@ -77,11 +91,12 @@ class PairVerification:
             conditioned response the analytic model response is compared with), or None.
         analytic: the model's analytic response (exact delays) on the grid, shape (M,), or
             None when not evaluated.
-        checks: envelope name → check of ``ε = model/truth`` (the paper's eq. 19), selected
-            by the truth's coherence.
-        analytic_checks: envelope name → check of ``ε = analytic/conditioned``, selected by
-            the partial coherence, at the points where the input's coherence with the
+        checks: envelope name → check of ``ε = model/truth`` (the paper's eq. 19) on the
+            points of ``band`` by the truth's coherence.
+        analytic_checks: envelope name → check of ``ε = analytic/conditioned`` on the points
+            of ``band`` by the partial coherence, where the input's coherence with the
             conditioning inputs is at most :data:`INPUT_COHERENCE_LIMIT`.
+        band: the verification band every check of the pair counts points in.
     """
 
     pair: str
@@ -95,6 +110,7 @@ class PairVerification:
     analytic_checks: Mapping[str, EnvelopeCheck] = attrs.field(converter=FrozenMapping)
     output_rms_ratio: float = float("nan")
     model_source: str = "simulated"      # or "apparent" (see compare_sweeps)
+    band: VerificationBand = DEFAULT_BAND
 
     @property
     def omega(self) -> np.ndarray:
@@ -124,9 +140,14 @@ class PairVerification:
         with np.errstate(divide="ignore", invalid="ignore"):
             return self.analytic / self.conditioned.response
 
-    def input_coherence(self, threshold: float = COHERENCE_THRESHOLD) -> float | None:
-        """Median coherence of the pair's input with the conditioning inputs over the points
-        where the partial coherence reaches ``threshold``; None if not conditioned.
+    @property
+    def checked(self) -> np.ndarray:
+        """Points of the band by the truth's coherence (the simulated checks'), shape (M,)."""
+        return self.band.selects(self.omega, self.coherence)
+
+    def input_coherence(self) -> float | None:
+        """Median coherence of the pair's input with the conditioning inputs over the band's
+        points by the partial coherence; None if not conditioned.
 
         Above about 0.5 the conditioned responses are unreliable (Tischler & Remple). The
         median is used because coherence estimated from few averages is biased upwards
@@ -134,8 +155,7 @@ class PairVerification:
         if self.conditioned is None or not self.conditioned.conditioned_on:
             return None
         values = self.conditioned.input_coherence
-        with np.errstate(invalid="ignore"):
-            used = values[self.conditioned.coherence >= threshold]
+        used = values[self.band.selects(self.omega, self.conditioned.coherence)]
         used = used[np.isfinite(used)]
         return float(np.median(used)) if used.size else None
 
@@ -149,6 +169,7 @@ class PairVerification:
             "model_source": self.model_source,
             "windows_s": list(self.truth.windows),
             "omega_range_rad_s": [float(self.omega.min()), float(self.omega.max())],
+            "band": self.band.as_dict(),
             "checks": {n: c.summary() for n, c in self.checks.items()},
             "analytic_checks": {n: c.summary() for n, c in self.analytic_checks.items()},
         }
@@ -173,6 +194,11 @@ class VerificationResult:
         """The verification of ``pair``, or ``None`` when it was not verified."""
         return next((item for item in self.pairs if item.pair == pair), None)
 
+    @property
+    def band(self) -> VerificationBand:
+        """The verification band of every pair (one comparison shares one band)."""
+        return self.pairs[0].band if self.pairs else DEFAULT_BAND
+
     def average_cost(self, envelope: str = "mismatch-cost", analytic: bool = False
                      ) -> float | None:
         """``J_ave`` over the pairs that have a cost for ``envelope``; None if none has."""
@@ -184,7 +210,8 @@ class VerificationResult:
 
     def summary(self) -> dict:
         """JSON-ready summary of every check and the time-domain metrics."""
-        return {"notes": list(self.notes), "pairs": [p.summary() for p in self.pairs],
+        return {"notes": list(self.notes), "band": self.band.as_dict(),
+                "pairs": [p.summary() for p in self.pairs],
                 "average_cost": self.average_cost(),
                 "average_cost_analytic": self.average_cost(analytic=True),
                 "cost_guideline": MISMATCH_COST_GUIDELINE,
@@ -192,6 +219,7 @@ class VerificationResult:
 
     def report(self) -> str:
         lines = [f"note: {note}" for note in self.notes]
+        lines.append(f"verification band (every check): {self.band.describe()}")
         for p in self.pairs:
             correlation = p.input_coherence()
             note = "" if correlation is None else (
@@ -256,15 +284,16 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
                    analytic=None, omega=None, windows=None,
                    conditioning: str | Sequence[str] = "auto",
                    model_response: str = "simulated",
-                   on_pair: Callable[[PairVerification], None] | None = None
-                   ) -> VerificationResult:
+                   on_pair: Callable[[PairVerification], None] | None = None,
+                   band: VerificationBand = DEFAULT_BAND) -> VerificationResult:
     """Compare a model's simulated sweeps with the recorded ones, pair by pair.
 
     Args:
         sweeps: :class:`~rotorid.data.ManeuverSet` of verification sweeps (truth outputs).
         model_outputs: the model's outputs for the same inputs, one (N_i, 8) array per sweep.
         pairs: ``output/input`` names; each uses the sweeps whose axis is its input.
-        envelopes: name → envelope; default MUAD, AEE and mismatch cost from the plugins.
+        envelopes: name → envelope; default MUAD, AEE and mismatch cost from the plugins,
+            built for ``band``; given envelopes must count γ² ≥ ``band.coherence``.
         analytic: optional callable ``omega -> (M, 8, 4)`` complex model response.
         omega: frequency grid in rad/s; default :func:`default_omega` of the sweeps.
         windows: window lengths in s; default from the shortest sweep.
@@ -276,6 +305,8 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
             the recorded inputs' cross-spectra (:func:`rotorid.verification.frequency.apparent_response`;
             needs ``analytic``), for models whose simulation drifts.
         on_pair: called with each pair's verification as it is done (progress).
+        band: the verification band: every check, simulated and analytic, counts only the
+            points in its frequency range whose coherence reaches its threshold.
 
     Both comparisons use single-input responses of truth and model: the model is driven by
     every recorded input, so the other inputs affect both sides alike.
@@ -287,7 +318,8 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
     if not names:
         raise VerificationError("no response pairs given; e.g. pairs=['q/long', 'p/long']")
     if envelopes is None:
-        envelopes = envelopes_by_name(PAPER_ENVELOPES)
+        envelopes = envelopes_by_name(PAPER_ENVELOPES, band=band)
+    check_envelope_thresholds(envelopes, band)
     if len(model_outputs) != len(sweeps):
         raise VerificationError(f"{len(model_outputs)} model output arrays for {len(sweeps)} "
                                 f"sweeps; simulate every sweep")
@@ -295,7 +327,7 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
     comparison = _SweepComparison(
         sweeps, list(model_outputs), [primary_axis(m) for m in sweeps], omega,
         None if analytic is None else analytic(omega), envelopes, windows, conditioning,
-        model_response)
+        model_response, band)
     results = []
     for name in names:
         results.append(comparison.pair(name))
@@ -318,7 +350,7 @@ def _check_model_response(model_response: str, analytic) -> None:
 class _SweepComparison:
     """What every pair of one :func:`compare_sweeps` call shares: the sweeps, the model's
     outputs on them, each sweep's input axis, the grid ω (M,), the analytic response
-    (M, 8, 4) or None, the envelopes and the processing options."""
+    (M, 8, 4) or None, the envelopes, the processing options and the verification band."""
 
     sweeps: ManeuverSet
     model_outputs: list
@@ -329,6 +361,7 @@ class _SweepComparison:
     windows: object
     conditioning: str | Sequence[str]
     model_response: str
+    band: VerificationBand
 
     def pair(self, name: str) -> PairVerification:
         """The verification of pair ``name`` (``output/input``) on the sweeps of its input."""
@@ -343,7 +376,7 @@ class _SweepComparison:
         ratio = _rms_ratio([self.model_outputs[i] for i in chosen],
                            [self.sweeps[i] for i in chosen], OUTPUT_CHANNELS.index(output))
         return PairVerification(name, subset.names, truth, model, conditioned, analytic,
-                                checks, analytic_checks, ratio, self.model_response)
+                                checks, analytic_checks, ratio, self.model_response, self.band)
 
     def _sweeps_of(self, name: str, control: str) -> list[int]:
         chosen = [i for i, axis in enumerate(self.axes) if axis == control]
@@ -368,11 +401,12 @@ class _SweepComparison:
 
     def _checks(self, response: np.ndarray, reference: FrequencyResponse
                 ) -> dict[str, EnvelopeCheck]:
-        """Every envelope's check of ``ε = response / reference``, selected by the
-        reference's coherence."""
+        """Every envelope's check of ``ε = response / reference`` on the band's points by the
+        reference's coherence (NaN outside the band's range)."""
+        coherence = self.band.restrict(self.omega, reference.coherence)
         with np.errstate(divide="ignore", invalid="ignore"):
             error = response / reference.response
-            return {n: e.check(error, reference.coherence, self.omega)
+            return {n: e.check(error, coherence, self.omega)
                     for n, e in self.envelopes.items()}
 
     def _analytic_comparison(self, subset, output: str, control: str,

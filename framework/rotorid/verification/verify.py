@@ -13,6 +13,7 @@ import numpy as np
 from rotorid.plugin.contracts import ValidationEnvelope
 from rotorid.simulation.simulator import simulate
 from rotorid.simulation.transfer import frequency_response
+from rotorid.verification.band import DEFAULT_BAND, VerificationBand
 from rotorid.verification.compare import VerificationResult, compare_sweeps, envelopes_by_name
 from rotorid.verification.pairs import PAPER_PAIRS
 from rotorid.verification.segments import segmented_simulation
@@ -25,7 +26,8 @@ DRIFT_LIMIT = 100.0
 
 def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
                  envelopes: Mapping[str, ValidationEnvelope] | Sequence[str] | None = None,
-                 segment: float | None = None, manager=None, **options) -> VerificationResult:
+                 segment: float | None = None, manager=None,
+                 band: VerificationBand = DEFAULT_BAND, **options) -> VerificationResult:
     """Verify an identified model on sweeps not used for identification.
 
     Simulates ``structure`` at ``values`` (vector, name→value mapping or None) on the
@@ -46,10 +48,12 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
     A slower instability is simulated in one piece. ``segment`` given explicitly simulates in
     segments of that length and uses the simulated comparison. The result's notes say which
     was done. Envelope names are built from ``manager`` (default the current plugin
-    manager). Other keyword options go to :func:`compare_sweeps`.
+    manager). Every check counts the points of ``band``
+    (:class:`~rotorid.verification.band.VerificationBand`). Other keyword options go to
+    :func:`compare_sweeps`.
     """
     if envelopes is not None and not isinstance(envelopes, Mapping):
-        envelopes = envelopes_by_name(tuple(envelopes), manager)
+        envelopes = envelopes_by_name(tuple(envelopes), manager, band)
     eigenvalues = np.linalg.eigvals(structure.matrices(values)[0])
     growth = float(np.max(eigenvalues.real))
     longest = max(m.duration for m in sweeps)
@@ -71,7 +75,7 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
     result = compare_sweeps(
         sweeps, outputs, pairs, envelopes,
         analytic=lambda omega: frequency_response(structure, values, omega),
-        model_response=comparison, **options)
+        model_response=comparison, band=band, **options)
     return attrs.evolve(result, notes=[*notes, *result.notes])
 
 

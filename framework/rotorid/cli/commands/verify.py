@@ -51,12 +51,36 @@ def add_arguments(parser) -> None:
                         help="which model of a study's result.json (default: with delays)")
     parser.add_argument("--envelopes", default=DEFAULT_ENVELOPES,
                         help=f"comma-separated envelope names ({DEFAULT_ENVELOPES})")
+    parser.add_argument("--band", default=None, metavar="COHERENCE,OMEGA_MIN,OMEGA_MAX",
+                        help="the verification band every check counts points in: γ² "
+                             "threshold and frequency range in rad/s (default 0.8,0.1,10)")
     parser.add_argument("--out", default="verification", metavar="DIR", type=output_directory,
                         help="output directory (created if needed; default ./verification)")
     parser.add_argument("--no-figures", action="store_true",
                         help="write only verification.json (faster)")
     parser.add_argument("--strict", action="store_true",
                         help="exit with status 1 when a verified envelope check fails")
+
+
+def parse_band(text: str | None):
+    """The :class:`~rotorid.verification.band.VerificationBand` of ``--band`` (default when
+    None)."""
+    from rotorid.errors import UsageError, VerificationError
+    from rotorid.verification.band import DEFAULT_BAND, VerificationBand
+
+    if text is None:
+        return DEFAULT_BAND
+    try:
+        values = [float(part) for part in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 3:
+        raise UsageError(f"--band needs COHERENCE,OMEGA_MIN,OMEGA_MAX, e.g. 0.8,0.1,10; got "
+                         f"{text!r}")
+    try:
+        return VerificationBand(*values)
+    except VerificationError as error:
+        raise UsageError(f"--band: {error}") from None
 
 
 def _split(files: list[str]):
@@ -144,6 +168,7 @@ def run(args) -> int:
     from rotorid.verification.producible import producible_pairs
 
     model, result_path, locations = _split(args.files)
+    band = parse_band(args.band)
     identified = load_result(result_path, args.model,
                              None if model is None else load_model(model))
     structure, values = identified.structure, identified.values
@@ -153,12 +178,13 @@ def run(args) -> int:
     if not selection.pairs:
         raise VerificationError("no pair can be verified: " + "; ".join(
             f"{pair}: {reason}" for pair, reason in selection.skipped.items()))
-    envelopes = envelopes_by_name([e.strip() for e in args.envelopes.split(",") if e.strip()])
+    envelopes = envelopes_by_name([e.strip() for e in args.envelopes.split(",") if e.strip()],
+                                  band=band)
     log = logging.getLogger("rotorid.verify")
     log.info("verifying %s on %d sweep(s)", ", ".join(selection.pairs), len(sweeps))
     compared = Countdown(len(selection.pairs))
     verification = verify_model(
-        structure, values, sweeps, selection.pairs, envelopes,
+        structure, values, sweeps, selection.pairs, envelopes, band=band,
         on_pair=lambda item: log.info("%s compared %s", item.pair, compared.step()))
 
     out = Path(args.out)

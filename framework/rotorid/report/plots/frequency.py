@@ -8,10 +8,13 @@
   apparent response, the measured response conditioned on the other inputs and the model's analytic
   response, all phases on one branch (no 360° jumps between curves), with the coherences.
 
-Points with γ² ≥ 0.8 are drawn as filled markers (they are checked), 0.6 ≤ γ² < 0.8 as open
-markers (shown, not checked), lower coherence is hidden. The y-limits come from the points
-with γ² ≥ 0.8 (and the envelope bounds, the analytic response), so outliers of low coherence
-never squash the plot; open markers beyond them are cut off. The
+Points of the pair's verification band (:class:`~rotorid.verification.band.VerificationBand`,
+by default γ² ≥ 0.8 over 0.1–10 rad/s) are drawn as filled markers (they are checked), other
+points with γ² ≥ 0.6 as open markers (shown, not checked), lower coherence is hidden; the
+frequencies outside the band's range are shaded and its threshold is drawn on the coherence
+panel. The y-limits come from the checked points (and the envelope bounds, the analytic
+response), so outliers of low coherence never squash the plot; open markers beyond them are
+cut off. The
 frequency axis is labelled at 1, 2 and 5 of every decade. Legends sit outside the axes.
 Every function returns its :class:`matplotlib.figure.Figure`.
 """
@@ -23,11 +26,12 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from rotorid.plugin.contracts import ValidationEnvelope
-from rotorid.verification.compare import COHERENCE_THRESHOLD, PairVerification
+from rotorid.verification.band import VerificationBand
+from rotorid.verification.compare import PairVerification
 from rotorid.verification.envelopes import error_db_deg, wrap180
 from rotorid.verification.frequency import unwrapped_phase_deg
 
-#: Coherence below which points are hidden.
+#: Coherence below which points are hidden (or the band's threshold, if lower).
 RELAXED_THRESHOLD = 0.6
 _MARKERS = ("o", "s", "^", "D", "v")
 #: How the model's single-input response was formed (``PairVerification.model_source``).
@@ -43,17 +47,18 @@ def _figure(n_rows: int, title: str):
     return figure, axes
 
 
-def _shown(coherence: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(strong, weak) masks: γ² ≥ 0.8, and 0.6 ≤ γ² < 0.8."""
+def _shown(band: VerificationBand, omega: np.ndarray, coherence: np.ndarray
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """(checked, shown) masks: the band's points, and the others with γ² ≥ 0.6."""
+    checked = band.selects(omega, coherence)
     with np.errstate(invalid="ignore"):
-        strong = coherence >= COHERENCE_THRESHOLD
-        weak = (coherence >= RELAXED_THRESHOLD) & ~strong
-    return strong, weak
+        shown = (coherence >= min(RELAXED_THRESHOLD, band.coherence)) & ~checked
+    return checked, shown
 
 
-def _scatter(axis, omega, values, coherence, color, marker, label):
-    """Filled markers for γ² ≥ 0.8, open for 0.6–0.8, nothing below."""
-    strong, weak = _shown(coherence)
+def _scatter(axis, band, omega, values, coherence, color, marker, label):
+    """Filled markers for the band's points, open for the other points with γ² ≥ 0.6."""
+    strong, weak = _shown(band, omega, coherence)
     axis.plot(omega[strong], values[strong], marker, color=color, markersize=3.5,
               linestyle="none", label=label)
     axis.plot(omega[weak], values[weak], marker, color=color, markersize=3.5,
@@ -89,12 +94,24 @@ def decade_axis(axis) -> None:
     axis.grid(True, which="minor", alpha=0.12)
 
 
-def _coherence_legend_entries(axis) -> None:
-    """Legend proxies explaining the filled and open markers."""
-    axis.plot([], [], "o", color="0.3", markersize=4,
-              label=f"filled: γ² ≥ {COHERENCE_THRESHOLD:g} (checked)")
-    axis.plot([], [], "o", color="0.3", markersize=4, markerfacecolor="none",
-              label=f"open: {RELAXED_THRESHOLD:g} ≤ γ² < {COHERENCE_THRESHOLD:g} (not checked)")
+def _mark_band(axes, band: VerificationBand, omega: np.ndarray) -> None:
+    """Legend proxies explaining the filled and open markers; the frequencies of ``omega``'s
+    span outside the band's range shaded on every axis; the band's threshold on the last
+    (coherence) axis."""
+    axes[0].plot([], [], "o", color="0.3", markersize=4,
+                 label=f"filled: in the verification band, {band.describe()} (checked)")
+    axes[0].plot([], [], "o", color="0.3", markersize=4, markerfacecolor="none",
+                 label=f"open: γ² ≥ {min(RELAXED_THRESHOLD, band.coherence):g} outside the "
+                       f"band (shown, not checked)")
+    low, high = float(np.min(omega)), float(np.max(omega))
+    spans = [(low, band.omega_min), (band.omega_max, high)]
+    for axis in axes:
+        for start, stop in spans:
+            if start < stop:
+                axis.axvspan(start, stop, color="0.9", zorder=0, linewidth=0,
+                             label="outside the band's frequency range")
+    axes[-1].axhline(band.coherence, color="grey", linestyle=":",
+                     label=f"γ² = {band.coherence:g} (band threshold)")
 
 
 def _counts(item: PairVerification, analytic: bool) -> str:
@@ -156,21 +173,19 @@ def plot_error(errors: Mapping[str, PairVerification] | PairVerification,
             raise ValueError(f"{label}: no analytic response was evaluated")
         coherence = item.analytic_coherence if analytic else item.coherence
         magnitude, phase = error_db_deg(error)
-        strong, _ = _shown(coherence)
+        strong, _ = _shown(item.band, item.omega, coherence)
         shown_mag.append(magnitude[strong])
         shown_phase.append(phase[strong])
         counts = _counts(item, analytic)
         text = f"{label}: {counts}" if counts else label
         color, marker = f"C{index}", _MARKERS[index % len(_MARKERS)]
-        _scatter(mag_axis, item.omega, magnitude, coherence, color, marker, text)
-        _scatter(phase_axis, item.omega, phase, coherence, color, marker, text)
+        _scatter(mag_axis, item.band, item.omega, magnitude, coherence, color, marker, text)
+        _scatter(phase_axis, item.band, item.omega, phase, coherence, color, marker, text)
     coherence = first.analytic_coherence if analytic else first.coherence
     coh_axis.semilogx(omega, coherence, color="0.2",
                       label=("partial γ² of the conditioned measured response" if analytic
                              else "γ² of the measured response"))
-    coh_axis.axhline(COHERENCE_THRESHOLD, color="grey", linestyle=":",
-                     label=f"γ² = {COHERENCE_THRESHOLD:g} (checked above)")
-    _coherence_legend_entries(mag_axis)
+    _mark_band((mag_axis, phase_axis, coh_axis), first.band, omega)
     mag_axis.set_ylim(*limits(shown_mag, least=2.0))
     phase_axis.set_ylim(*limits(shown_phase, least=10.0))
     mag_axis.set_ylabel("|ε| [dB]")
@@ -223,11 +238,11 @@ def plot_bode(item: PairVerification, output_unit: str = "", input_unit: str = "
         with np.errstate(divide="ignore"):
             magnitude = 20.0 * np.log10(np.abs(response))
         phase = common_branch_phase_deg(response, reference_deg)
-        strong, _ = _shown(coherence)
+        strong, _ = _shown(item.band, item.omega, coherence)
         shown_mag.append(magnitude[strong])
         shown_phase.append(phase[strong])
-        _scatter(mag_axis, item.omega, magnitude, coherence, color, "o", label)
-        _scatter(phase_axis, item.omega, phase, coherence, color, "o", label)
+        _scatter(mag_axis, item.band, item.omega, magnitude, coherence, color, "o", label)
+        _scatter(phase_axis, item.band, item.omega, phase, coherence, color, "o", label)
     if item.analytic is not None:
         with np.errstate(divide="ignore"):
             magnitude = 20.0 * np.log10(np.abs(item.analytic))
@@ -243,9 +258,7 @@ def plot_bode(item: PairVerification, output_unit: str = "", input_unit: str = "
     if conditioned is not None and conditioned.conditioned_on:
         coh_axis.semilogx(item.omega, conditioned.coherence, color="C3",
                           label="partial γ², measured conditioned")
-    coh_axis.axhline(COHERENCE_THRESHOLD, color="grey", linestyle=":",
-                     label=f"γ² = {COHERENCE_THRESHOLD:g}")
-    _coherence_legend_entries(mag_axis)
+    _mark_band((mag_axis, phase_axis, coh_axis), item.band, item.omega)
     mag_axis.set_ylim(*limits(shown_mag, least=6.0))
     phase_axis.set_ylim(*limits(shown_phase, least=30.0))
     mag_axis.set_ylabel(f"magnitude [dB, {unit}]")
