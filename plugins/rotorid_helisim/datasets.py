@@ -287,7 +287,7 @@ def fly_jobs(plant, jobs, progress=None, plant_id: str = "", with_record: bool =
             metadata["turbulence"] = job.config.as_dict()["turbulence"]
         by_job[id(job)].append(Maneuver(spec.name, record.time[:n],
                                         record.stick[row, :n] - job.trim_stick, outputs,
-                                        metadata, initial_state=np.zeros(8)))
+                                        metadata))
     sets = [ManeuverSet(by_job[id(job)]) for job in jobs]
     if with_record:
         return sets, record, [spec.name for _, spec in rows]
