@@ -121,11 +121,27 @@ def load_result(path: str | os.PathLike, model: str | None = None,
     return IdentifiedModel(identified, values, estimate, str(path), chosen)
 
 
-def _described_structure(record: Mapping, path: Path) -> ModelStructure:
+def named_model_file(path: str | os.PathLike) -> Path | None:
+    """The model file that the ``rotorid identify`` result ``path`` names (its ``structure``
+    path, relative to the result's folder), or None when it names none (a study result, an
+    embedded structure, a model by reference)."""
+    path = Path(path)
+    return _model_file(read_json_object(path, "result file"), path)
+
+
+def _model_file(record: Mapping, path: Path) -> Path | None:
     described = record.get("structure")
-    if isinstance(described, str):
-        model_path = Path(described)
-        return load_model(model_path if model_path.is_absolute() else path.parent / model_path)
+    if not isinstance(described, str):
+        return None
+    model_path = Path(described)
+    return model_path if model_path.is_absolute() else path.parent / model_path
+
+
+def _described_structure(record: Mapping, path: Path) -> ModelStructure:
+    model_file = _model_file(record, path)
+    if model_file is not None:
+        return load_model(model_file)
+    described = record.get("structure")
     if isinstance(described, Mapping):
         return parse_model(described, f"{path} (embedded structure)")
     raise DataFileError(f"{path}: the result names no model structure; give the model file "
@@ -178,4 +194,5 @@ def _identified(structure: ModelStructure, entry: Mapping, path: Path):
     return structure, structure.as_mapping(values)
 
 
-__all__ = ["IdentifiedModel", "STUDY_MODELS", "load_result", "model_values", "to_statespace"]
+__all__ = ["IdentifiedModel", "STUDY_MODELS", "load_result", "model_values", "named_model_file",
+           "to_statespace"]

@@ -17,7 +17,6 @@ from rotorid.report.plots.case import plot_rmse_path, plot_time_histories, save_
 from rotorid.report.plots.frequency import RELAXED_THRESHOLD, plot_bode, plot_error
 from rotorid.report.plots.profiles import plot_delay_profiles
 from rotorid.study.result import MODELS
-from rotorid.units import unit_system
 from rotorid.verification.compare import envelopes_by_name
 from rotorid.verification.pairs import parse_pair
 
@@ -70,8 +69,8 @@ def _time_caption(maneuver, models: Sequence[str]) -> str:
     return (f"{html.escape(str(kind))} input{html.escape(on)} "
             f"(<code>{html.escape(maneuver.name)}</code>, identification data): measured "
             f"outputs (thin grey) behind the simulated outputs of the models "
-            f"{html.escape(' and '.join(models))}, fed the recorded inputs; row 5 the inputs "
-            "(% of travel), row 6 the on-axis and the main coupled output zoomed on the input "
+            f"{html.escape(' and '.join(models))}, fed the recorded inputs; below them the "
+            "inputs, and last the on-axis and the main coupled output zoomed on the input "
             "window (shaded above).")
 
 
@@ -121,7 +120,7 @@ def case_figures(result, figures_dir: Path) -> dict[str, list[ReportFigure]]:
     Every identification maneuver gets a time-history figure, whatever its kind."""
     figures_dir.mkdir(parents=True, exist_ok=True)
     written = {"reduction": [], "delays": [], "time": [], "frequency": [], "bode": []}
-    units = unit_system(result.estimates["with delays"].units)
+    signals = result.structures["with delays"].signals
     flight = flight_label(result.condition)
     figure = plot_rmse_path(result.path, title=f"{flight}: RMSE versus removed parameters")
     save_figure(figure, figures_dir / "rmse")
@@ -139,7 +138,8 @@ def case_figures(result, figures_dir: Path) -> dict[str, list[ReportFigure]]:
         kind, axis = maneuver.metadata.get("kind"), maneuver.metadata.get("axis")
         what = " ".join(str(v) for v in (kind, "input on" if axis else None, axis) if v)
         figure = plot_time_histories(maneuver, simulated,
-                                     title=f"{flight}: {what or 'maneuver'} ({maneuver.name})")
+                                     title=f"{flight}: {what or 'maneuver'} ({maneuver.name})",
+                                     signals=signals)
         name = f"time_{file_stem(maneuver.name)}"
         save_figure(figure, figures_dir / name)
         written["time"].append(ReportFigure(f"{name}.png", _time_caption(maneuver, MODELS)))
@@ -149,7 +149,7 @@ def case_figures(result, figures_dir: Path) -> dict[str, list[ReportFigure]]:
     reference = result.verification.get("with delays")
     muad_range = _muad_range(result)
     for item in () if reference is None else reference.pairs:
-        output, control = parse_pair(item.pair)
+        output, control = parse_pair(item.pair, signals.outputs.names, signals.inputs.names)
         errors = {label: result.verification[label][item.pair] for label in MODELS
                   if label in result.verification}
         figure = plot_error(errors, envelopes,
@@ -160,7 +160,7 @@ def case_figures(result, figures_dir: Path) -> dict[str, list[ReportFigure]]:
                                                  _error_caption(item.pair, muad_range,
                                                                 item.band),
                                                  item.pair))
-        figure = plot_bode(item, output_unit=units.label(output),
+        figure = plot_bode(item, signals.outputs[output].unit, signals.inputs[control].unit,
                            title=f"{flight}: {item.pair} frequency responses "
                                  f"(model with delays)")
         stem = f"bode_{output}_{control}"

@@ -68,7 +68,8 @@ def _metrics(structure: ModelStructure, values, multisteps: ManeuverSet
              ) -> TimeDomainMetrics | None:
     """Multistep metrics of ``structure`` at ``values``; ``None`` when it diverges."""
     try:
-        return time_domain_metrics(multisteps, simulate(structure, values, multisteps))
+        return time_domain_metrics(multisteps, simulate(structure, values, multisteps),
+                                   outputs=structure.outputs)
     except SimulationDivergedError:
         return None
 

@@ -188,7 +188,8 @@ def _verify(case: FlightCase, structures, estimates, ident: ManeuverSet,
     values = {label: estimates[label].restricted(structures[label].parameter_names).values
               for label in MODELS}
     metrics = {label: time_domain_metrics(ident, simulate(structures[label], values[label],
-                                                          ident))
+                                                          ident),
+                                          outputs=structures[label].outputs)
                for label in MODELS}
     if verif is None:
         return metrics, {}

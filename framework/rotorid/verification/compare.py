@@ -17,7 +17,7 @@ from collections.abc import Callable, Mapping, Sequence
 import attrs
 import numpy as np
 
-from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS, ManeuverSet
+from rotorid.data import ManeuverSet
 from rotorid.errors import VerificationError
 from rotorid.frozen import FrozenMapping, readonly_array
 from rotorid.plugin.contracts import ValidationEnvelope
@@ -39,7 +39,7 @@ from rotorid.verification.frequency import (
     response_from_maneuvers,
 )
 from rotorid.verification.metrics import TimeDomainMetrics, time_domain_metrics
-from rotorid.verification.pairs import PAPER_PAIRS, parse_pair, primary_axis
+from rotorid.verification.pairs import default_pairs, parse_pair, sweeps_exciting
 
 #: Coherence of a pair's input with the conditioning inputs above which its conditioned
 #: response is unreliable (Tischler & Remple): the analytic comparison skips such points.
@@ -279,22 +279,27 @@ def default_omega(sweeps, n: int = 200, upper: float = 20.0) -> np.ndarray:
 
 
 def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
-                   pairs: Sequence[str] = PAPER_PAIRS,
+                   pairs: Sequence[str] | None = None,
                    envelopes: Mapping[str, ValidationEnvelope] | None = None, *,
                    analytic=None, omega=None, windows=None,
                    conditioning: str | Sequence[str] = "auto",
                    model_response: str = "simulated",
                    on_pair: Callable[[PairVerification], None] | None = None,
-                   band: VerificationBand = DEFAULT_BAND) -> VerificationResult:
+                   band: VerificationBand = DEFAULT_BAND,
+                   output_names: Sequence[str] | None = None,
+                   input_names: Sequence[str] | None = None) -> VerificationResult:
     """Compare a model's simulated sweeps with the recorded ones, pair by pair.
 
     Args:
         sweeps: :class:`~rotorid.data.ManeuverSet` of verification sweeps (truth outputs).
-        model_outputs: the model's outputs for the same inputs, one (N_i, 8) array per sweep.
-        pairs: ``output/input`` names; each uses the sweeps whose axis is its input.
+        model_outputs: the model's outputs for the same inputs, one (N_i, ny) array per sweep,
+            columns ``output_names``.
+        pairs: ``output/input`` names of the model's outputs and inputs; each uses the sweeps
+            whose axis is its input; default :func:`~rotorid.verification.pairs.default_pairs`.
         envelopes: name → envelope; default MUAD, AEE and mismatch cost from the plugins,
             built for ``band``; given envelopes must count γ² ≥ ``band.coherence``.
-        analytic: optional callable ``omega -> (M, 8, 4)`` complex model response.
+        analytic: optional callable ``omega -> (M, ny, m)`` complex model response (outputs
+            ``output_names``, inputs ``input_names``).
         omega: frequency grid in rad/s; default :func:`default_omega` of the sweeps.
         windows: window lengths in s; default from the shortest sweep.
         conditioning: inputs the truth's response is conditioned on for the analytic
@@ -307,14 +312,18 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
         on_pair: called with each pair's verification as it is done (progress).
         band: the verification band: every check, simulated and analytic, counts only the
             points in its frequency range whose coherence reaches its threshold.
+        output_names, input_names: the model's outputs and inputs (e.g. a structure's
+            ``outputs`` and ``controls``); default the sweeps' own.
 
     Both comparisons use single-input responses of truth and model: the model is driven by
     every recorded input, so the other inputs affect both sides alike.
     """
     _check_model_response(model_response, analytic)
-    names = list(pairs)
+    output_names = tuple(sweeps.output_names if output_names is None else output_names)
+    input_names = tuple(sweeps.input_names if input_names is None else input_names)
+    names = list(default_pairs(output_names, input_names) if pairs is None else pairs)
     for name in names:
-        parse_pair(name)                      # every name checked before any work
+        parse_pair(name, output_names, input_names)   # every name checked before any work
     if not names:
         raise VerificationError("no response pairs given; e.g. pairs=['q/long', 'p/long']")
     if envelopes is None:
@@ -325,7 +334,7 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
                                 f"sweeps; simulate every sweep")
     omega = default_omega(sweeps) if omega is None else np.asarray(omega, dtype=float)
     comparison = _SweepComparison(
-        sweeps, list(model_outputs), [primary_axis(m) for m in sweeps], omega,
+        sweeps, dict(zip(sweeps.names, model_outputs)), output_names, input_names, omega,
         None if analytic is None else analytic(omega), envelopes, windows, conditioning,
         model_response, band)
     results = []
@@ -333,7 +342,8 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
         results.append(comparison.pair(name))
         if on_pair is not None:
             on_pair(results[-1])
-    return VerificationResult(results, time_domain_metrics(sweeps, model_outputs),
+    return VerificationResult(results,
+                              time_domain_metrics(sweeps, model_outputs, outputs=output_names),
                               _drift_notes(results))
 
 
@@ -349,12 +359,14 @@ def _check_model_response(model_response: str, analytic) -> None:
 @attrs.frozen(eq=False)
 class _SweepComparison:
     """What every pair of one :func:`compare_sweeps` call shares: the sweeps, the model's
-    outputs on them, each sweep's input axis, the grid ω (M,), the analytic response
-    (M, 8, 4) or None, the envelopes, the processing options and the verification band."""
+    outputs on them (sweep name → (N_i, ny) array), the model's output and input names, the
+    grid ω (M,), the analytic response (M, ny, m) or None, the envelopes, the processing
+    options and the verification band."""
 
     sweeps: ManeuverSet
-    model_outputs: list
-    axes: list[str]
+    model_outputs: Mapping[str, np.ndarray]
+    output_names: tuple[str, ...]
+    input_names: tuple[str, ...]
     omega: np.ndarray
     analytic: np.ndarray | None
     envelopes: Mapping[str, ValidationEnvelope]
@@ -365,38 +377,31 @@ class _SweepComparison:
 
     def pair(self, name: str) -> PairVerification:
         """The verification of pair ``name`` (``output/input``) on the sweeps of its input."""
-        output, control = parse_pair(name)
-        chosen = self._sweeps_of(name, control)
-        subset = self.sweeps.select(lambda m, names={self.sweeps[i].name for i in chosen}:
-                                    m.name in names)
-        model, truth = self._responses(subset, chosen, output, control)
+        output, control = parse_pair(name, self.output_names, self.input_names)
+        subset = sweeps_exciting(self.sweeps, control, name)
+        outputs = [self.model_outputs[m.name] for m in subset]
+        model, truth = self._responses(subset, outputs, output, control)
         checks = self._checks(model.response, truth)
         conditioned, analytic, analytic_checks = self._analytic_comparison(
             subset, output, control, truth)
-        ratio = _rms_ratio([self.model_outputs[i] for i in chosen],
-                           [self.sweeps[i] for i in chosen], OUTPUT_CHANNELS.index(output))
+        column = self.output_names.index(output)
+        ratio = _rms_ratio([y[:, column] for y in outputs], [m.channel(output) for m in subset])
         return PairVerification(name, subset.names, truth, model, conditioned, analytic,
                                 checks, analytic_checks, ratio, self.model_response, self.band)
 
-    def _sweeps_of(self, name: str, control: str) -> list[int]:
-        chosen = [i for i, axis in enumerate(self.axes) if axis == control]
-        if not chosen:
-            raise VerificationError(f"pair {name}: no sweep excites {control!r}; the sweeps "
-                                    f"excite {', '.join(sorted(set(self.axes)))}")
-        return chosen
-
-    def _responses(self, subset, chosen: list[int], output: str, control: str
+    def _responses(self, subset, outputs: list[np.ndarray], output: str, control: str
                    ) -> tuple[FrequencyResponse, FrequencyResponse]:
-        """The model's and the truth's single-input responses of the pair."""
+        """The model's and the truth's single-input responses of the pair; ``outputs`` are the
+        model's on the ``subset`` of sweeps."""
         if self.model_response == "apparent":
             return apparent_response(subset, control, output, self.omega,
-                                     self.analytic[:, OUTPUT_CHANNELS.index(output)],
-                                     windows=self.windows)
+                                     self.analytic[:, self.output_names.index(output)],
+                                     input_names=self.input_names, windows=self.windows)
         truth = response_from_maneuvers(subset, control, output, self.omega,
                                         windows=self.windows)
         model = response_from_maneuvers(subset, control, output, self.omega,
-                                        windows=self.windows,
-                                        outputs=[self.model_outputs[i] for i in chosen])
+                                        windows=self.windows, outputs=outputs,
+                                        output_names=self.output_names)
         return model, truth
 
     def _checks(self, response: np.ndarray, reference: FrequencyResponse
@@ -418,8 +423,8 @@ class _SweepComparison:
         others = self._conditioning_inputs(subset, control)
         conditioned = truth if not others else response_from_maneuvers(
             subset, control, output, self.omega, windows=self.windows, conditioned_on=others)
-        analytic = self.analytic[:, OUTPUT_CHANNELS.index(output),
-                                 INPUT_CHANNELS.index(control)]
+        analytic = self.analytic[:, self.output_names.index(output),
+                                 self.input_names.index(control)]
         return conditioned, analytic, self._checks(analytic, _reliable(conditioned))
 
     def _conditioning_inputs(self, subset, control: str) -> tuple[str, ...]:
@@ -453,12 +458,13 @@ def _drift_notes(results: Sequence[PairVerification]) -> list[str]:
             if p.model_source == "simulated" and p.output_rms_ratio > DRIFT_RATIO]
 
 
-def _rms_ratio(model_outputs, maneuvers, column: int) -> float:
-    """RMS of the model's output over RMS of the recorded one (means removed)."""
+def _rms_ratio(model_outputs: Sequence[np.ndarray], measured: Sequence[np.ndarray]) -> float:
+    """RMS of the model's output over RMS of the recorded one (means removed), each given as
+    one (N_i,) array per sweep."""
     def rms(arrays):
         centred = [a - a.mean() for a in arrays]
         return float(np.sqrt(np.mean(np.concatenate(centred) ** 2)))
 
-    truth = rms([m.outputs[:, column] for m in maneuvers])
-    model = rms([np.asarray(y)[:, column] for y in model_outputs])
+    truth = rms([np.asarray(z, dtype=float) for z in measured])
+    model = rms([np.asarray(y, dtype=float) for y in model_outputs])
     return model / truth if truth > 0 else float("inf")

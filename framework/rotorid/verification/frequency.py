@@ -35,7 +35,7 @@ import attrs
 import numpy as np
 
 from rotorid.blas import single_threaded
-from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS, ManeuverSet
+from rotorid.data import ManeuverSet
 from rotorid.errors import VerificationError
 from rotorid.frozen import readonly_array
 
@@ -415,14 +415,15 @@ def moving_inputs(maneuvers: ManeuverSet, primary: str, fraction: float = 0.05
                   ) -> tuple[str, ...]:
     """Inputs other than ``primary`` whose RMS (mean removed) exceeds ``fraction`` of the
     primary input's RMS in the pooled maneuvers: the candidates for conditioning."""
-    _check_channel(primary, INPUT_CHANNELS, "input")
+    names = maneuvers.input_names
+    _check_channel(primary, names, "input")
     stacked = np.concatenate([m.inputs - m.inputs.mean(axis=0) for m in maneuvers])
     rms = np.sqrt(np.mean(stacked ** 2, axis=0))
-    reference = rms[INPUT_CHANNELS.index(primary)]
+    reference = rms[names.index(primary)]
     if reference <= 0:
         raise VerificationError(f"input {primary!r} does not move in these maneuvers; select "
                                 f"the sweeps of that axis")
-    return tuple(name for name, value in zip(INPUT_CHANNELS, rms)
+    return tuple(name for name, value in zip(names, rms)
                  if name != primary and value > fraction * reference)
 
 
@@ -434,6 +435,7 @@ def _check_channel(name: str, channels: Sequence[str], kind: str) -> None:
 def response_from_maneuvers(maneuvers: ManeuverSet, input: str, output: str,
                             omega: np.ndarray, *, conditioned_on: Sequence[str] = (),
                             outputs: Sequence[np.ndarray] | None = None,
+                            output_names: Sequence[str] | None = None,
                             windows: Sequence[float] | None = None,
                             overlap: float = DEFAULT_OVERLAP) -> FrequencyResponse:
     """Composite response ``output/input`` pooled over maneuvers, optionally conditioned.
@@ -443,39 +445,42 @@ def response_from_maneuvers(maneuvers: ManeuverSet, input: str, output: str,
         input, output: channel names (``"long"``, ``"q"``).
         omega: frequencies in rad/s, shape (M,).
         conditioned_on: other inputs to remove (see :func:`moving_inputs`).
-        outputs: replacement output arrays, one (N_i, 8) per maneuver (e.g. a model's
-            simulation of the same inputs); default the measured outputs.
+        outputs: replacement output arrays, one (N_i, len(output_names)) per maneuver (e.g. a
+            model's simulation of the same inputs); default the measured outputs.
+        output_names: the columns of ``outputs`` (e.g. a structure's outputs); default the
+            maneuvers' own outputs.
     """
-    _check_channel(input, INPUT_CHANNELS, "input")
-    _check_channel(output, OUTPUT_CHANNELS, "output")
+    _check_channel(input, maneuvers.input_names, "input")
     for name in conditioned_on:
-        _check_channel(name, INPUT_CHANNELS, "input")
+        _check_channel(name, maneuvers.input_names, "input")
     inputs = [input, *[c for c in conditioned_on if c != input]]
-    records = _records(maneuvers, inputs, output, outputs)
+    records = _records(maneuvers, inputs, output, outputs, output_names)
     return estimate_responses(records, maneuvers[0].dt, inputs, output, omega, windows,
                               overlap)[0]
 
 
 def _records(maneuvers: ManeuverSet, inputs: Sequence[str], output: str,
-             outputs: Sequence[np.ndarray] | None = None) -> list[np.ndarray]:
-    """Per maneuver, the ``inputs`` columns then the ``output`` column, shape (N_i, n + 1)."""
+             outputs: Sequence[np.ndarray] | None = None,
+             output_names: Sequence[str] | None = None) -> list[np.ndarray]:
+    """Per maneuver, the ``inputs`` columns then the ``output`` column, shape (N_i, n + 1);
+    the output from ``outputs`` (columns ``output_names``) when given."""
     dts = {round(m.dt, 9) for m in maneuvers}
     if len(dts) > 1:
         raise VerificationError(f"maneuvers have different sample times {sorted(dts)} s; "
                                 f"resample them to one before estimating responses")
+    names = tuple(maneuvers.output_names if output_names is None else output_names)
+    _check_channel(output, names, "output")
     if outputs is None:
-        outputs = [m.outputs for m in maneuvers]
+        outputs = [m.columns(names) for m in maneuvers]
     if len(outputs) != len(maneuvers):
         raise VerificationError(f"{len(outputs)} output arrays for {len(maneuvers)} maneuvers")
-    columns = [INPUT_CHANNELS.index(c) for c in inputs]
-    row = OUTPUT_CHANNELS.index(output)
     records = []
     for m, y in zip(maneuvers, outputs):
         y = np.asarray(y, dtype=float)
-        if y.shape != (m.n_samples, len(OUTPUT_CHANNELS)):
+        if y.shape != (m.n_samples, len(names)):
             raise VerificationError(f"outputs for maneuver {m.name!r} must have shape "
-                                    f"({m.n_samples}, {len(OUTPUT_CHANNELS)}), got {y.shape}")
-        records.append(np.column_stack([m.inputs[:, columns], y[:, row]]))
+                                    f"({m.n_samples}, {len(names)}), got {y.shape}")
+        records.append(np.column_stack([m.columns(inputs), y[:, names.index(output)]]))
     return records
 
 
@@ -492,7 +497,8 @@ def hold_response(omega: np.ndarray, dt: float, hold: str) -> np.ndarray:
 
 
 def apparent_response(maneuvers: ManeuverSet, input: str, output: str, omega: np.ndarray,
-                      model: np.ndarray, *, windows: Sequence[float] | None = None,
+                      model: np.ndarray, *, input_names: Sequence[str] | None = None,
+                      windows: Sequence[float] | None = None,
                       overlap: float = DEFAULT_OVERLAP) -> tuple[FrequencyResponse,
                                                                  FrequencyResponse]:
     """A model's response as the single-input estimate ``output/input`` on these records
@@ -509,9 +515,10 @@ def apparent_response(maneuvers: ManeuverSet, input: str, output: str, omega: np
         maneuvers: the records (one sample time).
         input, output: channel names (``"long"``, ``"q"``).
         omega: frequencies in rad/s, shape (M,).
-        model: the model's responses of ``output`` to every input on ``omega``, shape (M, 4)
-            complex, inputs in ``INPUT_CHANNELS`` order (e.g. from
-            :func:`rotorid.simulation.transfer.frequency_response`).
+        model: the model's responses of ``output`` to each of its inputs on ``omega``, shape
+            (M, m) complex (e.g. from :func:`rotorid.simulation.transfer.frequency_response`).
+        input_names: the model's inputs, the columns of ``model`` (default the maneuvers'
+            inputs); each must be recorded, and ``input`` must be one of them.
 
     The analytic responses are those of the continuous model; the recorded inputs are
     samples of held signals, so each is multiplied by the frequency response of the records'
@@ -519,19 +526,19 @@ def apparent_response(maneuvers: ManeuverSet, input: str, output: str, omega: np
 
     Returns ``(model, truth)``; the model's carries the truth's coherence and random error.
     """
-    _check_channel(input, INPUT_CHANNELS, "input")
-    _check_channel(output, OUTPUT_CHANNELS, "output")
+    names = tuple(maneuvers.input_names if input_names is None else input_names)
+    _check_channel(input, names, "input")
     omega = np.asarray(omega, dtype=float)
     model = np.asarray(model, dtype=complex)
-    if model.shape != (omega.size, len(INPUT_CHANNELS)):
+    if model.shape != (omega.size, len(names)):
         raise VerificationError(f"model responses must have shape ({omega.size}, "
-                                f"{len(INPUT_CHANNELS)}), got {model.shape}")
-    order = [input, *[c for c in INPUT_CHANNELS if c != input]]
+                                f"{len(names)}), got {model.shape}")
+    order = [input, *[c for c in names if c != input]]
     records = _records(maneuvers, order, output)
     if windows is None:
         windows = default_windows(min(r.shape[0] for r in records) * maneuvers[0].dt)
-    gains = (model[:, [INPUT_CHANNELS.index(c) for c in order]]
-             * hold_response(omega, maneuvers[0].dt, maneuvers.hold)[:, None])   # (M, 4)
+    gains = (model[:, [names.index(c) for c in order]]
+             * hold_response(omega, maneuvers[0].dt, maneuvers.hold)[:, None])   # (M, m)
     truths, models, used, averages = [], [], [], []
     for window in windows:
         spectra = cross_spectra(records, maneuvers[0].dt, omega, window, overlap)

@@ -21,7 +21,7 @@ from collections.abc import Sequence
 import attrs
 import numpy as np
 
-from rotorid.data import OUTPUT_CHANNELS, ManeuverSet
+from rotorid.data import ManeuverSet
 from rotorid.errors import DataError
 
 
@@ -96,6 +96,7 @@ class ManeuverMetrics:
     """Metrics of one maneuver (or of all pooled, ``name="all"``).
 
     Attributes:
+        outputs: the names of the outputs compared.
         rmse, j_rms: over all outputs, data units.
         rmse_per_output: RMSE of each output, shape (n_o,), data units.
         tic: Theil's U1 of each output, shape (n_o,).
@@ -106,12 +107,13 @@ class ManeuverMetrics:
     j_rms: float
     rmse_per_output: np.ndarray
     tic: np.ndarray
-    outputs: tuple[str, ...] = OUTPUT_CHANNELS
+    outputs: tuple[str, ...] = attrs.field(converter=tuple)
 
     @classmethod
-    def of(cls, name: str, measured, simulated, weights=None) -> "ManeuverMetrics":
+    def of(cls, name: str, outputs, measured, simulated, weights=None) -> "ManeuverMetrics":
         return cls(name, rmse(measured, simulated), j_rms(measured, simulated, weights),
-                   rmse(measured, simulated, per_output=True), tic(measured, simulated))
+                   rmse(measured, simulated, per_output=True), tic(measured, simulated),
+                   outputs)
 
     def summary(self) -> dict:
         return {"maneuver": self.name, "rmse": self.rmse, "j_rms": self.j_rms,
@@ -156,13 +158,17 @@ class TimeDomainMetrics:
 
 
 def time_domain_metrics(maneuvers: ManeuverSet, simulated: Sequence[np.ndarray],
-                        weights=None) -> TimeDomainMetrics:
-    """RMSE, J_rms and TIC of simulated outputs (one (N_i, 8) array per maneuver), per
-    maneuver and pooled; ``weights`` (8,) is J_rms's output weighting."""
+                        weights=None, outputs: Sequence[str] | None = None
+                        ) -> TimeDomainMetrics:
+    """RMSE, J_rms and TIC of simulated outputs (one (N_i, n_o) array per maneuver, columns
+    ``outputs``: a model's output names, default the maneuvers' own outputs) against the
+    recorded channels of those names, per maneuver and pooled; ``weights`` (n_o,) is J_rms's
+    output weighting."""
     if len(simulated) != len(maneuvers):
         raise DataError(f"{len(simulated)} simulated records for {len(maneuvers)} maneuvers")
-    per = tuple(ManeuverMetrics.of(m.name, m.outputs, y, weights)
-                for m, y in zip(maneuvers, simulated))
-    overall = ManeuverMetrics.of("all", [m.outputs for m in maneuvers], list(simulated),
-                                 weights)
+    outputs = tuple(maneuvers.output_names if outputs is None else outputs)
+    measured = [m.columns(outputs) for m in maneuvers]
+    per = tuple(ManeuverMetrics.of(m.name, outputs, z, y, weights)
+                for m, z, y in zip(maneuvers, measured, simulated))
+    overall = ManeuverMetrics.of("all", outputs, measured, list(simulated), weights)
     return TimeDomainMetrics(per, overall)

@@ -1,7 +1,9 @@
-"""Response pairs: ``output/input`` names such as ``q/long``, the paper's pairs, and the input
-axis a sweep excites (the sweeps a pair is verified on)."""
+"""Response pairs: ``output/input`` names such as ``q/long``, the paper's pairs, a model's
+default pairs, and the input axis a sweep excites (the sweeps a pair is verified on)."""
 
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -12,28 +14,40 @@ from rotorid.errors import RotoridError, VerificationError
 PAPER_PAIRS = ("q/long", "p/long", "q/lat", "p/lat", "r/coll", "az/coll", "r/ped", "ay/ped")
 
 
-def parse_pair(pair: str) -> tuple[str, str]:
-    """``"q/long"`` → ``("q", "long")`` (output, input); the error lists the valid names."""
+def parse_pair(pair: str, outputs: Sequence[str] = OUTPUT_CHANNELS,
+               inputs: Sequence[str] = INPUT_CHANNELS) -> tuple[str, str]:
+    """``"q/long"`` → ``("q", "long")`` (output, input), with the output one of ``outputs``
+    and the input one of ``inputs`` (default the helicopter's channels; a model's own signals
+    for a model); the error lists the valid names."""
     parts = str(pair).strip().split("/")
-    if (len(parts) != 2 or parts[0] not in OUTPUT_CHANNELS
-            or parts[1] not in INPUT_CHANNELS):
+    if len(parts) != 2 or parts[0] not in outputs or parts[1] not in inputs:
         raise VerificationError(
             f"unknown response pair {pair!r}; write OUTPUT/INPUT with OUTPUT one of "
-            f"{', '.join(OUTPUT_CHANNELS)} and INPUT one of {', '.join(INPUT_CHANNELS)}, "
-            f"e.g. 'q/long'")
+            f"{', '.join(outputs)} and INPUT one of {', '.join(inputs)}, "
+            f"e.g. '{outputs[0]}/{inputs[0]}'")
     return parts[0], parts[1]
+
+
+def default_pairs(outputs: Sequence[str], inputs: Sequence[str]) -> tuple[str, ...]:
+    """The pairs a model with these outputs and inputs is verified on by default: the paper's
+    pairs it has (q/long and az/coll for the longitudinal template), else every
+    ``output/input`` pair of the model."""
+    own = tuple(p for p in PAPER_PAIRS
+                if p.split("/")[0] in outputs and p.split("/")[1] in inputs)
+    return own or tuple(f"{o}/{i}" for i in inputs for o in outputs)
 
 
 def primary_axis(maneuver) -> str:
     """The input axis a sweep excites: ``metadata['axis']``, else the input of largest RMS."""
     axis = maneuver.metadata.get("axis")
+    names = maneuver.input_names
     if axis is not None:
-        if axis not in INPUT_CHANNELS:
+        if axis not in names:
             raise VerificationError(f"maneuver {maneuver.name!r}: metadata axis {axis!r} is "
-                                    f"not an input ({', '.join(INPUT_CHANNELS)})")
+                                    f"not one of its inputs ({', '.join(names)})")
         return axis
     centred = maneuver.inputs - maneuver.inputs.mean(axis=0)
-    return INPUT_CHANNELS[int(np.argmax(np.sqrt(np.mean(centred ** 2, axis=0))))]
+    return names[int(np.argmax(np.sqrt(np.mean(centred ** 2, axis=0))))]
 
 
 def sweeps_exciting(sweeps, control: str, pair: str,

@@ -1,9 +1,10 @@
 """The response pairs a model and its sweeps can produce, and why the others are skipped.
 
-A pair ``output/input`` cannot be verified when no sweep excites the input, when the model's
-output does not respond to the input at all (a decoupled model: its response is identically
-zero and ε would be infinite), or when the measured output never moves on the input's sweeps
-(a padded column: the measured response is zero). :func:`producible_pairs` sorts the pairs
+A pair ``output/input`` cannot be verified when the model lacks its output or input (the
+paper's lateral pairs of a longitudinal model), when no sweep excites the input, when the model's output does not respond to the
+input at all (a decoupled model: its response is identically zero and ε would be infinite),
+when the sweeps do not record the output, or when the measured output never moves on the
+input's sweeps (a padded column: the measured response is zero). :func:`producible_pairs` sorts the pairs
 into those to verify and those skipped, with the reason.
 """
 
@@ -14,7 +15,7 @@ from collections.abc import Mapping, Sequence
 import attrs
 import numpy as np
 
-from rotorid.data import OUTPUT_CHANNELS
+from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS
 from rotorid.model.statespace import responding_outputs
 from rotorid.verification.pairs import parse_pair, primary_axis
 
@@ -34,16 +35,25 @@ def producible_pairs(structure, values, sweeps, pairs: Sequence[str]) -> PairSel
     axes = [primary_axis(m) for m in sweeps]
     kept, skipped = [], {}
     for pair in pairs:
-        output, control = parse_pair(pair)
+        output, control = parse_pair(pair, (*OUTPUT_CHANNELS, *structure.outputs),
+                                     (*INPUT_CHANNELS, *structure.controls))
         chosen = [m for m, axis in zip(sweeps, axes) if axis == control]
-        column = OUTPUT_CHANNELS.index(output)
-        if not chosen:
+        missing = ([f"output {output!r}"] if output not in structure.outputs else []) + (
+            [f"input {control!r}"] if control not in structure.controls else [])
+        if missing:
+            skipped[pair] = (f"the model has no {' and no '.join(missing)} (outputs "
+                             f"{', '.join(structure.outputs)}; inputs "
+                             f"{', '.join(structure.controls)})")
+        elif not chosen:
             skipped[pair] = (f"no sweep excites {control!r} (the sweeps excite "
                              f"{', '.join(sorted(set(axes)))})")
         elif output not in responding[control]:
             skipped[pair] = (f"the model's {output} does not respond to {control} (no "
                              f"derivative couples them): its response is identically zero")
-        elif all(np.ptp(m.outputs[:, column]) == 0 for m in chosen):
+        elif output not in sweeps.output_names:
+            skipped[pair] = (f"the sweeps record no {output} (their outputs: "
+                             f"{', '.join(sweeps.output_names)})")
+        elif all(np.ptp(m.channel(output)) == 0 for m in chosen):
             skipped[pair] = (f"the measured {output} never moves on the {control} sweeps "
                              f"({', '.join(m.name for m in chosen)}); is the column padded?")
         else:

@@ -3,9 +3,10 @@ open-loop simulation would drift away from a long record."""
 
 from __future__ import annotations
 
+import attrs
 import numpy as np
 
-from rotorid.data import Maneuver, ManeuverSet
+from rotorid.data import ManeuverSet
 from rotorid.errors import VerificationError
 from rotorid.estimation.equation_error import reconstructed_states
 from rotorid.simulation.simulator import simulate
@@ -21,7 +22,7 @@ def segmented_simulation(structure, values, maneuvers, segment: float) -> list[n
     Delayed terms see trim before each restart, and the reconstructed velocities carry
     integration error, so the restarts are approximate: on noise-free data of the model
     itself they reproduce its plain simulation to a few per cent (tested).
-    Returns one (N_i, 8) array per maneuver.
+    Returns one (N_i, ny) array per maneuver, outputs in ``structure.outputs`` order.
     """
     if not segment > 0:
         raise VerificationError(f"segment must be a positive duration in s, got {segment!r}")
@@ -33,9 +34,11 @@ def segmented_simulation(structure, values, maneuvers, segment: float) -> list[n
         if len(starts) > 1 and m.n_samples - starts[-1] < 2:
             starts.pop()
         for first, stop in zip(starts, starts[1:] + [m.n_samples]):
-            pieces.append(Maneuver(f"{m.name}#{first}", m.time[first:stop],
-                                   m.inputs[first:stop], m.outputs[first:stop],
-                                   units=m.units, initial_state=states[first]))
+            pieces.append(attrs.evolve(
+                m, name=f"{m.name}#{first}", time=m.time[first:stop],
+                inputs=m.inputs[first:stop], outputs=m.outputs[first:stop],
+                extra_channels={k: v[first:stop] for k, v in m.extra_channels.items()},
+                initial_state=states[first]))
         counts.append(len(starts))
     simulated = iter(simulate(structure, values, ManeuverSet(pieces, hold=maneuvers.hold)))
     return [np.concatenate([next(simulated) for _ in range(count)]) for count in counts]

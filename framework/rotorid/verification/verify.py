@@ -15,7 +15,6 @@ from rotorid.simulation.simulator import simulate
 from rotorid.simulation.transfer import frequency_response
 from rotorid.verification.band import DEFAULT_BAND, VerificationBand
 from rotorid.verification.compare import VerificationResult, compare_sweeps, envelopes_by_name
-from rotorid.verification.pairs import PAPER_PAIRS
 from rotorid.verification.segments import segmented_simulation
 
 #: Growth of the unstable mode over the longest sweep above which the model's open-loop
@@ -24,7 +23,7 @@ from rotorid.verification.segments import segmented_simulation
 DRIFT_LIMIT = 100.0
 
 
-def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
+def verify_model(structure, values, sweeps, pairs: Sequence[str] | None = None,
                  envelopes: Mapping[str, ValidationEnvelope] | Sequence[str] | None = None,
                  segment: float | None = None, manager=None,
                  band: VerificationBand = DEFAULT_BAND, **options) -> VerificationResult:
@@ -32,7 +31,8 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
 
     Simulates ``structure`` at ``values`` (vector, name→value mapping or None) on the
     recorded inputs of every sweep (:func:`rotorid.simulation.simulator.simulate`, with the sweeps'
-    input hold), estimates truth and model responses with identical processing and holds
+    input hold) and compares the pairs ``pairs`` of its outputs and inputs (default
+    :func:`rotorid.verification.pairs.default_pairs` of the structure's signals), estimates truth and model responses with identical processing and holds
     ``ε = H_model/H_truth`` against the envelopes; also compares the analytic response with
     exact delays (:func:`rotorid.simulation.transfer.frequency_response`) with the truth's conditioned
     response. ``envelopes`` may be envelope objects by name or registered envelope names.
@@ -75,7 +75,8 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] = PAPER_PAIRS,
     result = compare_sweeps(
         sweeps, outputs, pairs, envelopes,
         analytic=lambda omega: frequency_response(structure, values, omega),
-        model_response=comparison, band=band, **options)
+        model_response=comparison, band=band, output_names=structure.outputs,
+        input_names=structure.controls, **options)
     return attrs.evolve(result, notes=[*notes, *result.notes])
 
 

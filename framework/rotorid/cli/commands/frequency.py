@@ -100,8 +100,8 @@ def run(args) -> int:
     sweeps = load_sweeps(args.sweeps)
     omega = default_omega(sweeps)
     responses = []
-    for pair in chosen_pairs(args.pairs, sweeps):
-        output, control = parse_pair(pair)
+    for pair in chosen_pairs(args.pairs, sweeps, sweeps.output_names, sweeps.input_names):
+        output, control = parse_pair(pair, sweeps.output_names, sweeps.input_names)
         subset = sweeps_exciting(sweeps, control, pair, UsageError)
         others = moving_inputs(subset, control) if args.conditioned else ()
         responses.append(response_from_maneuvers(subset, control, output, omega,

@@ -191,8 +191,7 @@ def data_warnings_report(messages: list[str]) -> str:
 
 
 def run(args) -> int:
-    from rotorid.cli.commands.simulate import _load_inputs
-    from rotorid.cli.files import refuse_overwrite
+    from rotorid.cli.files import load_maneuvers, refuse_overwrite
     from rotorid.errors import DataFileError, ExitStatus, MissingFileError, RotoridWarning
     from rotorid.estimation.data_checks import check_fit_data
     from rotorid.estimation.sanity import check_before_fit
@@ -220,8 +219,8 @@ def run(args) -> int:
             if not by_reference:
                 ingestion["channels"] = load_channel_map(args.model)
                 ingestion["signals"] = model.signals
-            maneuvers = _load_inputs(args.data, args.hold,
-                                     None if by_reference else model.units.name, ingestion)
+            maneuvers = load_maneuvers(args.data, args.hold,
+                                       None if by_reference else model.units.name, ingestion)
             if not by_reference:
                 check_fit_data(maneuvers, options.get("outputs"), model)
             checked = check_before_fit(maneuvers, None if by_reference else model)

@@ -67,24 +67,8 @@ def read_values(path: Path, structure):
     return structure, structure.as_vector(content)
 
 
-def _load_inputs(locations, hold: str, units: str, ingestion=None):
-    from rotorid.data import ManeuverSet
-    from rotorid.errors import DataFileError
-    from rotorid.plugin.manager import create
-
-    source = create("data-sources", "files", hold=hold, units=units, ingestion=ingestion)
-    maneuvers = []
-    for location in locations:
-        maneuvers.extend(source.load(location))
-    names = [m.name for m in maneuvers]
-    repeated = sorted({n for n in names if names.count(n) > 1})
-    if repeated:
-        raise DataFileError(f"maneuver name(s) {', '.join(repeated)} appear in more than one "
-                            f"input; each maneuver must have a unique name")
-    return ManeuverSet(maneuvers, hold=hold)
-
-
 def run(args) -> int:
+    from rotorid.cli.files import load_maneuvers
     from rotorid.estimation.data_checks import check_delays
     from rotorid.model.modelfile import load_channel_map, load_model
     from rotorid.plugin.manager import create
@@ -94,9 +78,9 @@ def run(args) -> int:
     values = None
     if args.values is not None:
         structure, values = read_values(Path(args.values), structure)
-    maneuvers = _load_inputs(args.inputs, args.hold, structure.units.name,
-                             {"signals": structure.signals,
-                              "channels": load_channel_map(args.model)})
+    maneuvers = load_maneuvers(args.inputs, args.hold, structure.units.name,
+                               {"signals": structure.signals,
+                                "channels": load_channel_map(args.model)})
     check_delays(structure, maneuvers, values)
     simulated = simulated_maneuvers(structure, values, maneuvers)
     paths = create("data-sources", "files", hold=args.hold).save(simulated, args.out, format=args.format)

@@ -11,11 +11,18 @@ Usage::
 relative to the result file, or an embedded model-file mapping). ``MODEL.toml`` overrides
 the structure (the estimate JSON of ``Estimate.as_dict`` names none, so give it). Free
 derivatives of the structure that the result does not list were removed by the reduction and
-are dropped; output biases and initial states of the identification records are ignored. SWEEPS are maneuver files, directories or glob patterns;
-when the maneuvers carry ``kind`` metadata only the ``sweep`` ones are used.
+are dropped; output biases and initial states of the identification records are ignored.
+SWEEPS are maneuver files, directories or glob patterns, read through the model file's
+``[channels]`` map and converted to its unit system; when the maneuvers carry ``kind``
+metadata only the ``sweep`` ones are used. They need only the channels the model uses (a
+``longitudinal`` model verifies on sweeps without lateral columns).
 
-A pair the model or the sweeps cannot produce (no sweep excites its input, the model's output
-does not respond to that input, the measured output never moves) is skipped with the reason
+Pairs are ``OUTPUT/INPUT`` names of the model's signals; by default the paper's pairs the model
+has (q/long and az/coll for the ``longitudinal`` template), else every output over every input
+(:func:`rotorid.verification.pairs.default_pairs`), limited to the inputs the sweeps excite.
+A pair the model or the sweeps cannot produce (the model lacks its signals, no sweep excites
+its input, the model's output does not respond to that input, the measured output never
+moves) is skipped with the reason
 (:mod:`rotorid.verification.producible`). Writes ``verification.json`` (every check, J_ave,
 time-domain metrics, the skipped pairs, and per pair the frequency responses it was judged
 on) and, per pair, ``error_<output>_<input>.png`` and ``bode_<output>_<input>.png`` into
@@ -44,9 +51,10 @@ def add_arguments(parser) -> None:
                         help="[MODEL.toml] RESULT.json SWEEPS...: optional model file, the "
                              "estimate JSON, then sweep files, directories or glob patterns")
     parser.add_argument("--pairs", default=None,
-                        help="comma-separated OUTPUT/INPUT pairs (default: the paper's "
-                             "q/long,p/long,q/lat,p/lat,r/coll,az/coll,r/ped,ay/ped, limited "
-                             "to the axes the sweeps excite)")
+                        help="comma-separated OUTPUT/INPUT pairs of the model's outputs and "
+                             "inputs (default: the paper's q/long,p/long,q/lat,p/lat,r/coll,"
+                             "az/coll,r/ped,ay/ped that the model has, else every pair of the "
+                             "model; limited to the axes the sweeps excite)")
     parser.add_argument("--model", choices=STUDY_MODELS, default=None,
                         help="which model of a study's result.json (default: with delays)")
     parser.add_argument("--envelopes", default=DEFAULT_ENVELOPES,
@@ -94,38 +102,39 @@ def _split(files: list[str]):
     return model, Path(rest[0]), rest[1:]
 
 
-def load_sweeps(locations):
-    """The maneuvers of files, directories or patterns; only the ``sweep`` ones when the
-    maneuvers carry ``kind`` metadata."""
-    from rotorid.plugin.manager import create
+def load_sweeps(locations, units: str | None = None, ingestion=None):
+    """The maneuvers of files, directories or patterns (:func:`rotorid.cli.files.load_maneuvers`);
+    only the ``sweep`` ones when the maneuvers carry ``kind`` metadata."""
+    from rotorid.cli.files import load_maneuvers
 
-    source = create("data-sources", "files")
-    sweeps = source.load(locations[0])
-    for location in locations[1:]:
-        sweeps = sweeps.merged(source.load(location))
+    sweeps = load_maneuvers(locations, units=units, ingestion=ingestion)
     if any("kind" in m.metadata for m in sweeps):
         sweeps = sweeps.select(kind="sweep")
     return sweeps
 
 
-def chosen_pairs(option: str | None, sweeps) -> list[str]:
-    """The ``--pairs`` option's pairs, or the paper's pairs whose input the sweeps excite."""
-    from rotorid.verification.pairs import PAPER_PAIRS, primary_axis
+def chosen_pairs(option: str | None, sweeps, outputs, inputs) -> list[str]:
+    """The ``--pairs`` option's pairs, each checked against the ``outputs`` and ``inputs`` (a
+    model's, or the sweeps' own); by default the
+    :func:`~rotorid.verification.pairs.default_pairs` of those signals whose input the sweeps
+    excite."""
+    from rotorid.verification.pairs import default_pairs, parse_pair, primary_axis
 
     if option:
-        return [p.strip() for p in option.split(",") if p.strip()]
+        pairs = [p.strip() for p in option.split(",") if p.strip()]
+        for pair in pairs:
+            parse_pair(pair, outputs, inputs)
+        return pairs
     axes = {primary_axis(m) for m in sweeps}
-    return [p for p in PAPER_PAIRS if p.split("/")[1] in axes]
+    return [p for p in default_pairs(outputs, inputs) if p.split("/")[1] in axes]
 
 
-def _check_units(structure, sweeps) -> None:
-    from rotorid.errors import DataFileError
-    from rotorid.units import unit_system
+def _model_file(model: str | None, result_path: Path):
+    """The model file whose ``[channels]`` the sweeps are read with: ``MODEL.toml`` if given,
+    else the one the result names (None for a study result)."""
+    from rotorid.estimation.result_file import named_model_file
 
-    expected = structure.units.name
-    if unit_system(sweeps.units).name != expected:
-        raise DataFileError(f"the sweeps are in {sweeps.units!r} units but the model in "
-                            f"{expected!r}; convert the sweep files first")
+    return Path(model) if model is not None else named_model_file(result_path)
 
 
 def _db_deg(response) -> dict:
@@ -159,7 +168,7 @@ def run(args) -> int:
     from rotorid.errors import ExitStatus, VerificationError
     from rotorid.estimation.result_file import load_result
     from rotorid.io import atomic_write, jsonable
-    from rotorid.model.modelfile import load_model
+    from rotorid.model.modelfile import load_channel_map, load_model
     from rotorid.progress import Countdown
     from rotorid.report.plots.case import save_figure
     from rotorid.report.plots.frequency import plot_bode, plot_error
@@ -172,9 +181,12 @@ def run(args) -> int:
     identified = load_result(result_path, args.model,
                              None if model is None else load_model(model))
     structure, values = identified.structure, identified.values
-    sweeps = load_sweeps(locations)
-    _check_units(structure, sweeps)
-    selection = producible_pairs(structure, values, sweeps, chosen_pairs(args.pairs, sweeps))
+    model_file = _model_file(model, result_path)
+    sweeps = load_sweeps(locations, structure.units.name,
+                         None if model_file is None else {"channels": load_channel_map(model_file)})
+    selection = producible_pairs(structure, values, sweeps,
+                                 chosen_pairs(args.pairs, sweeps, structure.outputs,
+                                              structure.controls))
     if not selection.pairs:
         raise VerificationError("no pair can be verified: " + "; ".join(
             f"{pair}: {reason}" for pair, reason in selection.skipped.items()))
@@ -191,10 +203,12 @@ def run(args) -> int:
     out.mkdir(parents=True, exist_ok=True)
     shown = [e for e in envelopes.values() if e.kind == "bounds"]
     drawn = Countdown(len(verification.pairs))
+    signals = structure.signals
     for item in () if args.no_figures else verification.pairs:
         stem = item.pair.replace("/", "_")
         save_figure(plot_error(item, shown), out / f"error_{stem}", formats=("png",))
-        save_figure(plot_bode(item, structure.units.label(item.truth.output)),
+        save_figure(plot_bode(item, signals.outputs[item.truth.output].unit,
+                              signals.inputs[item.truth.input].unit),
                     out / f"bode_{stem}", formats=("png",))
         log.info("%s figures drawn %s", item.pair, drawn.step())
     summary = verification.summary()

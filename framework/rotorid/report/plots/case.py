@@ -18,10 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS, Maneuver
+from rotorid.data import Maneuver
 from rotorid.estimation.reduction import ReductionPath
 from rotorid.io import atomic_write
-from rotorid.units import unit_system
+from rotorid.model.signals import ModelSignals, Signal, SignalSet
+from rotorid.units import CHANNEL_KINDS, unit_system
 
 #: Output names as engineers write them.
 OUTPUT_TITLES = {"ax": "a_x", "az": "a_z", "q": "q", "theta": "θ", "ay": "a_y", "p": "p",
@@ -123,7 +124,7 @@ def input_window(maneuver: Maneuver, margin: float = 1.5) -> tuple[float, float]
     20 % of its excursion); for inputs without steps, the span where it deviates from its
     first value by more than 5 % of its excursion."""
     time = maneuver.time
-    control = maneuver.inputs[:, INPUT_CHANNELS.index(_primary_axis(maneuver))]
+    control = maneuver.channel(_primary_axis(maneuver))
     excursion = float(np.ptp(control))
     if excursion == 0.0:
         return float(time[0]), float(time[-1])
@@ -138,10 +139,21 @@ def input_window(maneuver: Maneuver, margin: float = 1.5) -> tuple[float, float]
 
 def _primary_axis(maneuver: Maneuver) -> str:
     axis = maneuver.metadata.get("axis")
-    if axis in ZOOM_OUTPUTS:
+    if axis in maneuver.input_names:
         return axis
     excursion = np.ptp(maneuver.inputs, axis=0)
-    return INPUT_CHANNELS[int(np.argmax(excursion))]
+    return maneuver.input_names[int(np.argmax(excursion))]
+
+
+def _zoomed(axis: str, outputs: tuple[str, ...]) -> tuple[str, ...]:
+    """The outputs of the zoom row: :data:`ZOOM_OUTPUTS` of the axis that the model has,
+    else its first two outputs."""
+    return tuple(o for o in ZOOM_OUTPUTS.get(axis, ()) if o in outputs) or outputs[:2]
+
+
+def _title(signal) -> str:
+    """``a_x [ft/s²]``: a signal's name as engineers write it, and its unit."""
+    return f"{OUTPUT_TITLES.get(signal.name, signal.name)} [{signal.unit}]"
 
 
 def _outputs_panel(axis, time: np.ndarray, measured: np.ndarray,
@@ -155,58 +167,77 @@ def _outputs_panel(axis, time: np.ndarray, measured: np.ndarray,
     axis.grid(True, alpha=0.3)
 
 
+def _default_signals(maneuver: Maneuver) -> ModelSignals:
+    """The maneuver's own inputs and outputs as signals in its unit system's units."""
+    units = unit_system(maneuver.units)
+
+    def signal_set(names):
+        return SignalSet(Signal(n, units.label(n), CHANNEL_KINDS[n]) for n in names)
+
+    return ModelSignals(signal_set(()), signal_set(maneuver.input_names),
+                        signal_set(maneuver.output_names))
+
+
 def plot_time_histories(maneuver: Maneuver, simulated: Mapping[str, np.ndarray],
-                        title: str | None = None):
+                        title: str | None = None, signals: ModelSignals | None = None):
     """Measured outputs of ``maneuver`` against the simulated outputs of each model.
 
-    Rows 1–4: the eight outputs (measured thin and grey behind the models; the input window
-    shaded); row 5: the inputs; row 6: the on-axis and the main coupled output zoomed on the
-    input window (:data:`ZOOM_OUTPUTS`).
+    The first rows: the model's outputs, two per row (measured thin and grey behind the
+    models; the input window shaded); then the inputs (two panels); last the on-axis and the
+    main coupled output zoomed on the input window (:data:`ZOOM_OUTPUTS`). Axes are labelled
+    with the signals' names and units.
 
     Args:
-        maneuver: the record (its outputs are drawn as "measured").
-        simulated: label → simulated outputs, shape (N, 8) in ``OUTPUT_CHANNELS`` order.
+        maneuver: the record (its channels of the outputs' names are drawn as "measured").
+        simulated: label → simulated outputs, shape (N, ny), columns ``signals.outputs``.
+        signals: the model's signals (e.g. ``structure.signals``); default the maneuver's own
+            inputs and outputs in its unit system.
     """
     from matplotlib.figure import Figure
 
-    units = unit_system(maneuver.units)
-    simulated = {label: np.asarray(outputs) for label, outputs in simulated.items()}
-    for label, outputs in simulated.items():
-        if outputs.shape != maneuver.outputs.shape:
-            raise ValueError(f"{label}: simulated outputs have shape {outputs.shape}, the "
-                             f"maneuver {maneuver.outputs.shape}")
-    figure = Figure(figsize=(10.0, 13.0), layout="constrained")
-    grid = figure.add_gridspec(6, 2, height_ratios=(1, 1, 1, 1, 0.9, 1.3))
+    signals = _default_signals(maneuver) if signals is None else signals
+    outputs, inputs = signals.outputs, signals.inputs
+    simulated = {label: np.asarray(values) for label, values in simulated.items()}
+    for label, values in simulated.items():
+        if values.shape != (maneuver.n_samples, len(outputs)):
+            raise ValueError(f"{label}: simulated outputs have shape {values.shape}, expected "
+                             f"({maneuver.n_samples}, {len(outputs)}) for outputs "
+                             f"{', '.join(outputs.names)}")
+    measured = maneuver.columns(outputs.names)
+    rows = (len(outputs) + 1) // 2
+    figure = Figure(figsize=(10.0, 3.0 + 2.5 * rows), layout="constrained")
+    grid = figure.add_gridspec(rows + 2, 2, height_ratios=(1,) * rows + (0.9, 1.3))
     first = figure.add_subplot(grid[0, 0])
     axes = [first] + [figure.add_subplot(grid[k // 2, k % 2], sharex=first)
-                      for k in range(1, 10)]
+                      for k in range(1, len(outputs))]
     start, end = input_window(maneuver)
     time = maneuver.time
-    for column, name in enumerate(OUTPUT_CHANNELS):
-        _outputs_panel(axes[column], time, maneuver.outputs[:, column],
+    for column, signal in enumerate(outputs):
+        _outputs_panel(axes[column], time, measured[:, column],
                        {label: values[:, column] for label, values in simulated.items()},
-                       f"{OUTPUT_TITLES[name]} [{units.label(name)}]")
+                       _title(signal))
         axes[column].axvspan(start, end, color="C8", alpha=0.08, zorder=0)
-    for offset, (axis, pair) in enumerate(zip(axes[8:], (INPUT_CHANNELS[:2],
-                                                          INPUT_CHANNELS[2:]))):
-        for k, name in enumerate(pair):
-            column = INPUT_CHANNELS.index(name)
-            axis.plot(time, maneuver.inputs[:, column], _STYLES[k], color=f"C{4 + 2 * offset + k}",
-                      label=f"δ_{name} [%]")
-        axis.set_ylabel("control [% of travel]")
+        axes[column].tick_params(labelbottom=False)
+    half = (len(inputs) + 1) // 2
+    for offset, group in enumerate((inputs.signals[:half], inputs.signals[half:])):
+        axis = figure.add_subplot(grid[rows, offset], sharex=first)
+        for k, signal in enumerate(group):
+            axis.plot(time, maneuver.channel(signal.name), _STYLES[k % len(_STYLES)],
+                      color=f"C{4 + 2 * offset + k}", label=f"δ_{signal.name} [{signal.unit}]")
+        axis.set_ylabel("inputs" if len({s.unit for s in group}) != 1
+                        else f"input [{group[0].unit}]")
         axis.set_xlabel("time t [s]")
-        axis.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.0, 1.0))
+        if group:
+            axis.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.0, 1.0))
         axis.grid(True, alpha=0.3)
-    for axis in axes[:8]:
-        axis.tick_params(labelbottom=False)
     mask = (time >= start) & (time <= end)
-    for k, name in enumerate(ZOOM_OUTPUTS[_primary_axis(maneuver)]):
-        zoom = figure.add_subplot(grid[5, k])
-        column = OUTPUT_CHANNELS.index(name)
-        _outputs_panel(zoom, time[mask], maneuver.outputs[mask, column],
+    for k, name in enumerate(_zoomed(_primary_axis(maneuver), outputs.names)):
+        zoom = figure.add_subplot(grid[rows + 1, k])
+        column = outputs.index(name)
+        _outputs_panel(zoom, time[mask], measured[mask, column],
                        {label: values[mask, column] for label, values in simulated.items()},
-                       f"{OUTPUT_TITLES[name]} [{units.label(name)}]")
-        zoom.set_title(f"zoom: {OUTPUT_TITLES[name]} over the input window "
+                       _title(outputs[column]))
+        zoom.set_title(f"zoom: {OUTPUT_TITLES.get(name, name)} over the input window "
                        f"{start:.1f}–{end:.1f} s", fontsize="medium")
         zoom.set_xlabel("time t [s]")
         zoom.set_facecolor((0.97, 0.97, 1.0))
