@@ -182,8 +182,10 @@ def run(args) -> int:
                              None if model is None else load_model(model))
     structure, values = identified.structure, identified.values
     model_file = _model_file(model, result_path)
-    sweeps = load_sweeps(locations, structure.units.name,
-                         None if model_file is None else {"channels": load_channel_map(model_file)})
+    ingestion = {"signals": structure.signals}
+    if model_file is not None:
+        ingestion["channels"] = load_channel_map(model_file)
+    sweeps = load_sweeps(locations, structure.units.name, ingestion)
     selection = producible_pairs(structure, values, sweeps,
                                  chosen_pairs(args.pairs, sweeps, structure.outputs,
                                               structure.controls))
