@@ -216,8 +216,6 @@ def test_the_estimator_wraps_a_nonlinear_model_and_honours_output_biases():
     (dict(step=0.0), "the finite-difference step must be positive"),
     (dict(initial=InitialConditions(fixed={"alpha": 0.0})),
      "initial condition for 'alpha', which is not a state; states: q"),
-    (dict(initial=InitialConditions(estimated=("q",))), "estimated initial states need the "
-                                                        "maneuvers"),
     (dict(channels=ChannelMap([ChannelLink("az", "q", "g")], source="m.toml")),
      "m.toml: column 'az' has unit g, which does not fit signal 'q'"),
 ])
@@ -245,6 +243,14 @@ def test_bad_declarations_and_data():
     other = ManeuverSet([attrs.evolve(data[0], name="third")])
     with pytest.raises(StructureError, match="maneuver 'third' has no estimated initial state"):
         estimated.simulate(estimated.initial_values(), other)
+    unbound = IntegratedModel(model, channels=STICK_IN_LONG,
+                              initial=InitialConditions(estimated=("q",)))
+    with pytest.raises(StructureError, match=r"give the model its maneuvers first, "
+                                             r"model.for_maneuvers\(maneuvers\)"):
+        unbound.simulate(unbound.initial_values(), data)
+    bound = unbound.for_maneuvers(data)
+    assert bound.parameter_names == estimated.parameter_names
+    np.testing.assert_array_equal(bound.initial_values(), estimated.initial_values())
 
 
 def test_the_models_page_example_declares_an_identifiable_model():

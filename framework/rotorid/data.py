@@ -143,7 +143,8 @@ class Maneuver:
                      initial_state=None, ingestion: Ingestion | Mapping | None = None,
                      ) -> "Maneuver":
         """A maneuver from named columns: ``time`` (s), the controls and outputs it has (at
-        least one of each), and any further columns as :attr:`extra_channels`; prepared first as ``ingestion``
+        least one of each, unless it holds columns the ingestion keeps for a model of one's
+        own), and any further columns as :attr:`extra_channels`; prepared first as ``ingestion``
         says (units per channel, resampling, trim removal; :mod:`rotorid.ingestion`), each
         step stated in the metadata."""
         where = f"maneuver {name!r}"
@@ -153,18 +154,23 @@ class Maneuver:
         output_layout = OUTPUT_CHANNELS if signals is None else signals.outputs.names
         inputs = tuple(c for c in input_layout if c in columns)
         outputs = tuple(c for c in output_layout if c in columns)
+        kept = [c for c in ingestion.keep_columns if c in columns]
         missing = [label for label, present in (("time", "time" in columns),
-                                                ("every input", inputs),
-                                                ("every output", outputs)) if not present]
+                                                ("every input", inputs or kept),
+                                                ("every output", outputs or kept))
+                   if not present]
         if missing:
             raise DataError(f"{where}: missing column(s) {', '.join(missing)}; a maneuver "
                             f"needs time, at least one input ({', '.join(input_layout)}) and "
                             f"at least one output ({', '.join(output_layout)}); link the "
                             f"file's own column names in a channel map")
         prepared, notes = prepare_columns(columns, unit_system(units).name, ingestion, where)
-        return cls(name, prepared["time"],
-                   np.column_stack([prepared[c] for c in inputs]),
-                   np.column_stack([prepared[c] for c in outputs]),
+        def block(names):
+            """The columns ``names`` side by side, shape (N, len(names))."""
+            return np.array([prepared[c] for c in names]).T.reshape(-1, len(names)) \
+                if names else np.zeros((prepared["time"].size, 0))
+
+        return cls(name, prepared["time"], block(inputs), block(outputs),
                    metadata={**dict(metadata or {}), **notes}, units=units,
                    initial_state=initial_state,
                    extra_channels={k: v for k, v in prepared.items()

@@ -104,6 +104,10 @@ class Ingestion:
         signals: the model's signals (optional): their kinds decide unit conversions, and a
             maneuver built with them takes the model's controls and outputs as its inputs
             and outputs (e.g. ``elevator`` and ``alpha`` of an aeroplane).
+        keep_columns: further columns kept as recorded, as extra channels: those a model of
+            one's own reads through its own channel map
+            (:attr:`rotorid.estimation.integrated.IntegratedModel.columns`); a record holding
+            them needs none of the inputs and outputs.
     """
 
     trim: str | Mapping[str, float] | None = attrs.field(default=None, validator=_check_trim)
@@ -112,6 +116,7 @@ class Ingestion:
     channel_units: Mapping[str, str] = attrs.field(factory=dict, converter=_units)
     channels: ChannelMap = attrs.field(factory=ChannelMap, converter=_channel_map)
     signals: ModelSignals | None = None
+    keep_columns: tuple[str, ...] = attrs.field(default=(), converter=tuple)
 
     def kind(self, channel: str) -> str | None:
         """Physical kind of ``channel``: the model's signal's when :attr:`signals` declares

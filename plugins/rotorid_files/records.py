@@ -98,7 +98,7 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
     except DataError as error:
         raise DataFileError(str(error)) from None
     declared = () if ingestion.signals is None else ingestion.signals.all.names
-    known = tuple(dict.fromkeys(ALL_CHANNELS + VELOCITIES + declared))
+    known = tuple(dict.fromkeys(ALL_CHANNELS + VELOCITIES + declared + ingestion.keep_columns))
     unknown = [c for c in columns if c not in known]
     if unknown:
         raise DataFileError(f"{path}: unknown channel(s) {', '.join(map(repr, unknown))}; "

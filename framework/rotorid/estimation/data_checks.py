@@ -39,8 +39,10 @@ MAX_ACCELERATION_G = 30.0
 
 
 def is_constant(record: np.ndarray) -> bool:
-    """Whether the samples ``record`` (any shape) never vary (see :data:`CONSTANT_FRACTION`)."""
-    return bool(np.std(record) <= CONSTANT_FRACTION * np.max(np.abs(record)))
+    """Whether the samples ``record`` (any shape) never vary (see :data:`CONSTANT_FRACTION`);
+    a record without samples (no channel) does not."""
+    return bool(np.size(record) == 0
+                or np.std(record) <= CONSTANT_FRACTION * np.max(np.abs(record)))
 
 
 def check_fit_data(maneuvers: ManeuverSet, outputs: Sequence[str] | None,

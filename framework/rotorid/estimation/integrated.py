@@ -22,9 +22,9 @@ import numpy as np
 from rotorid.data import Maneuver, ManeuverSet
 from rotorid.errors import StructureError
 from rotorid.model.nonlinear import NonlinearModel, has_own_jacobians
-from rotorid.model.signals import ChannelMap
+from rotorid.model.signals import ChannelMap, ModelSignals
 from rotorid.simulation.integrators import Integration, integrate, integrate_with_tangents
-from rotorid.units import unit_system
+from rotorid.units import CHANNEL_KINDS, unit_system
 
 SENSITIVITY_METHODS = ("central", "forward", "model")
 
@@ -64,7 +64,8 @@ class IntegratedModel:
         model: the author's model (signals, parameters, derivatives, outputs).
         channels: links from maneuver channels to the model's signals; unlinked signals are
             read from the channel of the same name.
-        initial: the initial conditions; estimating some needs ``maneuvers``.
+        initial: the initial conditions; estimating some needs ``maneuvers``, given here or
+            later through :meth:`for_maneuvers` (``rotorid identify`` does that).
         maneuvers: the maneuvers whose initial states are estimated (their names name the
             parameters; their data give the start values).
         sensitivities: ``"central"``, ``"forward"`` or ``"model"``; default ``"model"`` when
@@ -101,7 +102,8 @@ class IntegratedModel:
         self._free = [k for k, p in enumerate(parameters) if not p.fixed]
         self._theta = np.array([p.start for p in parameters], dtype=float)
         self._estimated = self.signals.states.indices(initial.estimated)
-        self._maneuver_names = maneuvers.names if initial.estimated else ()
+        self._maneuver_names = (maneuvers.names if initial.estimated and maneuvers is not None
+                                else ())
         self.parameter_names = tuple(parameters[k].name for k in self._free) + tuple(
             f"x0_{m}_{s}" for m in self._maneuver_names for s in initial.estimated)
         self.output_names = self.signals.outputs.names
@@ -109,7 +111,7 @@ class IntegratedModel:
         self._cache: dict[int, tuple[ManeuverSet, list[_Record]]] = {}
         self._start_states = (np.concatenate([r.initial_state[self._estimated]
                                               for r in self._records(maneuvers)])
-                              if initial.estimated else np.zeros(0))
+                              if self._maneuver_names else np.zeros(0))
 
     def _check_options(self, maneuvers):
         if self.method not in SENSITIVITY_METHODS:
@@ -129,9 +131,22 @@ class IntegratedModel:
             if name not in self.signals.states:
                 raise StructureError(f"initial condition for {name!r}, which is not a state; "
                                      f"states: {', '.join(self.signals.states.names)}")
-        if self.initial.estimated and maneuvers is None:
-            raise StructureError("estimated initial states need the maneuvers: "
-                                 "IntegratedModel(model, initial=..., maneuvers=maneuvers)")
+
+    def for_maneuvers(self, maneuvers: ManeuverSet) -> "IntegratedModel":
+        """This model with its estimated initial states (if any) set up for ``maneuvers``: one
+        set per maneuver, parameters ``x0_<maneuver>_<state>`` starting from their data."""
+        if not self.initial.estimated:
+            return self
+        return IntegratedModel(self.model, channels=self.channels, initial=self.initial,
+                               maneuvers=maneuvers, sensitivities=self.method, step=self.step,
+                               integration=self.integration, anticipate=self.anticipate)
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """The data columns the model reads: each signal's linked column, else its name (a
+        file reader keeps these, :attr:`rotorid.ingestion.Ingestion.keep_columns`)."""
+        linked = {link.signal: link.column for link in self.channels.links}
+        return tuple(dict.fromkeys(linked.get(s.name, s.name) for s in self.signals.all))
 
     # ------------------------------------------------------------ the model protocol
     def initial_values(self) -> np.ndarray:
@@ -184,7 +199,7 @@ class IntegratedModel:
 
     def _read(self, maneuver: Maneuver, names) -> np.ndarray:
         """The signals called ``names`` from ``maneuver``, (N, len(names)), signal units."""
-        columns, units = maneuver_columns(maneuver)
+        columns, units = maneuver_columns(maneuver, self.signals)
         return self.channels.read(columns, self.signals.all, names,
                                   f"maneuver {maneuver.name!r}", units)
 
@@ -203,6 +218,9 @@ class IntegratedModel:
         theta[:, self._free] = batch[:, :len(self._free)]
         states = np.stack([np.tile(r.initial_state, (batch.shape[0], 1)) for r in records])
         if self._estimated:
+            if not self._maneuver_names:
+                raise StructureError("the initial states are estimated per maneuver: give the "
+                                     "model its maneuvers first, model.for_maneuvers(maneuvers)")
             names = [r.name for r in records]
             unknown = sorted(set(names) - set(self._maneuver_names))
             if unknown:
@@ -313,11 +331,15 @@ class IntegratedModel:
         return outputs, sens
 
 
-def maneuver_columns(maneuver: Maneuver) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+def maneuver_columns(maneuver: Maneuver, signals: ModelSignals
+                     ) -> tuple[dict[str, np.ndarray], dict[str, str]]:
     """A maneuver's channels by name (extra channels included), and the units of those its
-    unit system knows (the outputs; controls and extra channels carry whatever unit the data
-    have)."""
+    unit system fixes: its outputs, by the helicopter channel's kind or the kind ``signals``
+    declare (controls and extra channels carry whatever unit the data have)."""
     system = unit_system(maneuver.units)
+    declared = {s.name: s.kind for s in signals.all}
+    kinds = {c: CHANNEL_KINDS.get(c, declared.get(c)) for c in maneuver.output_names}
     names = maneuver.channel_names + tuple(maneuver.extra_channels)
     return ({c: maneuver.channel(c) for c in names},
-            {c: system.label(c) for c in maneuver.output_names})
+            {c: system.unit_of(kind) for c, kind in kinds.items()
+             if kind not in (None, "control")})

@@ -12,8 +12,10 @@ Usage::
 ``MODEL.toml`` is a model file (:mod:`rotorid.model.modelfile`); its initial values are the start
 values (all zero: the estimator chooses its own start, see docs/estimation.md). MODEL may
 instead name a model of one's own by reference, ``package.module:Name`` or
-``path/to/file.py:Name`` (:mod:`rotorid.model.reference`, docs/models.md); its data are read
-in the units the files declare. DATA are
+``path/to/file.py:Name`` (:mod:`rotorid.model.reference`, docs/models.md); the files keep the
+columns it reads (an :class:`~rotorid.estimation.integrated.IntegratedModel`'s ``columns``:
+the file's own names, such as ``VTAS_mps``, that its channel map links to its signals), and
+the model converts them from the units its map declares. DATA are
 maneuver files (CSV, NPZ, MAT), directories or glob patterns of the ``files`` data source; they
 are converted to the model's unit system, after the trim removal and resampling asked for
 (:mod:`rotorid.ingestion`). The report goes to stdout; stderr gets one line per
@@ -216,7 +218,9 @@ def run(args) -> int:
         with warnings.catch_warnings(record=True) as found, _checks_log(args.quiet):
             warnings.simplefilter("always", RotoridWarning)
             ingestion = _ingestion(args)
-            if not by_reference:
+            if by_reference:
+                ingestion["keep_columns"] = getattr(model, "columns", ())
+            else:
                 ingestion["channels"] = load_channel_map(args.model)
                 ingestion["signals"] = model.signals
             maneuvers = load_maneuvers(args.data, args.hold,
@@ -225,7 +229,10 @@ def run(args) -> int:
                 check_fit_data(maneuvers, options.get("outputs"), model)
             checked = check_before_fit(maneuvers, None if by_reference else model)
         _print_warnings(found)
-        model = model if by_reference else checked
+        if not by_reference:
+            model = checked
+        elif hasattr(model, "for_maneuvers"):          # initial states estimated per record
+            model = model.for_maneuvers(maneuvers)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", RotoridWarning)
             estimate = estimator.estimate(model, maneuvers)
