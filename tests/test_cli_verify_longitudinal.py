@@ -120,3 +120,46 @@ def test_time_histories_are_labelled_with_the_models_signals(identified):
     measured, model_line = figure.axes[2].get_lines()
     assert np.array_equal(measured.get_ydata(), maneuver.channel("q"))
     assert np.array_equal(model_line.get_ydata(), simulated[:, 2])
+
+
+CASE = """name = "longitudinal"
+description = "longitudinal-only records"
+
+[data]
+source = "files"
+identification = "{ident}"
+verification = "{sweeps}"
+
+[condition]
+u0_fps = 60.0
+w0_fps = 4.0
+theta0_deg = 4.0
+
+[structure]
+template = "longitudinal"
+
+[reduction]
+continue_to_zero = false
+
+[delays]
+derivatives = ["M_q"]
+"""
+
+
+def test_study_runs_a_longitudinal_case_on_longitudinal_only_files(identified, tmp_path,
+                                                                  capsys):
+    model, result, sweeps = identified
+    case = tmp_path / "case.toml"
+    case.write_text(CASE.format(ident=model.parent / "*.csv", sweeps=Path(sweeps[0]).parent),
+                    encoding="utf-8")
+    status = main(["study", str(case), "--out", str(tmp_path / "out")])
+    printed = capsys.readouterr()
+    assert status == 0, printed.err
+    assert "not verified" not in printed.out + printed.err
+    record = json.loads((tmp_path / "out" / "longitudinal" / "result.json").read_text())
+    verified = record["frequency_verification"]["with delays"]["pairs"]
+    assert [p["pair"] for p in verified] == ["q/long", "az/coll"]
+    assert set(record["time_metrics"]["with delays"]["rmse_per_output"]) == {"ax", "az", "q",
+                                                                             "theta"}
+    figures = {f.name for f in (tmp_path / "out" / "longitudinal" / "figures").glob("*.png")}
+    assert {"time_long3211.png", "bode_q_long.png", "error_az_coll.png"} <= figures

@@ -37,7 +37,6 @@ from rotorid.study.checks import check_case, check_registered
 from rotorid.study.reference import ReferenceValue, parse_reference
 from rotorid.verification.band import BAND_KEYS, DEFAULT_BAND, VerificationBand
 from rotorid.verification.compare import PAPER_ENVELOPES
-from rotorid.verification.pairs import PAPER_PAIRS
 
 BUILTIN = ("hover", "forward")
 #: Tables of a case file and the keys each may hold (``None``: checked where it is used).
@@ -93,6 +92,8 @@ class FlightCase:
     (default: the verification pairs) up to ``compare_band_max`` rad/s (default: each pair's
     coherent range). With ``compare_estimators`` each listed estimator also fits the model
     with delays to the identification data (:mod:`rotorid.study.estimator_comparison`).
+    Empty ``pairs`` are the structure's own default pairs
+    (:func:`rotorid.verification.pairs.default_pairs`: the paper's pairs it has).
     ``delay_profile_points`` is the number of grid values in [0, ``delay_upper``] of each kept
     delay's profile (0: no profiles).
     """
@@ -101,7 +102,7 @@ class FlightCase:
     description: str = ""
     data: Mapping = attrs.field(factory=dict, converter=dict)
     condition: Mapping = attrs.field(factory=dict, converter=dict)
-    pairs: tuple[str, ...] = PAPER_PAIRS
+    pairs: tuple[str, ...] = ()
     envelopes: tuple[str, ...] = PAPER_ENVELOPES
     band: VerificationBand = DEFAULT_BAND
     reference: Mapping[str, ReferenceValue] = attrs.field(factory=dict, converter=dict)

@@ -44,11 +44,12 @@ def check_case(case, where: str) -> None:
     if "source" not in case.data:
         raise DataFileError(f"{where}: [data] needs a source, e.g. source = \"files\"")
     check_registered("data-sources", case.data_source, where, "[data] source")
-    names = _structure_names(case, where)
-    _check_delays(case, names, where)
-    check_reference_names(case.reference, names, where)
+    structure = _starting_structure(case, where)
+    _check_delays(case, structure.names, where)
+    check_reference_names(case.reference, structure.names, where)
     for pair in case.pairs:
-        _wrapped(lambda: parse_pair(pair), where, "[verification] pairs")
+        _wrapped(lambda: parse_pair(pair, structure.outputs, structure.controls), where,
+                 "[verification] pairs")
     for envelope in case.envelopes:
         check_registered("validation-envelopes", envelope, where, "[verification] envelopes")
     check_registered("estimators", case.estimator, where, "[estimator] name")
@@ -124,9 +125,9 @@ def _wrapped(check, where: str, key: str | None = None):
         raise DataFileError(f"{where}: {f'{key}: ' if key else ''}{error}") from None
 
 
-def _structure_names(case, where: str) -> tuple[str, ...]:
-    """The derivatives of the case's starting structure (its ``[structure]`` and
-    ``[derivatives]`` tables checked at a placeholder trim), after checking ``[condition]``."""
+def _starting_structure(case, where: str):
+    """The case's starting structure (its ``[structure]`` and ``[derivatives]`` tables checked
+    at a placeholder trim), after checking ``[condition]``."""
     if case.condition:
         _wrapped(lambda: FlightCondition.from_mapping(case.condition), where)
     mapping = {"condition": {"airspeed_kt": 0.0}, "structure": dict(case.structure),
@@ -135,7 +136,7 @@ def _structure_names(case, where: str) -> tuple[str, ...]:
     if not structure.parameter_names:
         raise DataFileError(f"{where}: [structure]/[derivatives] leave no free derivative to "
                             f"estimate; declare at least one without 'fixed'")
-    return structure.names
+    return structure
 
 
 def _check_delays(case, names: tuple[str, ...], where: str) -> None:

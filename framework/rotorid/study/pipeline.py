@@ -53,6 +53,7 @@ from rotorid.study.persistence import load_steps, prepare_directory, save_result
 from rotorid.study.result import MODELS, CaseResult
 from rotorid.study.truth import truth_derivatives, truth_equivalent_delays
 from rotorid.verification.metrics import time_domain_metrics
+from rotorid.verification.pairs import default_pairs
 from rotorid.verification.producible import producible_pairs
 from rotorid.verification.verify import verify_model
 
@@ -193,8 +194,10 @@ def _verify(case: FlightCase, structures, estimates, ident: ManeuverSet,
                for label in MODELS}
     if verif is None:
         return metrics, {}
-    selection = producible_pairs(structures["with delays"], values["with delays"], verif,
-                                 case.pairs)
+    identified = structures["with delays"]
+    selection = producible_pairs(identified, values["with delays"], verif,
+                                 case.pairs or default_pairs(identified.outputs,
+                                                             identified.controls))
     skipped = [f"{pair} not verified: {reason}" for pair, reason in selection.skipped.items()]
     for note in skipped:
         report(case.name, note)
@@ -219,8 +222,10 @@ def _compare(case: FlightCase, structures, estimates, metrics, ident: ManeuverSe
     band_max = math.inf if case.compare_band_max is None else case.compare_band_max
     comparisons = {}
     for label in MODELS:
-        comparison = compare_frequency_fit(structures[label], estimates[label], metrics[label],
-                                           verif, ident, case.frequency_pairs, band_max)
+        structure = structures[label]
+        pairs = case.frequency_pairs or default_pairs(structure.outputs, structure.controls)
+        comparison = compare_frequency_fit(structure, estimates[label], metrics[label], verif,
+                                           ident, pairs, band_max)
         comparisons[label] = comparison
         costs = {m: sum(c.values()) for m, c in comparison.pair_costs.items()}
         iterations = comparison.frequency_estimate.iterations
