@@ -6,6 +6,7 @@ exponential sweep on long, then on coll, with white measurement noise.
 """
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -163,3 +164,25 @@ def test_study_runs_a_longitudinal_case_on_longitudinal_only_files(identified, t
                                                                              "theta"}
     figures = {f.name for f in (tmp_path / "out" / "longitudinal" / "figures").glob("*.png")}
     assert {"time_long3211.png", "bode_q_long.png", "error_az_coll.png"} <= figures
+
+
+@pytest.mark.parametrize("channels, fragment", [
+    ('DELX = { signal = "long", unit = "%" }', "has no column 'DELX' .linked to 'long'"),
+    ('q = { signal = "q", unit = "g" }', "unit g, which does not fit 'q' .rate."),
+    ('q = { signal = "q", unit = "deg/s" }\ntheta = { signal = "q", unit = "deg" }',
+     "signal 'q' is linked to several columns"),
+])
+@pytest.mark.parametrize("command", ["verify", "simulate"])
+def test_bad_channel_maps_stop_verify_and_simulate_in_one_line(identified, tmp_path, capsys,
+                                                              command, channels, fragment):
+    model, result, sweeps = identified
+    bad = tmp_path / "bad.toml"
+    bad.write_text(MODEL + "\n[channels]\n" + channels + "\n", encoding="utf-8")
+    arguments = ([str(bad), str(result), *sweeps, "--no-figures"] if command == "verify"
+                 else [str(bad), *sweeps, "--values", str(result)])
+    status = main([command, *arguments, "--out", str(tmp_path / "out")])
+    error = capsys.readouterr().err.strip()
+    assert status != 0
+    assert len(error.splitlines()) == 1 and "Traceback" not in error, error
+    assert re.search(fragment, error), error
+    assert "bad.toml" in error

@@ -9,6 +9,7 @@ by rotorid's integrator, from level trim, with seeded sensor noise.
 
 import importlib.util
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -76,3 +77,30 @@ def test_rotorids_integration_of_the_records_matches_the_independent_solver(exam
     simulated = model.simulate(list(example.TRUTH.values()), ManeuverSet([record]))[0]
     noise = np.array(list(example.NOISE.values()))
     assert np.all(np.max(np.abs(simulated - reference), axis=0) <= 1e-3 * noise)
+
+
+@pytest.mark.parametrize("edit, fragment", [
+    (('"VTAS_mps": ("V", "m/s")', '"VTAS_kt": ("V", "kt")'),
+     r"elevator_3211.csv: unknown channel\(s\) 'VTAS_mps'; channels are .*VTAS_kt.*; link "
+     r"the file's own column names to them in the model's channel map"),
+    (('"AOA_rad": ("alpha", "rad")', '"AOA_rad": ("alpha", "m/s")'),
+     r"fixed_wing_nonlinear.py: column 'AOA_rad' has unit m/s, which does not fit signal "
+     r"'alpha' \(angle in rad\)"),
+    (('"PITCH_rad": ("theta", "rad")', '"PITCH_rad": ("alpha", "rad")'),
+     r"fixed_wing_nonlinear.py: signal 'alpha' is linked to several columns"),
+])
+def test_bad_channel_maps_of_the_model_file_are_one_line_errors(example, tmp_path, capsys,
+                                                               edit, fragment):
+    model = tmp_path / "fixed_wing_nonlinear.py"
+    model.write_text(EXAMPLE.read_text(encoding="utf-8").replace(*edit), encoding="utf-8")
+    records = tmp_path / "records"
+    records.mkdir()
+    for path in example.write_records(tmp_path / "all"):
+        shutil.copy(path, records / path.name)
+        break
+    status = main(["identify", f"{model}:AEROPLANE", str(records), "--out",
+                   str(tmp_path / "r.json")])
+    error = capsys.readouterr().err.strip()
+    assert status != 0
+    assert len(error.splitlines()) == 1 and "Traceback" not in error, error
+    assert re.search(fragment, error), error

@@ -103,7 +103,8 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
     if unknown:
         raise DataFileError(f"{path}: unknown channel(s) {', '.join(map(repr, unknown))}; "
                             f"channels are {','.join(known)}; link the file's own column "
-                            f"names to them in the model file's [channels] table")
+                            f"names to them in the model's channel map (a model file's "
+                            f"[channels] table)")
     if "time" not in columns:
         raise DataFileError(f"{path}: missing channel(s) time; a maneuver file needs time, "
                             f"then any of {','.join(ALL_CHANNELS[1:])}")
