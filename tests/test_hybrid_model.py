@@ -13,8 +13,8 @@ import warnings
 import numpy as np
 import pytest
 import rotorid
-from hover_reference import multistep
-from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
+from hybrid_reference import hybrid_reference, open_loop_maneuvers, six_dof_of
+from rotorid import FlightCondition, ModelStructure
 from rotorid.errors import IdentifiabilityWarning, StructureError
 from rotorid.model.hybrid import (
     DIRECT_DERIVATIVES,
@@ -25,15 +25,11 @@ from rotorid.model.hybrid import (
     hybrid_start,
 )
 from rotorid.model.residualisation import residualise
-from rotorid.model.templates import SIX_DOF, structure_template
-from rotorid.simulation.simulator import simulate
+from rotorid.model.templates import SIX_DOF
 from rotorid.study.truth import derivatives_of
-from rotorid_helisim.linearize import PADFIELD_STATES, linearize
+from rotorid_helisim.linearize import PADFIELD_STATES
 
-HYBRID = structure_template("hybrid")
 FLAP = ("beta1c", "beta1s")
-#: white-noise standard deviations per output (ft/s², deg/s, deg), ax az q θ ay p φ r
-NOISE = np.array([0.1, 0.1, 0.1, 0.05, 0.1, 0.1, 0.05, 0.1])
 #: actuator-like delays of the true model on the controls into flapping, s
 TRUE_DELAY = 0.03
 
@@ -72,22 +68,12 @@ def test_populated_hybrid_structure():
 @pytest.fixture(scope="module")
 def reference_70kt(truth_model, trim_70kt):
     """(condition, A, B) of the 70 kt hybrid reference in flight-test units."""
-    full = linearize(truth_model, trim_70kt, full=True, units="flight-test")
-    a, b = residualise(full.A, full.B, full.states, HYBRID.states)
-    condition = FlightCondition.from_airspeed(70.0, trim_70kt.theta_deg, trim_70kt.phi_deg)
-    return condition, a, b
-
-
-def _six_dof_of(condition, a, b):
-    """The quasi-steady 6-DoF structure (every derivative) and values of a hybrid (A, B)."""
-    structure = ModelStructure.six_dof(condition)
-    a6, b6 = residualise(a, b, HYBRID.states, PADFIELD_STATES)
-    return structure, structure.as_vector(derivatives_of(structure, a6, b6))
+    return hybrid_reference(truth_model, trim_70kt)
 
 
 def test_hybrid_start_has_the_six_dof_model_as_its_quasi_steady_form(reference_70kt):
     condition, a, b = reference_70kt
-    six_dof, values = _six_dof_of(condition, a, b)
+    six_dof, values = six_dof_of(condition, a, b)
     hybrid = hybrid_from_six_dof(six_dof, values, flap_time_constant=0.09, delay_upper=None)
     a_h, b_h, _, _ = hybrid.matrices()
     a_q, b_q = residualise(a_h, b_h, hybrid.states, PADFIELD_STATES)
@@ -107,25 +93,6 @@ def test_hybrid_start_refuses_what_it_cannot_map():
         hybrid_start({"L_p": -10.0, "M_q": -3.0}, flap_time_constant=0.0)
 
 
-def _maneuvers(structure, values, seed, duration=10.0, dt=0.02) -> ManeuverSet:
-    """3211 and 2311 multisteps (0.15 s unit, 2 % of travel) on every control, both
-    directions, open loop, outputs with white noise :data:`NOISE`."""
-    n = int(round(duration / dt)) + 1
-    time = np.arange(n) * dt
-    clean = []
-    for axis, control in enumerate(structure.controls):
-        for kind in ("3211", "2311"):
-            for direction in (1, -1):
-                inputs = np.zeros((n, 4))
-                inputs[:, axis] = multistep(kind, direction, n, dt, 2.0, 0.15)
-                clean.append(Maneuver(f"{kind}_{control}_{direction:+d}", time, inputs,
-                                      np.zeros((n, 8))))
-    clean = ManeuverSet(clean)
-    rng = np.random.default_rng(seed)
-    return ManeuverSet([m.with_outputs(y + rng.normal(size=y.shape) * NOISE)
-                        for m, y in zip(clean, simulate(structure, values, clean))])
-
-
 def test_every_hybrid_parameter_recovered_within_3_cramer_rao_bounds(reference_70kt):
     """Data simulated with the hybrid model (70 kt reference values, delays of 0.03 s on the
     controls into flapping); the fit starts from the hybrid start of the quasi-steady 6-DoF
@@ -135,13 +102,13 @@ def test_every_hybrid_parameter_recovered_within_3_cramer_rao_bounds(reference_7
     are honest) and a largest of 2.4–3.1 among the 72 parameters (seed 1: X_w at 3.07), as
     expected of 72 normal draws; the test uses seed 2."""
     condition, a, b = reference_70kt
-    six_dof, six_values = _six_dof_of(condition, a, b)
+    six_dof, six_values = six_dof_of(condition, a, b)
     structure = hybrid_from_six_dof(six_dof, six_values, flap_time_constant=0.12)
     truth = derivatives_of(structure, a, b)
     true_values = structure.as_vector(
         {**{n: truth[n] for n in structure.parameter_names if n in truth},
          **{f"tau_{n}": TRUE_DELAY for n in FLAP_CONTROL_DELAYS}})
-    maneuvers = _maneuvers(structure, true_values, seed=2)
+    maneuvers = open_loop_maneuvers(structure, true_values, seed=2)
     estimator = rotorid.create("estimators", "output-error")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IdentifiabilityWarning)

@@ -44,6 +44,7 @@ from rotorid.report.figures import (
 )
 from rotorid.study.claims import PAPER_SOURCES, claims_tally, mean_phase_error, paper_claims
 from rotorid.study.expectations import check_signs, derivative_unit
+from rotorid.study.hybrid_comparison import HYBRID_BAND, HYBRID_MODELS, mean_cost
 from rotorid.study.result import KEY_DERIVATIVES, MODELS
 from rotorid.units import CHANNEL_KINDS, unit_system
 from rotorid.verification.band import DEFAULT_BAND
@@ -310,6 +311,72 @@ def estimators_html(result) -> str:
         _html_table(estimator_rows(result))])
 
 
+def hybrid_model_rows(result) -> list[list[str]]:
+    """With ``[compare] hybrid``: each of the three models' parameters, simulation RMSE and
+    det R on the identification maneuvers, and J per verification pair over 1–20 rad/s."""
+    comparison = result.hybrid_comparison
+    pairs = list(dict.fromkeys(p for costs in comparison.costs.values() for p in costs))
+    rows = [["model", "parameters [-]", "RMSE [mixed units]", "det R [mixed units]",
+             *(f"J {pair} [-]" for pair in pairs), "mean J [-]"]]
+    for label in HYBRID_MODELS:
+        simulation = comparison.simulation[label]
+        costs = comparison.costs.get(label, {})
+        rows.append([label, str(comparison.parameters[label]),
+                     "diverges" if simulation is None else _number(simulation.metrics.rmse),
+                     "diverges" if simulation is None else _number(simulation.det_r),
+                     *(_number(costs.get(pair), 3) for pair in pairs),
+                     _number(mean_cost(costs), 3)])
+    return rows
+
+
+def hybrid_term_rows(result) -> list[list[str]]:
+    """With ``[compare] hybrid``: the flap time constants and the hybrid's rotor terms with
+    their Cramér-Rao bounds beside the truth's flap-coupled reference (when there is one)."""
+    comparison = result.hybrid_comparison
+    reference = comparison.reference
+    units = comparison.estimate.units
+    rows = [["parameter", "unit", "identified", "CR", "reference (flap-coupled)",
+             "identified/reference [-]"]]
+    for name, (tau, bound) in comparison.flap_time_constants().items():
+        truth = None if reference is None else -1.0 / reference[name]
+        rows.append([f"τ_f = −1/{name}", "s", _number(tau), _number(bound, 3), _number(truth),
+                     _number(None if truth is None else tau / truth, 3)])
+    for name, term in comparison.rotor_terms().items():
+        truth = term["reference"]
+        rows.append([name, derivative_unit(name, units), _number(term["identified"]),
+                     _number(term["cramer_rao"], 3), _number(truth),
+                     _number(None if not truth else term["identified"] / truth, 3)])
+    for name in comparison.structure.parameter_names:
+        if delayed_derivative(name):
+            item = comparison.estimate[name]
+            rows.append([name, "s", _number(item.value), _number(item.cramer_rao, 3), "–",
+                         "–"])
+    return rows
+
+
+def hybrid_html(result) -> str:
+    """The case report's section on the three models (empty unless the case ran it)."""
+    if result.hybrid_comparison is None:
+        return ""
+    comparison = result.hybrid_comparison
+    reference = ("The reference is the truth model's full linearisation with the flap rates, "
+                 "coning and inflow residualised: the flap-coupled model, not the 6-DoF one."
+                 if comparison.reference is not None else "")
+    return "\n".join([
+        '<h2 id="hybrid">Three models: no delays, delays, hybrid</h2>',
+        "<p>The hybrid rotor-body model (docs/hybrid.md) is the selected model with the "
+        "rotor's tip-path-plane tilts β1c, β1s as first-order states: the disc tilt carries the "
+        "roll and pitch rate damping and the cyclic's moments, with delays on the cyclic into "
+        "flapping; it was fitted from the start whose quasi-steady form is the selected model "
+        f"({comparison.estimate.iterations} iterations, {comparison.seconds:.1f} s). All three "
+        "are judged alike: their simulation of the identification maneuvers, and J per pair "
+        f"over {html.escape(HYBRID_BAND.describe())} ({MISMATCH_COST_GUIDELINE_TEXT}).</p>",
+        _html_table(hybrid_model_rows(result)),
+        "<h3>Rotor terms of the hybrid model</h3>",
+        f"<p>{reference}</p>" if reference else "",
+        _html_table(hybrid_term_rows(result))])
+
+
 def _csv(rows: Sequence[Sequence[str]]) -> str:
     buffer = io.StringIO()
     csv.writer(buffer, lineterminator="\n").writerows(rows)
@@ -500,7 +567,9 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
                               *(("comparison_costs", "comparison_parameters")
                                 if result.frequency_comparison else ()),
                               *(("estimator_fits", "estimators")
-                                if result.estimator_comparison is not None else ())))
+                                if result.estimator_comparison is not None else ()),
+                              *(("hybrid_models", "hybrid_terms")
+                                if result.hybrid_comparison is not None else ())))
         + ".</p>",
         '<h2 id="summary">Summary</h2>', summary_html(result, claims)]
     if claims:
@@ -559,6 +628,9 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
     if result.estimator_comparison is not None:
         contents.append(("estimators", "Estimators side by side"))
         body.append(estimators_html(result))
+    if result.hybrid_comparison is not None:
+        contents.append(("hybrid", "Three models: no delays, delays, hybrid"))
+        body.append(hybrid_html(result))
     return _page(f"rotorid study — case {result.name}", "\n".join(body), contents)
 
 
@@ -586,6 +658,9 @@ def write_case_outputs(result, directory: str | Path) -> Path:
     if result.estimator_comparison is not None:
         atomic_write(tables / "estimator_fits.csv", _csv(estimator_fit_rows(result)))
         atomic_write(tables / "estimators.csv", _csv(estimator_rows(result)))
+    if result.hybrid_comparison is not None:
+        atomic_write(tables / "hybrid_models.csv", _csv(hybrid_model_rows(result)))
+        atomic_write(tables / "hybrid_terms.csv", _csv(hybrid_term_rows(result)))
     return atomic_write(directory / "report.html", case_html(result, figures, claims))
 
 

@@ -47,7 +47,7 @@ _TABLES = {
     "delays": {"derivatives", "initial", "upper", "threshold", "starts", "seed",
                "profile_points"},
     "quick": {"duration_scale", "continue_to_zero", "warm_start", "delay_profile_points"},
-    "compare": {"frequency", "pairs", "band_max", "estimators"},
+    "compare": {"frequency", "pairs", "band_max", "estimators", "hybrid"},
     "reference": None,
 }
 _TOP_LEVEL = {"name", "description", *_TABLES}
@@ -70,6 +70,7 @@ _FIELDS = {
     ("compare", "pairs"): ("compare_pairs", tuple),
     ("compare", "band_max"): ("compare_band_max", float),
     ("compare", "estimators"): ("compare_estimators", tuple),
+    ("compare", "hybrid"): ("compare_hybrid", bool),
 }
 
 #: What each converter of :data:`_FIELDS` reads, for the error messages.
@@ -91,7 +92,9 @@ class FlightCase:
     sweeps' frequency responses (:mod:`rotorid.study.comparison`) on ``compare_pairs``
     (default: the verification pairs) up to ``compare_band_max`` rad/s (default: each pair's
     coherent range). With ``compare_estimators`` each listed estimator also fits the model
-    with delays to the identification data (:mod:`rotorid.study.estimator_comparison`).
+    with delays to the identification data (:mod:`rotorid.study.estimator_comparison`). With
+    ``compare_hybrid`` the hybrid rotor-body model is built on the selected model and compared
+    with both (:mod:`rotorid.study.hybrid_comparison`).
     Empty ``pairs`` are the structure's own default pairs
     (:func:`rotorid.verification.pairs.default_pairs`: the paper's pairs it has).
     ``delay_profile_points`` is the number of grid values in [0, ``delay_upper``] of each kept
@@ -126,6 +129,7 @@ class FlightCase:
     compare_pairs: tuple[str, ...] = ()
     compare_band_max: float | None = None
     compare_estimators: tuple[str, ...] = ()
+    compare_hybrid: bool = False
     quick_settings: Mapping = attrs.field(factory=dict, converter=dict)
     is_quick: bool = False
 
@@ -207,10 +211,11 @@ class FlightCase:
         return attrs.evolve(self, data={**self.data, "seed": int(seed)})
 
     def as_dict(self) -> dict:
-        """Plain settings, as recorded in ``result.json``; ``compare_estimators`` only when
-        set, so that cases without it keep the record they had before it existed."""
-        return attrs.asdict(self, filter=lambda a, v: not (a.name == "compare_estimators"
-                                                           and not v))
+        """Plain settings, as recorded in ``result.json``; ``compare_estimators`` and
+        ``compare_hybrid`` only when set, so that cases without them keep the record they had
+        before they existed."""
+        return attrs.asdict(self, filter=lambda a, v: not (
+            a.name in ("compare_estimators", "compare_hybrid") and not v))
 
 
 def _tables(mapping: Mapping, source: str) -> dict[str, dict]:

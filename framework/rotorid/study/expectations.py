@@ -20,6 +20,7 @@ from collections.abc import Mapping
 import attrs
 
 from rotorid.model.derivatives import EQUATION_OF_LETTER, parse_name
+from rotorid.model.templates import HYBRID, StructureTemplate
 from rotorid.units import CHANNEL_KINDS, channel_scale, unit_system
 
 #: name → (hover, 70 kt) reference values in SI-rad units (derivatives without a published
@@ -59,14 +60,20 @@ def derivative_scale(name: str, units: str) -> float:
     return float(row / column)
 
 
-def derivative_unit(name: str, units: str) -> str:
-    """Unit label of a derivative, e.g. ``'1/s'`` or ``'(deg/s²)/(ft/s)'``."""
+#: The kind of a signal's time derivative.
+_RATE_OF = {"velocity": "acceleration", "rate": "angular-acceleration", "angle": "rate"}
+
+
+def derivative_unit(name: str, units: str, template: StructureTemplate = HYBRID) -> str:
+    """Unit label of a derivative of ``template``, e.g. ``'1/s'`` or ``'(deg/s²)/(ft/s)'``
+    (default: the hybrid's equations and signals, which include the six-dof's)."""
     letter, variable = parse_name(name)
     system = unit_system(units)
-    row = EQUATION_OF_LETTER[letter]
-    if CHANNEL_KINDS[row] == CHANNEL_KINDS.get(variable):
+    kinds = {**CHANNEL_KINDS, **template.kind_of}
+    row = kinds[dict(template.equations)[letter]]
+    if row == kinds.get(variable):
         return "1/s"
-    return f"({system.label(row)}²)/({system.label(variable)})"
+    return f"({system.unit_of(_RATE_OF[row])})/({system.unit_of(kinds[variable])})"
 
 
 @attrs.frozen

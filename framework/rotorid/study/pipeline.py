@@ -49,6 +49,7 @@ from rotorid.study.checks import check_case, check_cases
 from rotorid.study.comparison import compare_frequency_fit
 from rotorid.study.delays import delay_profiles, with_delays
 from rotorid.study.estimator_comparison import EstimatorComparison, compare_estimators
+from rotorid.study.hybrid_comparison import HybridComparison, compare_hybrid, mean_cost
 from rotorid.study.persistence import load_steps, prepare_directory, save_result, save_step
 from rotorid.study.result import MODELS, CaseResult
 from rotorid.study.truth import truth_derivatives, truth_equivalent_delays
@@ -252,6 +253,27 @@ def _compare_estimators(case: FlightCase, structure: ModelStructure, estimate,
     return comparison
 
 
+def _compare_hybrid(case: FlightCase, structures, estimates, ident: ManeuverSet,
+                    verif: ManeuverSet | None, estimator, truth, condition: FlightCondition,
+                    report: Progress) -> HybridComparison | None:
+    """The hybrid rotor-body model beside the case's two (``None`` unless the case asks for it
+    with ``[compare] hybrid``)."""
+    if not case.compare_hybrid:
+        return None
+    reference = None if truth is None else (
+        lambda hybrid: truth_derivatives(truth, condition, hybrid))
+    comparison = compare_hybrid(structures, estimates, ident, verif, case.pairs, estimator,
+                                reference)
+    taus = ", ".join(f"{t:.3f} s" for t, _ in comparison.flap_time_constants().values())
+    costs = "; ".join(f"{label} {cost:.0f}" for label, costs in comparison.costs.items()
+                      if (cost := mean_cost(costs)) is not None)
+    report(case.name, f"hybrid model: {comparison.structure.n_parameters} parameters, "
+                      f"{comparison.estimate.iterations} iter, RMSE "
+                      f"{comparison.estimate.rmse:.4f}, flap time constants {taus}"
+                      + (f"; mean J over 1–20 rad/s: {costs}" if costs else ""))
+    return comparison
+
+
 def _durations(clock: dict) -> dict:
     keys = list(clock)
     return {k: clock[k] - clock[p] for p, k in zip(keys, keys[1:])}
@@ -312,12 +334,16 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     if estimators is not None:
         clock["estimator comparison"] = time.perf_counter()
     truth = data.truth
+    hybrid = _compare_hybrid(case, structures, estimates, ident, verif, estimator, truth,
+                             condition, report)
+    if hybrid is not None:
+        clock["hybrid comparison"] = time.perf_counter()
     result = CaseResult(
         case, condition, ident, verif, path, structures, estimates, metrics, verification,
         None if truth is None else truth_derivatives(truth, condition, structure),
         _durations(clock), dropped, resumed,
         None if truth is None else truth_equivalent_delays(truth, condition, delayed),
-        comparison, profiles, estimators, data_warnings)
+        comparison, profiles, estimators, data_warnings, hybrid)
     save_result(directory, result)
     if report_writer is not None:
         report(case.name, "figures and report")

@@ -17,6 +17,7 @@ from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase
 from rotorid.study.comparison import FrequencyComparison
 from rotorid.study.estimator_comparison import EstimatorComparison
+from rotorid.study.hybrid_comparison import HybridComparison
 from rotorid.study.claims import paper_claims
 from rotorid.study.reference import ReferenceComparison, compare_with_reference
 from rotorid.verification.compare import VerificationResult
@@ -54,6 +55,8 @@ class CaseResult:
     estimator_comparison: EstimatorComparison | None = None
     # what the sanity checks of the identification data warned about (estimation.sanity)
     data_warnings: tuple[str, ...] = ()
+    # with [compare] hybrid: the hybrid rotor-body model beside the two models
+    hybrid_comparison: HybridComparison | None = None
 
     @property
     def name(self) -> str:
@@ -87,10 +90,13 @@ class CaseResult:
         return compare_with_reference(self.estimates["with delays"], self.case.reference)
 
     def as_dict(self) -> dict:
-        """The ``result.json`` record (``estimator_comparison`` only when the case ran it)."""
+        """The ``result.json`` record (``estimator_comparison`` and ``hybrid_comparison`` only
+        when the case ran them)."""
         path = self.path
         comparison = ({} if self.estimator_comparison is None
                       else {"estimator_comparison": self.estimator_comparison.summary()})
+        if self.hybrid_comparison is not None:
+            comparison["hybrid_comparison"] = self.hybrid_comparison.summary()
         return {
             "case": self.case.as_dict(),
             "condition": attrs.asdict(self.condition),

@@ -1,0 +1,140 @@
+"""Three models side by side (``[compare] hybrid``): no delays, with delays, and hybrid.
+
+The hybrid rotor-body model (docs/hybrid.md) is built on the selected 6-DoF model
+(:func:`rotorid.model.hybrid.hybrid_from_six_dof`: the disc tilt instead of the direct roll and
+pitch rate and cyclic terms, the flap equations, delays on the cyclic into flapping) and
+fitted with the case's estimator to the identification maneuvers, starting where the 6-DoF
+fit ended. Every model is judged on the same terms: its parameters, the RMSE and det R of its
+simulation of the identification maneuvers, and per verification pair the mismatch cost J
+over :data:`HYBRID_BAND` (γ² ≥ 0.6, Tischler's range, from 1 to 20 rad/s where the sweeps
+reach it: the band where the rotor's lag shows). With a truth model, the hybrid's rotor terms
+are set beside the truth's flap-coupled reference (its full linearisation with the flap rates,
+coning and inflow residualised).
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from collections.abc import Mapping
+
+import attrs
+import numpy as np
+
+from rotorid.data import ManeuverSet
+from rotorid.errors import IdentifiabilityWarning
+from rotorid.estimation.estimate import Estimate
+from rotorid.model.hybrid import hybrid_from_six_dof, with_disc_at_trim
+from rotorid.model.structure import ModelStructure
+from rotorid.study.estimator_comparison import SimulationFit, simulation_fit
+from rotorid.verification.band import VerificationBand
+from rotorid.verification.verify import verify_model
+
+#: The models compared, in table order.
+HYBRID_MODELS = ("no delays", "with delays", "hybrid")
+#: Where J is taken: Tischler's fitting coherence over 1–20 rad/s.
+HYBRID_BAND = VerificationBand(coherence=0.6, omega_min=1.0, omega_max=20.0)
+#: The hybrid's rotor terms set beside the truth's reference: flap damping (−1/τ_f), hub
+#: moments per disc tilt, cyclic into flapping.
+ROTOR_TERMS = ("Bc_beta1c", "Bs_beta1s", "M_beta1c", "L_beta1s", "Bc_long", "Bs_lat")
+#: The flap equations' own damping terms, each giving a flap time constant τ_f = −1/value.
+FLAP_DAMPING = ("Bc_beta1c", "Bs_beta1s")
+
+
+@attrs.frozen(eq=False)
+class HybridComparison:
+    """The three models of one case on common terms (module docstring).
+
+    Attributes:
+        structure, estimate: the hybrid model and its fit.
+        parameters: number of estimated parameters by model label (:data:`HYBRID_MODELS`).
+        simulation: each model's simulation of the identification maneuvers.
+        costs: J by model label and pair over :data:`HYBRID_BAND` (None where no point).
+        reference: the truth's flap-coupled values of the hybrid's derivatives by name, or
+            None without a truth model.
+        seconds: wall time of the hybrid fit, s.
+    """
+
+    structure: ModelStructure
+    estimate: Estimate
+    parameters: Mapping[str, int]
+    simulation: Mapping[str, SimulationFit | None]
+    costs: Mapping[str, Mapping[str, float | None]]
+    reference: Mapping[str, float] | None
+    seconds: float
+
+    def flap_time_constants(self) -> dict[str, tuple[float, float]]:
+        """τ_f = −1/value of each flap damping term with its Cramér-Rao bound, s."""
+        result = {}
+        for name in FLAP_DAMPING:
+            value, bound = self.estimate.value(name), self.estimate[name].cramer_rao
+            result[name] = (-1.0 / value, bound / value**2)
+        return result
+
+    def rotor_terms(self) -> dict[str, dict]:
+        """Each of :data:`ROTOR_TERMS`: identified value, Cramér-Rao bound, reference."""
+        return {name: {"identified": self.estimate.value(name),
+                       "cramer_rao": self.estimate[name].cramer_rao,
+                       "reference": None if self.reference is None
+                       else self.reference.get(name)}
+                for name in ROTOR_TERMS if name in self.estimate.parameter_names}
+
+    def summary(self) -> dict:
+        """The ``result.json`` record."""
+        return {"band": attrs.asdict(HYBRID_BAND),
+                "models": {label: {"parameters": self.parameters[label],
+                                   "simulation": (None if self.simulation[label] is None
+                                                  else self.simulation[label].summary()),
+                                   "mismatch_cost": dict(self.costs.get(label, {}))}
+                           for label in HYBRID_MODELS},
+                "flap_time_constants_s": {n: {"identified": t, "cramer_rao": s}
+                                          for n, (t, s) in self.flap_time_constants().items()},
+                "rotor_terms": self.rotor_terms(),
+                "estimate": self.estimate.as_dict(),
+                "seconds": self.seconds}
+
+
+def _costs(structure, estimate, sweeps, pairs) -> dict[str, float | None]:
+    checked = verify_model(structure, estimate.values, sweeps, pairs, ["mismatch-cost"],
+                           band=HYBRID_BAND)
+    return {pair.pair: pair.checks["mismatch-cost"].cost for pair in checked.pairs}
+
+
+def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[str, Estimate],
+                   ident: ManeuverSet, sweeps: ManeuverSet | None, pairs, estimator,
+                   reference=None) -> HybridComparison:
+    """Build and fit the hybrid model on ``structures["no delays"]`` and compare it with the
+    case's two models.
+
+    Args:
+        structures, estimates: the case's models by label (``no delays``, ``with delays``).
+        ident: identification maneuvers; sweeps: verification maneuvers or None (no J).
+        pairs: the verification pairs; estimator: the case's estimator.
+        reference: ``reference(structure) -> {name: value}`` of the truth, or None.
+    """
+    hybrid = hybrid_from_six_dof(structures["no delays"], estimates["no delays"].values)
+    records = {"no delays": ident, "with delays": ident, "hybrid": with_disc_at_trim(ident)}
+    clock = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
+        estimate = estimator.estimate(hybrid, records["hybrid"])
+    seconds = time.perf_counter() - clock
+    structures = {**structures, "hybrid": hybrid}
+    estimates = {**estimates, "hybrid": estimate}
+    costs = {}
+    if sweeps is not None and pairs:
+        verification = {"no delays": sweeps, "with delays": sweeps,
+                        "hybrid": with_disc_at_trim(sweeps)}
+        costs = {label: _costs(structures[label], estimates[label], verification[label], pairs)
+                 for label in HYBRID_MODELS}
+    return HybridComparison(
+        hybrid, estimate, {label: structures[label].n_parameters for label in HYBRID_MODELS},
+        {label: simulation_fit(structures[label], estimates[label], records[label])
+         for label in HYBRID_MODELS},
+        costs, None if reference is None else reference(hybrid), seconds)
+
+
+def mean_cost(costs: Mapping[str, float | None]) -> float | None:
+    """Mean J over the pairs that have one, or None."""
+    values = [c for c in costs.values() if c is not None]
+    return float(np.mean(values)) if values else None

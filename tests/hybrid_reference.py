@@ -1,0 +1,52 @@
+"""The 70 kt hybrid reference as a true model for tests: the truth model's full linearisation
+reduced to the hybrid's states (docs/hybrid.md), its quasi-steady 6-DoF model, and open-loop
+multisteps simulated with it. At 70 kt the model is stable, so open-loop records stay near
+trim."""
+
+from __future__ import annotations
+
+import numpy as np
+from hover_reference import multistep
+from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
+from rotorid.model.residualisation import residualise
+from rotorid.model.templates import HYBRID
+from rotorid.simulation.simulator import simulate
+from rotorid.study.truth import derivatives_of
+from rotorid_helisim.linearize import PADFIELD_STATES, linearize
+
+#: white-noise standard deviations per output (ft/s², deg/s, deg), ax az q θ ay p φ r
+NOISE = np.array([0.1, 0.1, 0.1, 0.05, 0.1, 0.1, 0.05, 0.1])
+
+
+def hybrid_reference(truth_model, trim) -> tuple[FlightCondition, np.ndarray, np.ndarray]:
+    """(condition, A, B) of the hybrid reference at ``trim``, flight-test units."""
+    full = linearize(truth_model, trim, full=True, units="flight-test")
+    a, b = residualise(full.A, full.B, full.states, HYBRID.states)
+    condition = FlightCondition.from_airspeed(trim.airspeed_kt, trim.theta_deg, trim.phi_deg)
+    return condition, a, b
+
+
+def six_dof_of(condition, a, b) -> tuple[ModelStructure, np.ndarray]:
+    """The quasi-steady 6-DoF structure (every derivative) and values of a hybrid (A, B)."""
+    structure = ModelStructure.six_dof(condition)
+    a6, b6 = residualise(a, b, HYBRID.states, PADFIELD_STATES)
+    return structure, structure.as_vector(derivatives_of(structure, a6, b6))
+
+
+def open_loop_maneuvers(structure, values, seed, duration=10.0, dt=0.02) -> ManeuverSet:
+    """3211 and 2311 multisteps (0.15 s unit, 2 % of travel) on every control, both
+    directions, open loop, outputs with white noise :data:`NOISE`."""
+    n = int(round(duration / dt)) + 1
+    time = np.arange(n) * dt
+    clean = []
+    for axis, control in enumerate(structure.controls):
+        for kind in ("3211", "2311"):
+            for direction in (1, -1):
+                inputs = np.zeros((n, 4))
+                inputs[:, axis] = multistep(kind, direction, n, dt, 2.0, 0.15)
+                clean.append(Maneuver(f"{kind}_{control}_{direction:+d}", time, inputs,
+                                      np.zeros((n, 8))))
+    clean = ManeuverSet(clean)
+    rng = np.random.default_rng(seed)
+    return ManeuverSet([m.with_outputs(y + rng.normal(size=y.shape) * NOISE)
+                        for m, y in zip(clean, simulate(structure, values, clean))])

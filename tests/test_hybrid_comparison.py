@@ -1,0 +1,94 @@
+"""``[compare] hybrid``: the hybrid model beside the case's two, on data simulated with the
+70 kt hybrid reference (tests/test_hybrid_model.py), and its report tables."""
+
+import types
+import warnings
+
+import numpy as np
+import pytest
+import rotorid
+from hybrid_reference import NOISE, hybrid_reference, open_loop_maneuvers, six_dof_of
+from rotorid import Maneuver, ManeuverSet
+from rotorid.errors import IdentifiabilityWarning
+from rotorid.model.hybrid import hybrid_from_six_dof
+from rotorid.report.html import hybrid_html, hybrid_model_rows, hybrid_term_rows
+from rotorid.simulation.simulator import simulate
+from rotorid.study.case import FlightCase
+from rotorid.study.hybrid_comparison import HYBRID_MODELS, compare_hybrid
+from rotorid.study.truth import derivatives_of
+
+PAIRS = ("q/long", "p/lat")
+
+
+def _sweeps(structure, values, seed) -> ManeuverSet:
+    """One log sweep 0.5–20 rad/s per cyclic axis (1 % of travel, 40 s at 50 Hz), outputs with
+    a fifth of the identification data's white noise."""
+    time = np.arange(2001) * 0.02
+    phase = 0.5 * 40.0 / np.log(40.0) * (np.exp(np.log(40.0) * time / 40.0) - 1.0)
+    sweeps = []
+    for axis in (0, 1):
+        inputs = np.zeros((time.size, 4))
+        inputs[:, axis] = np.sin(phase)
+        sweeps.append(Maneuver(f"sweep_{structure.controls[axis]}", time, inputs,
+                               np.zeros((time.size, 8))))
+    clean = ManeuverSet(sweeps)
+    rng = np.random.default_rng(seed)
+    return ManeuverSet([m.with_outputs(y + rng.normal(size=y.shape) * NOISE / 5)
+                        for m, y in zip(clean, simulate(structure, values, clean))])
+
+
+@pytest.fixture(scope="module")
+def comparison(truth_model, trim_70kt):
+    condition, a, b = hybrid_reference(truth_model, trim_70kt)
+    six_dof, six_values = six_dof_of(condition, a, b)
+    truth = hybrid_from_six_dof(six_dof, six_values)
+    reference = derivatives_of(truth, a, b)
+    values = truth.as_vector({**{n: reference[n] for n in truth.parameter_names
+                                 if n in reference},
+                              **{n: 0.03 for n in truth.parameter_names
+                                 if n.startswith("tau_")}})
+    ident = open_loop_maneuvers(truth, values, seed=4)
+    estimator = rotorid.create("estimators", "output-error")
+    delayed = six_dof.with_delays()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
+        plain = estimator.estimate(six_dof, ident)
+        with_delays = estimator.estimate(delayed, ident, start=plain.as_mapping())
+    return compare_hybrid({"no delays": six_dof, "with delays": delayed},
+                          {"no delays": plain, "with delays": with_delays}, ident,
+                          _sweeps(truth, values, seed=5), PAIRS, estimator,
+                          lambda hybrid: derivatives_of(hybrid, a, b))
+
+
+def test_the_hybrid_model_of_hybrid_data_beats_both_six_dof_models(comparison):
+    simulation, costs = comparison.simulation, comparison.costs
+    assert set(simulation) == set(costs) == set(HYBRID_MODELS)
+    assert simulation["hybrid"].det_r < simulation["with delays"].det_r
+    assert simulation["with delays"].det_r < simulation["no delays"].det_r
+    for pair in PAIRS:
+        assert costs["hybrid"][pair] < costs["with delays"][pair]
+    for name, (tau, bound) in comparison.flap_time_constants().items():
+        truth = -1.0 / comparison.reference[name]
+        assert abs(tau - truth) < 3.0 * bound
+    assert comparison.parameters["hybrid"] == comparison.structure.n_parameters
+
+
+def test_report_tables_of_the_three_models(comparison):
+    result = types.SimpleNamespace(hybrid_comparison=comparison)
+    models = hybrid_model_rows(result)
+    assert [row[0] for row in models[1:]] == list(HYBRID_MODELS)
+    assert models[0][4:6] == ["J q/long [-]", "J p/lat [-]"]
+    terms = {row[0]: row for row in hybrid_term_rows(result)[1:]}
+    assert terms["M_beta1c"][1] == "(deg/s²)/(deg)"
+    assert float(terms["τ_f = −1/Bc_beta1c"][5]) == pytest.approx(1.0, abs=0.05)
+    assert "tau_Bs_lat" in terms
+    assert 'id="hybrid"' in hybrid_html(result)
+    assert hybrid_html(types.SimpleNamespace(hybrid_comparison=None)) == ""
+
+
+def test_case_option():
+    mapping = {"name": "h", "data": {"source": "helisim", "condition": "hover"}}
+    plain = FlightCase.from_mapping(mapping)
+    assert not plain.compare_hybrid and "compare_hybrid" not in plain.as_dict()
+    hybrid = FlightCase.from_mapping({**mapping, "compare": {"hybrid": True}})
+    assert hybrid.compare_hybrid and hybrid.as_dict()["compare_hybrid"] is True
