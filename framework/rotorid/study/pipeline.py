@@ -254,15 +254,16 @@ def _compare_estimators(case: FlightCase, structure: ModelStructure, estimate,
 
 
 def _compare_hybrid(case: FlightCase, structures, estimates, ident: ManeuverSet,
-                    verif: ManeuverSet | None, estimator, truth, condition: FlightCondition,
-                    report: Progress) -> HybridComparison | None:
-    """The hybrid rotor-body model beside the case's two (``None`` unless the case asks for it
-    with ``[compare] hybrid``)."""
+                    verif: ManeuverSet | None, verification, estimator, truth,
+                    condition: FlightCondition, report: Progress) -> HybridComparison | None:
+    """The hybrid rotor-body model beside the case's two on the pairs they were verified on
+    (``None`` unless the case asks for it with ``[compare] hybrid``)."""
     if not case.compare_hybrid:
         return None
     reference = None if truth is None else (
         lambda hybrid: truth_derivatives(truth, condition, hybrid))
-    comparison = compare_hybrid(structures, estimates, ident, verif, case.pairs, estimator,
+    pairs = [p.pair for p in verification["with delays"].pairs] if verification else []
+    comparison = compare_hybrid(structures, estimates, ident, verif, pairs, estimator,
                                 reference)
     taus = ", ".join(f"{t:.3f} s" for t, _ in comparison.flap_time_constants().values())
     costs = "; ".join(f"{label} {cost:.0f}" for label, costs in comparison.costs.items()
@@ -334,8 +335,8 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     if estimators is not None:
         clock["estimator comparison"] = time.perf_counter()
     truth = data.truth
-    hybrid = _compare_hybrid(case, structures, estimates, ident, verif, estimator, truth,
-                             condition, report)
+    hybrid = _compare_hybrid(case, structures, estimates, ident, verif, verification,
+                             estimator, truth, condition, report)
     if hybrid is not None:
         clock["hybrid comparison"] = time.perf_counter()
     result = CaseResult(
