@@ -11,6 +11,7 @@ from hybrid_reference import NOISE, hybrid_reference, open_loop_maneuvers, six_d
 from rotorid import Maneuver, ManeuverSet
 from rotorid.errors import IdentifiabilityWarning
 from rotorid.model.hybrid import hybrid_from_six_dof
+from rotorid.report.figures import hybrid_figures
 from rotorid.report.html import hybrid_html, hybrid_model_rows, hybrid_term_rows
 from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase
@@ -83,6 +84,14 @@ def test_report_tables_of_the_three_models(comparison):
     assert float(terms["τ_f = −1/Bc_beta1c"][5]) == pytest.approx(1.0, abs=0.05)
     assert "tau_Bs_lat" in terms
     assert 'id="hybrid"' in hybrid_html(result)
+
+
+def test_report_figures_of_the_three_models(comparison, tmp_path):
+    result = types.SimpleNamespace(hybrid_comparison=comparison)
+    figures = hybrid_figures(result, tmp_path, "70 kt", comparison.structure.signals)
+    assert [f.file for f in figures] == ["hybrid_error_q_long.png", "hybrid_error_p_lat.png"]
+    assert all((tmp_path / f.file).stat().st_size > 0 for f in figures)
+    assert "hybrid_error_q_long.png" in hybrid_html(result, figures)
     assert hybrid_html(types.SimpleNamespace(hybrid_comparison=None)) == ""
 
 

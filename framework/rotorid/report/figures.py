@@ -167,4 +167,27 @@ def case_figures(result, figures_dir: Path) -> dict[str, list[ReportFigure]]:
         save_figure(figure, figures_dir / stem)
         written["bode"].append(ReportFigure(f"{stem}.png", _bode_caption(item.pair, item),
                                             item.pair))
+    written["hybrid"] = hybrid_figures(result, figures_dir, flight, signals)
+    return written
+
+
+def hybrid_figures(result, figures_dir: Path, flight: str, signals) -> list[ReportFigure]:
+    """With ``[compare] hybrid``: per verified pair, ε of the three models over 1–20 rad/s."""
+    comparison = result.hybrid_comparison
+    if comparison is None or not comparison.verification:
+        return []
+    written = []
+    for item in comparison.verification["hybrid"].pairs:
+        output, control = parse_pair(item.pair, signals.outputs.names, signals.inputs.names)
+        errors = {label: verification[item.pair]
+                  for label, verification in comparison.verification.items()}
+        figure = plot_error(errors, title=f"{flight}: {item.pair} error ε = "
+                                          f"H_model/H_measured, three models")
+        stem = f"hybrid_error_{output}_{control}"
+        save_figure(figure, figures_dir / stem)
+        written.append(ReportFigure(
+            f"{stem}.png",
+            f"{item.pair}: magnitude and phase of ε = H_model/H_measured for the models without "
+            f"and with delays and the hybrid model; filled markers are the points J counts "
+            f"({item.band.describe()}); 0 dB and 0° is a perfect match.", item.pair))
     return written

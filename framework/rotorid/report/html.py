@@ -354,8 +354,9 @@ def hybrid_term_rows(result) -> list[list[str]]:
     return rows
 
 
-def hybrid_html(result) -> str:
-    """The case report's section on the three models (empty unless the case ran it)."""
+def hybrid_html(result, figures: Sequence = ()) -> str:
+    """The case report's section on the three models with its ``figures`` (empty unless the
+    case ran it)."""
     if result.hybrid_comparison is None:
         return ""
     comparison = result.hybrid_comparison
@@ -372,6 +373,7 @@ def hybrid_html(result) -> str:
         "are judged alike: their simulation of the identification maneuvers, and J per pair "
         f"over {html.escape(HYBRID_BAND.describe())} ({MISMATCH_COST_GUIDELINE_TEXT}).</p>",
         _html_table(hybrid_model_rows(result)),
+        figures_html(figures),
         "<h3>Rotor terms of the hybrid model</h3>",
         f"<p>{reference}</p>" if reference else "",
         _html_table(hybrid_term_rows(result))])
@@ -630,7 +632,7 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         body.append(estimators_html(result))
     if result.hybrid_comparison is not None:
         contents.append(("hybrid", "Three models: no delays, delays, hybrid"))
-        body.append(hybrid_html(result))
+        body.append(hybrid_html(result, figures.get("hybrid", [])))
     return _page(f"rotorid study — case {result.name}", "\n".join(body), contents)
 
 

@@ -28,6 +28,7 @@ from rotorid.model.hybrid import hybrid_from_six_dof, with_disc_at_trim
 from rotorid.model.structure import ModelStructure
 from rotorid.study.estimator_comparison import SimulationFit, simulation_fit
 from rotorid.verification.band import VerificationBand
+from rotorid.verification.compare import VerificationResult
 from rotorid.verification.verify import verify_model
 
 #: The models compared, in table order.
@@ -49,7 +50,8 @@ class HybridComparison:
         structure, estimate: the hybrid model and its fit.
         parameters: number of estimated parameters by model label (:data:`HYBRID_MODELS`).
         simulation: each model's simulation of the identification maneuvers.
-        costs: J by model label and pair over :data:`HYBRID_BAND` (None where no point).
+        verification: by model label, the sweeps' verification in :data:`HYBRID_BAND` with J
+            (empty without sweeps).
         reference: the truth's flap-coupled values of the hybrid's derivatives by name, or
             None without a truth model.
         seconds: wall time of the hybrid fit, s.
@@ -59,9 +61,15 @@ class HybridComparison:
     estimate: Estimate
     parameters: Mapping[str, int]
     simulation: Mapping[str, SimulationFit | None]
-    costs: Mapping[str, Mapping[str, float | None]]
+    verification: Mapping[str, VerificationResult]
     reference: Mapping[str, float] | None
     seconds: float
+
+    @property
+    def costs(self) -> dict[str, dict[str, float | None]]:
+        """J by model label and pair over :data:`HYBRID_BAND` (None where no point)."""
+        return {label: {pair.pair: pair.checks["mismatch-cost"].cost for pair in result.pairs}
+                for label, result in self.verification.items()}
 
     def flap_time_constants(self) -> dict[str, tuple[float, float]]:
         """τ_f = −1/value of each flap damping term with its Cramér-Rao bound, s."""
@@ -94,12 +102,6 @@ class HybridComparison:
                 "seconds": self.seconds}
 
 
-def _costs(structure, estimate, sweeps, pairs) -> dict[str, float | None]:
-    checked = verify_model(structure, estimate.values, sweeps, pairs, ["mismatch-cost"],
-                           band=HYBRID_BAND)
-    return {pair.pair: pair.checks["mismatch-cost"].cost for pair in checked.pairs}
-
-
 def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[str, Estimate],
                    ident: ManeuverSet, sweeps: ManeuverSet | None, pairs, estimator,
                    reference=None) -> HybridComparison:
@@ -121,17 +123,19 @@ def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[
     seconds = time.perf_counter() - clock
     structures = {**structures, "hybrid": hybrid}
     estimates = {**estimates, "hybrid": estimate}
-    costs = {}
+    verification = {}
     if sweeps is not None and pairs:
-        verification = {"no delays": sweeps, "with delays": sweeps,
-                        "hybrid": with_disc_at_trim(sweeps)}
-        costs = {label: _costs(structures[label], estimates[label], verification[label], pairs)
-                 for label in HYBRID_MODELS}
+        records_of = {"no delays": sweeps, "with delays": sweeps,
+                      "hybrid": with_disc_at_trim(sweeps)}
+        verification = {label: verify_model(structures[label], estimates[label].values,
+                                            records_of[label], pairs, ["mismatch-cost"],
+                                            band=HYBRID_BAND)
+                        for label in HYBRID_MODELS}
     return HybridComparison(
         hybrid, estimate, {label: structures[label].n_parameters for label in HYBRID_MODELS},
         {label: simulation_fit(structures[label], estimates[label], records[label])
          for label in HYBRID_MODELS},
-        costs, None if reference is None else reference(hybrid), seconds)
+        verification, None if reference is None else reference(hybrid), seconds)
 
 
 def mean_cost(costs: Mapping[str, float | None]) -> float | None:
