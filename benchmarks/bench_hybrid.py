@@ -36,7 +36,7 @@ import warnings  # noqa: E402
 import rotorid  # noqa: E402
 from rotorid import FlightCondition, ManeuverSet, ModelStructure  # noqa: E402
 from rotorid.errors import IdentifiabilityWarning  # noqa: E402
-from rotorid.model.hybrid import hybrid_from_six_dof, with_disc_at_trim  # noqa: E402
+from rotorid.model.hybrid import hybrid_from_six_dof  # noqa: E402
 from rotorid.study.truth import truth_derivatives  # noqa: E402
 from rotorid_helisim.source import HelisimSource  # noqa: E402
 
@@ -74,8 +74,7 @@ def main(argv=None) -> None:
     six_runs = [timed_fit(six_dof, ident) for _ in range(args.repeats)]
     six_estimate = six_runs[-1][1]
     hybrid = hybrid_from_six_dof(six_dof, six_estimate.values)
-    hybrid_data = with_disc_at_trim(ident)
-    hybrid_runs = [timed_fit(hybrid, hybrid_data) for _ in range(args.repeats)]
+    hybrid_runs = [timed_fit(hybrid, ident) for _ in range(args.repeats)]
     estimate = hybrid_runs[-1][1]
     six_time = statistics.median(t for t, _ in six_runs)
     hybrid_time = statistics.median(t for t, _ in hybrid_runs)

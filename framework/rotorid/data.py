@@ -21,7 +21,7 @@ import numpy as np
 from rotorid.errors import DataError
 from rotorid.frozen import readonly_array
 from rotorid.ingestion import Ingestion, prepare_columns
-from rotorid.model.structure import CONTROLS, OUTPUTS
+from rotorid.model.structure import CONTROLS, OUTPUTS, STATES
 from rotorid.notebook import (
     maneuver_html,
     maneuver_set_html,
@@ -93,7 +93,10 @@ class Maneuver:
 
     ``input_names`` and ``output_names`` name the columns (default the six-dof helicopter's
     four controls and eight outputs; a subset of them, in that order, for records without the
-    others). ``initial_state`` is a state vector of the model the record is simulated with.
+    others). ``initial_state`` gives the record's initial perturbation state: one value per
+    state of ``state_names`` (default the six-dof helicopter's ``u w q theta v p phi r``); a
+    model simulating the record starts each of its own states from the value of that name, or
+    from trim (zero) when the record names none (:meth:`initial_values`).
 
     Units are those of ``units`` (flight-test by default: ft/s², deg/s, deg, % of travel).
     ``metadata`` holds free-form descriptors such as ``condition`` (``"hover"``), ``kind``
@@ -116,6 +119,8 @@ class Maneuver:
         factory=dict, converter=lambda m: {str(k): readonly_array(v) for k, v in dict(m).items()})
     input_names: tuple[str, ...] = attrs.field(default=INPUT_CHANNELS, converter=tuple)
     output_names: tuple[str, ...] = attrs.field(default=OUTPUT_CHANNELS, converter=tuple)
+    state_names: tuple[str, ...] = attrs.field(
+        default=STATES, converter=lambda names: STATES if names is None else tuple(names))
 
     def __attrs_post_init__(self):
         where = f"maneuver {self.name!r}"
@@ -136,12 +141,18 @@ class Maneuver:
         if self.initial_state is not None and self.initial_state.ndim != 1:
             raise DataError(f"{where}: initial_state must be a vector of states, "
                             f"got shape {self.initial_state.shape}")
+        if len(set(self.state_names)) != len(self.state_names):
+            raise DataError(f"{where}: state_names {' '.join(self.state_names)} repeat a name")
+        if self.initial_state is not None and self.initial_state.size != len(self.state_names):
+            raise DataError(f"{where}: initial_state has {self.initial_state.size} values for "
+                            f"the {len(self.state_names)} states {' '.join(self.state_names)}; "
+                            f"give one value per state and name them (state_names)")
 
     @classmethod
     def from_columns(cls, name: str, columns: Mapping[str, np.ndarray], *,
                      units: str = "flight-test", metadata: Mapping | None = None,
-                     initial_state=None, ingestion: Ingestion | Mapping | None = None,
-                     ) -> "Maneuver":
+                     initial_state=None, state_names=None,
+                     ingestion: Ingestion | Mapping | None = None) -> "Maneuver":
         """A maneuver from named columns: ``time`` (s), the controls and outputs it has (at
         least one of each, unless it holds columns the ingestion keeps for a model of one's
         own), and any further columns as :attr:`extra_channels`; prepared first as ``ingestion``
@@ -172,7 +183,7 @@ class Maneuver:
 
         return cls(name, prepared["time"], block(inputs), block(outputs),
                    metadata={**dict(metadata or {}), **notes}, units=units,
-                   initial_state=initial_state,
+                   initial_state=initial_state, state_names=state_names,
                    extra_channels={k: v for k, v in prepared.items()
                                    if k not in ("time",) + inputs + outputs},
                    input_names=inputs, output_names=outputs)
@@ -194,6 +205,14 @@ class Maneuver:
 
     def _repr_html_(self) -> str:
         return maneuver_html(self, self.channel_names)
+
+    def initial_values(self, states) -> np.ndarray:
+        """The record's initial state of the model states called ``states``, shape (n,): the
+        value it gives for each (:attr:`state_names`), trim (zero) for the others and for all
+        when it gives none."""
+        given = ({} if self.initial_state is None
+                 else dict(zip(self.state_names, self.initial_state)))
+        return np.array([given.get(name, 0.0) for name in states], dtype=float)
 
     @property
     def dt(self) -> float:

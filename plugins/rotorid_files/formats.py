@@ -25,7 +25,6 @@ from rotorid.data import HOLDS, Maneuver, ManeuverSet
 from rotorid.errors import DataError, DataFileError, MissingFileError, RotoridError
 from rotorid.ingestion import Ingestion
 from rotorid.io import atomic_write, require_file
-from rotorid.model.structure import STATES
 from rotorid.plugin.contracts import CaseData
 from rotorid.units import CHANNEL_KINDS, channel_scale, unit_system
 
@@ -79,7 +78,8 @@ def convert_units(maneuver: Maneuver, units, kinds=None) -> Maneuver:
         return maneuver
     state = None
     if maneuver.initial_state is not None:
-        state = maneuver.initial_state * channel_scale(STATES, target, source)
+        state = maneuver.initial_state * channel_scale(maneuver.state_names, target, source,
+                                                       kinds)
     return attrs.evolve(maneuver, outputs=maneuver.outputs * channel_scale(
         maneuver.output_names, target, source, kinds), units=target.name, initial_state=state,
         extra_channels={name: values * (channel_scale((name,), target, source, kinds)[0]

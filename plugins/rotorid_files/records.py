@@ -2,9 +2,11 @@
 :class:`~rotorid.data.Maneuver`.
 
 A file holds one maneuver as named columns (``time``, controls, outputs and optionally the
-body velocities ``u v w``) plus a flat header: ``name``, ``units``, ``initial_state``, ``channel_units`` (channel → the
-unit it was recorded in, when not its unit system's) and any metadata key (``condition``,
-``kind``, ``axis``, ``direction`` …). Header values are JSON values.
+body velocities ``u v w``) plus a flat header: ``name``, ``units``, ``initial_state`` (and
+``state_names``, the states it gives values for, when not ``u w q theta v p phi r``),
+``channel_units`` (channel → the unit it was recorded in, when not its unit system's) and any
+metadata key (``condition``, ``kind``, ``axis``, ``direction`` …). Header values are JSON
+values.
 """
 
 from __future__ import annotations
@@ -19,13 +21,14 @@ import numpy as np
 from rotorid.data import ALL_CHANNELS, Maneuver
 from rotorid.errors import DataError, DataFileError, RotoridError
 from rotorid.ingestion import Ingestion
+from rotorid.model.structure import STATES
 from rotorid.units import unit_system
 
 #: Optional body-velocity columns, kept as extra channels (the kinematic consistency check
 #: integrates the accelerations against them, :mod:`rotorid.estimation.kinematics`).
 VELOCITIES = ("u", "v", "w")
 #: Header keys that are not metadata.
-RESERVED = ("name", "units", "initial_state", "channel_units")
+RESERVED = ("name", "units", "initial_state", "state_names", "channel_units")
 #: Allowed metadata keys (also the ``# key: value`` syntax of CSV files).
 KEY_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_.-]*")
 
@@ -50,6 +53,8 @@ def header_of(maneuver: Maneuver, where: str) -> dict:
     header = {"name": maneuver.name, "units": maneuver.units}
     if maneuver.initial_state is not None:
         header["initial_state"] = maneuver.initial_state.tolist()
+        if maneuver.state_names != STATES:
+            header["state_names"] = list(maneuver.state_names)
     for key, value in maneuver.metadata.items():
         if key in RESERVED or not isinstance(key, str) or not KEY_PATTERN.fullmatch(key):
             raise DataFileError(
@@ -128,6 +133,7 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
                                                           **declared})
         return Maneuver.from_columns(name, columns, units=units, metadata=metadata,
                                      initial_state=header.get("initial_state"),
+                                     state_names=header.get("state_names"),
                                      ingestion=ingestion)
     except DataError as error:
         raise DataFileError(f"{path}: {error}{row_note}") from None

@@ -73,7 +73,7 @@ class Records:
             outputs[: m.n_samples, b] = m.columns(structure.outputs)
             mask[: m.n_samples, b] = True
         return cls(float(np.mean(dts)), inputs, outputs, mask,
-                   _initial_states(maneuvers, structure.n_states), lengths)
+                   _initial_states(maneuvers, structure.states), lengths)
 
     @property
     def n_samples(self) -> int:
@@ -85,15 +85,11 @@ class Records:
         return [innovations[:n, b] for b, n in enumerate(self.lengths)]
 
 
-def _initial_states(maneuvers: ManeuverSet, n_states: int) -> np.ndarray:
-    """(M, n): each maneuver's ``initial_state``, trim (zeros) where it has none."""
-    for m in maneuvers:
-        if m.initial_state is not None and m.initial_state.shape != (n_states,):
-            raise DataError(f"maneuver {m.name!r}: initial_state has {m.initial_state.size} "
-                            f"values but the structure has {n_states} states; give one value "
-                            f"per state of the structure, or none (trim)")
-    return np.array([np.zeros(n_states) if m.initial_state is None else m.initial_state
-                     for m in maneuvers]).reshape(len(maneuvers), n_states)
+def _initial_states(maneuvers: ManeuverSet, states) -> np.ndarray:
+    """(M, n): each maneuver's initial state of the structure's ``states``
+    (:meth:`rotorid.data.Maneuver.initial_values`)."""
+    return np.array([m.initial_values(states) for m in maneuvers]).reshape(len(maneuvers),
+                                                                           len(states))
 
 
 def _nominal_and_derivative(stack: np.ndarray):

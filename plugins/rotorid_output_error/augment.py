@@ -84,9 +84,9 @@ class WithInitialStates:
         self.n_states = self.structure.n_states
 
     def start_states(self, maneuvers) -> np.ndarray:
-        """Each maneuver's ``initial_state`` (zeros without one), flattened to (n·M,)."""
-        return np.concatenate([np.zeros(self.n_states) if m.initial_state is None
-                               else m.initial_state for m in maneuvers])
+        """Each maneuver's initial state of the structure's states
+        (:meth:`rotorid.data.Maneuver.initial_values`), flattened to (n·M,)."""
+        return np.concatenate([m.initial_values(self.structure.states) for m in maneuvers])
 
     def initial_values(self) -> np.ndarray:
         extra = len(self.parameter_names) - self.n_base

@@ -36,8 +36,7 @@ def reconstructed_states(structure: ModelStructure, maneuver) -> np.ndarray:
         if name in structure.outputs:
             x[:, row] = maneuver.channel(name)
     known = structure.known_state_matrix()
-    start = (np.zeros(len(states)) if maneuver.initial_state is None
-             else maneuver.initial_state)
+    start = maneuver.initial_values(states)
     for name, accel in _VELOCITY_EQUATION.items():
         if name not in states or name in structure.outputs or accel not in structure.outputs:
             continue

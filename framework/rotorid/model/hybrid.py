@@ -16,13 +16,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-import attrs
 import numpy as np
 
-from rotorid.data import ManeuverSet
 from rotorid.errors import StructureError
 from rotorid.model.structure import ModelStructure
-from rotorid.model.templates import FLAP_STATES, STATES
 
 #: What the hybrid model adds to a 6-DoF structure: the flap equations' own damping and
 #: cross-coupling, the hub moments per disc tilt, and (:func:`hybrid_from_six_dof`) the
@@ -113,15 +110,3 @@ def hybrid_from_six_dof(structure: ModelStructure, values,
     if delay_upper is None:
         return hybrid
     return hybrid.with_delays(FLAP_CONTROL_DELAYS, upper=delay_upper, missing="skip")
-
-
-def with_disc_at_trim(maneuvers: ManeuverSet) -> ManeuverSet:
-    """The records with each 6-DoF initial state (u w q θ v p φ r) extended by the disc at
-    trim (β1c = β1s = 0), as the hybrid model's initial state; records without one keep none."""
-    extended = []
-    for m in maneuvers:
-        state = m.initial_state
-        if state is not None and state.shape == (len(STATES),):
-            m = attrs.evolve(m, initial_state=np.concatenate([state, np.zeros(len(FLAP_STATES))]))
-        extended.append(m)
-    return ManeuverSet(extended, hold=maneuvers.hold)

@@ -241,13 +241,8 @@ class Simulator:
     def _initial_states(self, initial_states) -> np.ndarray:
         n, n_x = len(self.maneuvers), self.structure.n_states
         if initial_states is None:
-            for m in self.maneuvers:
-                if m.initial_state is not None and m.initial_state.shape != (n_x,):
-                    raise DataError(f"maneuver {m.name!r}: initial_state has "
-                                    f"{m.initial_state.size} values but the structure "
-                                    f"{n_x} states ({' '.join(self.structure.states)})")
-            return np.array([np.zeros(n_x) if m.initial_state is None else m.initial_state
-                             for m in self.maneuvers])
+            return np.array([m.initial_values(self.structure.states)
+                             for m in self.maneuvers]).reshape(n, n_x)
         states = np.asarray(initial_states, dtype=float)
         if states.shape != (n, n_x):
             raise DataError(f"initial_states must have shape ({n}, {n_x}), one row of "

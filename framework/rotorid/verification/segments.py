@@ -38,7 +38,7 @@ def segmented_simulation(structure, values, maneuvers, segment: float) -> list[n
                 m, name=f"{m.name}#{first}", time=m.time[first:stop],
                 inputs=m.inputs[first:stop], outputs=m.outputs[first:stop],
                 extra_channels={k: v[first:stop] for k, v in m.extra_channels.items()},
-                initial_state=states[first]))
+                initial_state=states[first], state_names=structure.states))
         counts.append(len(starts))
     simulated = iter(simulate(structure, values, ManeuverSet(pieces, hold=maneuvers.hold)))
     return [np.concatenate([next(simulated) for _ in range(count)]) for count in counts]
