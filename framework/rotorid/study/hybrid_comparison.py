@@ -24,7 +24,7 @@ import numpy as np
 from rotorid.data import ManeuverSet
 from rotorid.errors import IdentifiabilityWarning
 from rotorid.estimation.estimate import Estimate
-from rotorid.model.hybrid import hybrid_from_six_dof, with_disc_at_trim
+from rotorid.model.hybrid import hybrid_from_six_dof
 from rotorid.model.structure import ModelStructure
 from rotorid.study.estimator_comparison import SimulationFit, simulation_fit
 from rotorid.verification.band import VerificationBand
@@ -115,25 +115,22 @@ def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[
         reference: ``reference(structure) -> {name: value}`` of the truth, or None.
     """
     hybrid = hybrid_from_six_dof(structures["no delays"], estimates["no delays"].values)
-    records = {"no delays": ident, "with delays": ident, "hybrid": with_disc_at_trim(ident)}
     clock = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IdentifiabilityWarning)
-        estimate = estimator.estimate(hybrid, records["hybrid"])
+        estimate = estimator.estimate(hybrid, ident)        # the disc starts at trim
     seconds = time.perf_counter() - clock
     structures = {**structures, "hybrid": hybrid}
     estimates = {**estimates, "hybrid": estimate}
     verification = {}
     if sweeps is not None and pairs:
-        records_of = {"no delays": sweeps, "with delays": sweeps,
-                      "hybrid": with_disc_at_trim(sweeps)}
         verification = {label: verify_model(structures[label], estimates[label].values,
-                                            records_of[label], pairs, ["mismatch-cost"],
+                                            sweeps, pairs, ["mismatch-cost"],
                                             band=HYBRID_BAND)
                         for label in HYBRID_MODELS}
     return HybridComparison(
         hybrid, estimate, {label: structures[label].n_parameters for label in HYBRID_MODELS},
-        {label: simulation_fit(structures[label], estimates[label], records[label])
+        {label: simulation_fit(structures[label], estimates[label], ident)
          for label in HYBRID_MODELS},
         verification, None if reference is None else reference(hybrid), seconds)
 
