@@ -12,7 +12,7 @@ multistep's input biases and output reference shifts fitted to the fixed model.
 Run from the repository root::
 
     python docs/examples/frequency_vs_time.py DIR/hover|DIR/forward [--pairs q/long,...]
-        [--band-max 10] [--paper-delays] [--starts 8]
+        [--band-max 10] [--paper-delays] [--starts 24]
 """
 
 from __future__ import annotations
@@ -69,8 +69,8 @@ def main() -> None:
     parser.add_argument("--paper-delays", action="store_true",
                         help="fit all eight of the paper's delays, also those the study "
                              "dropped (the time-domain estimate has them at zero)")
-    parser.add_argument("--starts", type=int, default=8,
-                        help="starts of the frequency-domain fit (default 8)")
+    parser.add_argument("--starts", type=int, default=24,
+                        help="starts of the frequency-domain fit (default 24, as the study)")
     args = parser.parse_args()
 
     result = json.loads((args.directory / "result.json").read_text())

@@ -32,7 +32,7 @@ FREQUENCY_ESTIMATOR = "frequency-response"
 #: The two estimates compared, by method.
 METHODS = ("time", "frequency")
 #: Starts of the frequency-domain fit (the equation-error start and varied ones).
-FREQUENCY_STARTS = 8
+FREQUENCY_STARTS = 24
 
 
 @attrs.frozen(eq=False)
