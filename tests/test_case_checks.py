@@ -50,6 +50,19 @@ def case_file(tmp_path, text: str):
      r"\[reference\] M_q: give a number or a table with value"),
     ('[reference]\nM_q = { value = -3.9, uncertainty = -1 }\n',
      r"\[reference\] M_q.uncertainty must be a positive number"),
+    ('channels = { Q_g = { signal = "q", unit = "g" } }\n',
+     r"\[data\] channels: column 'Q_g' has unit g, which does not fit 'q' \(rate\); give one "
+     r"of"),
+    ('channels = { Q1 = { signal = "q", unit = "deg/s" }, Q2 = { signal = "q", unit = "rad/s" } }'
+     '\n', r"\[data\] channels: signal 'q' is linked to several columns \(Q1, Q2\)"),
+    ('channels = { P = { signal = "p", unit = "deg/s" } }\n[structure]\n'
+     'template = "longitudinal"\n[delays]\nderivatives = ["M_q"]\n',
+     r"\[data\] channels: column 'P' is linked to 'p', which is not a signal of the case's "
+     r"structure \(u, w, q, theta"),
+    ('[structure]\ntemplate = "longitudinal"\n[delays]\nderivatives = ["M_q"]\n'
+     '[verification]\npairs = ["p/lat"]\n',
+     r"\[verification\] pairs: unknown response pair 'p/lat'; write OUTPUT/INPUT with OUTPUT "
+     r"one of ax, az, q, theta and INPUT one of long, coll"),
 ])
 def test_a_bad_setting_names_the_file_and_the_key(tmp_path, text, message):
     path = case_file(tmp_path, text)

@@ -10,15 +10,17 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 from rotorid.errors import DataFileError, RotoridError
+from rotorid.model.signals import ChannelMap
 from rotorid.estimation.reduction import RULES
 from rotorid.model.modelfile import parse_model
 from rotorid.model.structure import FlightCondition
 from rotorid.plugin.manager import registry
 from rotorid.study.comparison import FREQUENCY_ESTIMATOR
 from rotorid.study.reference import check_reference_names
+from rotorid.units import unit_fits_kind, units_of_kind
 from rotorid.verification.pairs import parse_pair
 
 #: A case name is a directory of the results: letters, digits and ``_ . + -``, never a path.
@@ -45,6 +47,7 @@ def check_case(case, where: str) -> None:
         raise DataFileError(f"{where}: [data] needs a source, e.g. source = \"files\"")
     check_registered("data-sources", case.data_source, where, "[data] source")
     structure = _starting_structure(case, where)
+    _check_channels(case, structure, where)
     _check_delays(case, structure.names, where)
     check_reference_names(case.reference, structure.names, where)
     for pair in case.pairs:
@@ -137,6 +140,29 @@ def _starting_structure(case, where: str):
         raise DataFileError(f"{where}: [structure]/[derivatives] leave no free derivative to "
                             f"estimate; declare at least one without 'fixed'")
     return structure
+
+
+def _check_channels(case, structure, where: str) -> None:
+    """A ``[data] channels`` map (a files case's) links signals of the case's structure, each
+    in a unit that fits the signal's kind; its columns are checked when the files are read."""
+    table = case.data.get("channels")
+    if table is None:
+        return
+    if not isinstance(table, Mapping):
+        raise DataFileError(f"{where}: [data] channels must be a table of COLUMN = {{ signal "
+                            f"= \"q\", unit = \"deg/s\" }}, got {table!r}")
+    links = _wrapped(lambda: ChannelMap.from_mapping(table, "[data] channels").links, where)
+    signals = structure.signals.all
+    for link in links:
+        if link.signal not in signals:
+            raise DataFileError(f"{where}: [data] channels: column {link.column!r} is linked to "
+                                f"{link.signal!r}, which is not a signal of the case's "
+                                f"structure ({', '.join(signals.names)}); link it to one of them")
+        kind = signals[link.signal].kind
+        if not unit_fits_kind(link.unit, kind):
+            raise DataFileError(f"{where}: [data] channels: column {link.column!r} has unit "
+                                f"{link.unit}, which does not fit {link.signal!r} ({kind}); "
+                                f"give one of {', '.join(units_of_kind(kind))}")
 
 
 def _check_delays(case, names: tuple[str, ...], where: str) -> None:
