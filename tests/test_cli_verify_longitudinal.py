@@ -186,3 +186,12 @@ def test_bad_channel_maps_stop_verify_and_simulate_in_one_line(identified, tmp_p
     assert len(error.splitlines()) == 1 and "Traceback" not in error, error
     assert re.search(fragment, error), error
     assert "bad.toml" in error
+
+
+def test_frequency_estimates_the_on_axis_responses_of_longitudinal_sweeps(identified, tmp_path,
+                                                                          capsys):
+    model, result, sweeps = identified
+    out = tmp_path / "responses.json"
+    assert main(["frequency", *sweeps, "--out", str(out)]) == 0, capsys.readouterr().err
+    responses = json.loads(out.read_text(encoding="utf-8"))
+    assert [p["pair"] for p in responses["pairs"]] == ["q/long", "az/coll"]

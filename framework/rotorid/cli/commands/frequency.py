@@ -38,8 +38,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("sweeps", nargs="+", metavar="SWEEPS",
                         help="sweep files, directories or glob patterns")
     parser.add_argument("--pairs", default=None,
-                        help="comma-separated OUTPUT/INPUT pairs (default: the paper's "
-                             "pairs whose input the sweeps excite)")
+                        help="comma-separated OUTPUT/INPUT pairs of the sweeps' channels "
+                             "(default: the paper's pairs they hold, else every output over "
+                             "every input, limited to the inputs the sweeps excite)")
     parser.add_argument("--conditioned", action="store_true",
                         help="condition each response on the other inputs that moved in its "
                              "sweeps (partial coherence)")
