@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from rotorid import simulate
+from rotorid import load_result, simulate
 from rotorid.errors import DataFileError
 from rotorid.report.html import StudyReport, estimator_fit_rows, estimator_rows
 from rotorid.study.case import FlightCase
@@ -57,6 +57,17 @@ def test_delays_and_verification_use_the_structures_parameters(filtered):
         direct = rmse([m.outputs for m in result.identification],
                       simulate(structure, values, result.identification))
         assert result.time_metrics[label].rmse == pytest.approx(direct, rel=1e-12)
+
+
+def test_the_result_file_gives_the_model_without_the_noise_parameters(filtered):
+    """rotorid.load_result (behind verify, simulate and export) reads the filter-error model:
+    its derivatives and delays, F and R left out as parameters of the estimation."""
+    result, directory = filtered
+    identified = load_result(directory / "result.json")
+    structure = result.structures["with delays"]
+    assert identified.structure.parameter_names == structure.parameter_names
+    assert identified.values == {n: result.estimates["with delays"].value(n)
+                                 for n in structure.parameter_names}
 
 
 def test_estimators_side_by_side_in_result_and_report(filtered):

@@ -24,7 +24,7 @@ import attrs
 from rotorid.errors import DataFileError, UsageError
 from rotorid.estimation.estimate import Estimate
 from rotorid.io import read_json_object
-from rotorid.model.derivatives import delay_parameter
+from rotorid.model.derivatives import delay_parameter, delayed_derivative
 from rotorid.model.modelfile import load_model, parse_model
 from rotorid.model.statespace import NamedStateSpace, state_space
 from rotorid.model.structure import FlightCondition, ModelStructure
@@ -80,11 +80,23 @@ def to_statespace(estimate: Estimate, structure: ModelStructure, pade_order: int
                        pade_order=pade_order).to_scipy()
 
 
+def is_model_parameter(structure: ModelStructure, name: str) -> bool:
+    """Whether ``name`` is a parameter of the model rather than of its estimation: a delay, or
+    a name whose letter is one of the structure's equation letters (a derivative; one the
+    structure cannot hold is then refused where it is used). The records' parameters
+    (:data:`RECORD_PARAMETER_PREFIXES`) and an estimator's own, such as filter error's process
+    and measurement noise ``F_*`` and ``R_*``, are not."""
+    if name.startswith(RECORD_PARAMETER_PREFIXES):
+        return False
+    return (delayed_derivative(name) is not None
+            or name.partition("_")[0] in structure.template.letters)
+
+
 def model_values(structure: ModelStructure, values: Mapping[str, float]) -> dict[str, float]:
-    """``values`` without the parameters of the identification records
-    (:data:`RECORD_PARAMETER_PREFIXES`), as a mapping over ``structure``'s parameters."""
-    kept = {n: v for n, v in values.items() if not n.startswith(RECORD_PARAMETER_PREFIXES)}
-    return structure.as_mapping(kept)
+    """``values`` of the model's parameters (:func:`is_model_parameter`), as a mapping over
+    ``structure``'s parameters."""
+    return structure.as_mapping({n: v for n, v in values.items()
+                                 if is_model_parameter(structure, n)})
 
 
 def load_result(path: str | os.PathLike, model: str | None = None,
@@ -180,7 +192,7 @@ def _identified(structure: ModelStructure, entry: Mapping, path: Path):
                             f"structure in {structure.units.name!r}; use the model file it "
                             f"was estimated with")
     parameters = {n: _number(e, n, path) for n, e in entry["parameters"].items()
-                  if not n.startswith(RECORD_PARAMETER_PREFIXES)}
+                  if is_model_parameter(structure, n)}
     for name, value in dict(entry.get("fixed") or {}).items():
         if name in structure.names:
             structure = structure.fixing(name, _number(value, name, path))
@@ -194,5 +206,5 @@ def _identified(structure: ModelStructure, entry: Mapping, path: Path):
     return structure, structure.as_mapping(values)
 
 
-__all__ = ["IdentifiedModel", "STUDY_MODELS", "load_result", "model_values", "named_model_file",
-           "to_statespace"]
+__all__ = ["IdentifiedModel", "STUDY_MODELS", "is_model_parameter", "load_result",
+           "model_values", "named_model_file", "to_statespace"]
