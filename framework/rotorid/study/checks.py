@@ -48,6 +48,10 @@ def check_case(case, where: str) -> None:
     check_registered("data-sources", case.data_source, where, "[data] source")
     structure = _starting_structure(case, where)
     _check_channels(case, structure, where)
+    if "states" in case.structure and "units" not in case.data:
+        raise DataFileError(f"{where}: [structure] declares its own signals, whose known terms "
+                            f"are numbers in one unit system; say which in [data] units = "
+                            f"\"si\" (or \"flight-test\"), so the data are read in it")
     _check_delays(case, structure.names, where)
     check_reference_names(case.reference, structure.names, where)
     for pair in case.pairs:
