@@ -61,5 +61,6 @@ def test_the_profile_figure_draws_one_line_and_one_marker_per_delay(fitted):
     assert line.get_ydata() == pytest.approx(100 * profile.relative_rmse)
     assert marker.get_xdata().tolist() == [profile.free_value]
     assert "[s]" in axis.get_xlabel() and "[%]" in axis.get_ylabel()
+    assert axis.get_yscale() == "symlog"          # shallow and steep profiles both read
     legend = axis.get_legend()
     assert legend.get_bbox_to_anchor().x0 > axis.get_window_extent().x1 - 1   # outside the axes
