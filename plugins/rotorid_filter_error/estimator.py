@@ -66,10 +66,6 @@ _SIZE_FLOOR = 1e-4
 _CORRELATION_START = 1.0
 #: Longest correlation time of a disturbance, s (a random walk for the record lengths flown).
 _LONGEST_CORRELATION = 1000.0
-#: Ratio of an output's mean square innovation to its predicted variance up to which the
-#: process noise start of the state it measures is left as it is, and the most doublings.
-_SCALE_RATIO = 2.0
-_SCALE_DOUBLINGS = 12
 #: Lowest matched R, relative to the output's mean square innovation.
 _MATCH_FLOOR = 0.05
 
@@ -149,35 +145,6 @@ def _innovation_ratio(problem: "FilterErrorProblem", values: np.ndarray):
         return None
     mean_square = np.einsum("nmi,nmi->i", innovations, innovations) / problem.n_samples
     return (mean_square, b) if np.all(np.isfinite(mean_square)) else None
-
-
-def scaled_process_noise(problem: "FilterErrorProblem", values: np.ndarray,
-                         keep: tuple[str, ...] = ()) -> np.ndarray:
-    """``values`` with each process noise and disturbance size (``F_<state>``, ``D_<state>``,
-    except those in ``keep``) doubled while the output measuring its state
-    (:func:`measuring_output`) has a mean square innovation above :data:`_SCALE_RATIO` times
-    its predicted variance B_ii (at most :data:`_SCALE_DOUBLINGS` doublings).
-
-    From the small default start, data flown in turbulence leave innovations tens of times
-    the filter's B; matching them with R alone would explain the disturbances' response as
-    measurement noise, a poor local minimum (on data with a Gauss-Markov heave disturbance
-    the fit then ended with R_az four times the truth and Z_w 9 CR off). In still air the
-    ratio is near one and nothing changes.
-    """
-    values = np.array(values, dtype=float)
-    rows = [i for i, n in enumerate(problem.parameter_names)
-            if n.startswith(("F_", "D_")) and n not in keep]
-    outputs = np.array([measuring_output(problem.structure, problem.parameter_names[i][2:])[0]
-                        for i in rows], dtype=int)
-    for _ in range(_SCALE_DOUBLINGS if rows else 0):
-        found = _innovation_ratio(problem, values)
-        if found is None:
-            break
-        high = (found[0] / np.diag(found[1]))[outputs] > _SCALE_RATIO
-        if not high.any():
-            break
-        values[np.array(rows)[high]] *= 2.0
-    return values
 
 
 def matched_measurement_noise(problem: "FilterErrorProblem", values: np.ndarray,
@@ -411,8 +378,7 @@ class FilterErrorEstimator:
                 structure, maneuvers, process_noise_states(structure, self.process_noise),
                 settings, process_noise_states(structure, self.disturbances, "disturbances"))
             values, note, given = self._start_values(problem, maneuvers, start)
-            values = matched_measurement_noise(
-                problem, scaled_process_noise(problem, values, given), given)
+            values = matched_measurement_noise(problem, values, given)
             bounds = self._bounds(problem, values)
 
             def progress(record):

@@ -17,7 +17,10 @@ Besides the observed change of det R, the run stops when the change that the Gau
 model predicts for the next (bounded, λ = 0) step is below the cost tolerance: with R fixed,
 d ln det R = dQ/N for Q = Σ eᵀR⁻¹e, so the predicted relative change is −(2GᵀΔ + ΔᵀFΔ)/N.
 This test uses the F and G that the next step needs anyway, so a converged run ends with F at
-its final values without one more sensitivity evaluation.
+its final values without one more sensitivity evaluation. A shortened step along the
+Gauss-Newton step never predicts a rise; a projected one can (it is then no descent step, and
+the model says nothing about convergence), so a predicted rise beyond the tolerance does not
+stop the run.
 """
 
 from __future__ import annotations
@@ -222,8 +225,9 @@ def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | Non
             break
         f, g = problem.gauss_newton(values, r, residuals)
         current = True
-        if predicted_change(f, g, values, bounds, problem.n_samples,
-                            settings.shorten_steps) < settings.cost_tolerance:
+        predicted = predicted_change(f, g, values, bounds, problem.n_samples,
+                                     settings.shorten_steps)
+        if abs(predicted) < settings.cost_tolerance:
             reason, converged = "predicted cost change below tolerance", True
             break
     if final_information and not current:
