@@ -176,10 +176,11 @@ class Maneuver:
                             f"at least one output ({', '.join(output_layout)}); link the "
                             f"file's own column names in a channel map")
         prepared, notes = prepare_columns(columns, unit_system(units).name, ingestion, where)
+        rows = prepared["time"].size
+
         def block(names):
-            """The columns ``names`` side by side, shape (N, len(names))."""
-            return np.array([prepared[c] for c in names]).T.reshape(-1, len(names)) \
-                if names else np.zeros((prepared["time"].size, 0))
+            """The columns ``names`` side by side, shape (N, len(names)); (N, 0) for none."""
+            return np.array([prepared[c] for c in names]).T.reshape(rows, len(names))
 
         return cls(name, prepared["time"], block(inputs), block(outputs),
                    metadata={**dict(metadata or {}), **notes}, units=units,

@@ -1,11 +1,12 @@
 """The response pairs a model and its sweeps can produce, and why the others are skipped.
 
 A pair ``output/input`` cannot be verified when the model lacks its output or input (the
-paper's lateral pairs of a longitudinal model), when no sweep excites the input, when the model's output does not respond to the
-input at all (a decoupled model: its response is identically zero and ε would be infinite),
-when the sweeps do not record the output, or when the measured output never moves on the
-input's sweeps (a padded column: the measured response is zero). :func:`producible_pairs` sorts the pairs
-into those to verify and those skipped, with the reason.
+paper's lateral pairs of a longitudinal model), when no sweep excites the input, when the
+model's output does not respond to the input at all (a decoupled model: its response is
+identically zero and ε would be infinite), when the sweeps do not record the output, or when
+the measured output never moves on the input's sweeps (a padded column: the measured response
+is zero). :func:`producible_pairs` sorts the pairs into those to verify and those skipped, with
+the reason.
 """
 
 from __future__ import annotations
