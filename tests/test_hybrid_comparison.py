@@ -9,7 +9,7 @@ import pytest
 import rotorid
 from hybrid_reference import NOISE, hybrid_reference, open_loop_maneuvers, six_dof_of
 from rotorid import Maneuver, ManeuverSet
-from rotorid.errors import IdentifiabilityWarning
+from rotorid.errors import DataFileError, IdentifiabilityWarning
 from rotorid.model.hybrid import hybrid_from_six_dof
 from rotorid.report.figures import hybrid_figures
 from rotorid.report.html import hybrid_html, hybrid_model_rows, hybrid_term_rows
@@ -99,5 +99,11 @@ def test_case_option():
     mapping = {"name": "h", "data": {"source": "helisim", "condition": "hover"}}
     plain = FlightCase.from_mapping(mapping)
     assert not plain.compare_hybrid and "compare_hybrid" not in plain.as_dict()
-    hybrid = FlightCase.from_mapping({**mapping, "compare": {"hybrid": True}})
+    hybrid = FlightCase.from_mapping({**mapping, "compare": {"hybrid": True,
+                                                             "hybrid_band_max": 14.0}})
     assert hybrid.compare_hybrid and hybrid.as_dict()["compare_hybrid"] is True
+    assert hybrid.as_dict()["compare_hybrid_band_max"] == 14.0
+    with pytest.raises(DataFileError, match="hybrid comparison only"):
+        FlightCase.from_mapping({**mapping, "compare": {"hybrid_band_max": 14.0}})
+    with pytest.raises(DataFileError, match="top frequency"):
+        FlightCase.from_mapping({**mapping, "compare": {"hybrid": True, "hybrid_band_max": 0.5}})

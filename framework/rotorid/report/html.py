@@ -44,7 +44,7 @@ from rotorid.report.figures import (
 )
 from rotorid.study.claims import PAPER_SOURCES, claims_tally, mean_phase_error, paper_claims
 from rotorid.study.expectations import check_signs, derivative_unit
-from rotorid.study.hybrid_comparison import HYBRID_BAND, HYBRID_MODELS, mean_cost
+from rotorid.study.hybrid_comparison import HYBRID_MODELS, mean_cost
 from rotorid.study.result import KEY_DERIVATIVES, MODELS
 from rotorid.units import CHANNEL_KINDS, unit_system
 from rotorid.verification.band import DEFAULT_BAND
@@ -371,7 +371,7 @@ def hybrid_html(result, figures: Sequence = ()) -> str:
         "flapping; it was fitted from the start whose quasi-steady form is the selected model "
         f"({comparison.estimate.iterations} iterations, {comparison.seconds:.1f} s). All three "
         "are judged alike: their simulation of the identification maneuvers, and J per pair "
-        f"over {html.escape(HYBRID_BAND.describe())} ({MISMATCH_COST_GUIDELINE_TEXT}).</p>",
+        f"over {html.escape(comparison.band.describe())} ({MISMATCH_COST_GUIDELINE_TEXT}).</p>",
         _html_table(hybrid_model_rows(result)),
         figures_html(figures),
         "<h3>Rotor terms of the hybrid model</h3>",

@@ -34,6 +34,7 @@ from rotorid.io import require_file
 from rotorid.model.structure import PAPER_DELAYED
 from rotorid.plugin.manager import create
 from rotorid.study.checks import check_case, check_registered
+from rotorid.study.hybrid_comparison import HYBRID_OMEGA_MAX
 from rotorid.study.reference import ReferenceValue, parse_reference
 from rotorid.verification.band import BAND_KEYS, DEFAULT_BAND, VerificationBand
 from rotorid.verification.compare import PAPER_ENVELOPES
@@ -47,7 +48,7 @@ _TABLES = {
     "delays": {"derivatives", "initial", "upper", "threshold", "starts", "seed",
                "profile_points"},
     "quick": {"duration_scale", "continue_to_zero", "warm_start", "delay_profile_points"},
-    "compare": {"frequency", "pairs", "band_max", "estimators", "hybrid"},
+    "compare": {"frequency", "pairs", "band_max", "estimators", "hybrid", "hybrid_band_max"},
     "reference": None,
 }
 _TOP_LEVEL = {"name", "description", *_TABLES}
@@ -71,6 +72,7 @@ _FIELDS = {
     ("compare", "band_max"): ("compare_band_max", float),
     ("compare", "estimators"): ("compare_estimators", tuple),
     ("compare", "hybrid"): ("compare_hybrid", bool),
+    ("compare", "hybrid_band_max"): ("compare_hybrid_band_max", float),
 }
 
 #: What each converter of :data:`_FIELDS` reads, for the error messages.
@@ -94,7 +96,8 @@ class FlightCase:
     coherent range). With ``compare_estimators`` each listed estimator also fits the model
     with delays to the identification data (:mod:`rotorid.study.estimator_comparison`). With
     ``compare_hybrid`` the hybrid rotor-body model is built on the selected model and compared
-    with both (:mod:`rotorid.study.hybrid_comparison`).
+    with both (:mod:`rotorid.study.hybrid_comparison`), J up to ``compare_hybrid_band_max``
+    rad/s (the sweeps' top frequency; default 20).
     Empty ``pairs`` are the structure's own default pairs
     (:func:`rotorid.verification.pairs.default_pairs`: the paper's pairs it has).
     ``delay_profile_points`` is the number of grid values in [0, ``delay_upper``] of each kept
@@ -130,6 +133,7 @@ class FlightCase:
     compare_band_max: float | None = None
     compare_estimators: tuple[str, ...] = ()
     compare_hybrid: bool = False
+    compare_hybrid_band_max: float = HYBRID_OMEGA_MAX
     quick_settings: Mapping = attrs.field(factory=dict, converter=dict)
     is_quick: bool = False
 
@@ -215,7 +219,8 @@ class FlightCase:
         ``compare_hybrid`` only when set, so that cases without them keep the record they had
         before they existed."""
         return attrs.asdict(self, filter=lambda a, v: not (
-            a.name in ("compare_estimators", "compare_hybrid") and not v))
+            a.name in ("compare_estimators", "compare_hybrid") and not v
+            or a.name == "compare_hybrid_band_max" and not self.compare_hybrid))
 
 
 def _tables(mapping: Mapping, source: str) -> dict[str, dict]:

@@ -19,6 +19,7 @@ from rotorid.model.modelfile import parse_model
 from rotorid.model.structure import FlightCondition
 from rotorid.plugin.manager import registry
 from rotorid.study.comparison import FREQUENCY_ESTIMATOR
+from rotorid.study.hybrid_comparison import HYBRID_OMEGA_MAX
 from rotorid.study.reference import check_reference_names
 from rotorid.units import unit_fits_kind, units_of_kind
 from rotorid.verification.pairs import parse_pair
@@ -80,6 +81,13 @@ def _check_compare(case, where: str) -> None:
     elif case.compare_pairs or case.compare_band_max is not None:
         raise DataFileError(f"{where}: [compare] pairs and band_max apply to the "
                             f"frequency-domain fit only; add frequency = true or drop them")
+    top = case.compare_hybrid_band_max
+    if not (math.isfinite(top) and top > 1.0):
+        raise DataFileError(f"{where}: [compare] hybrid_band_max must be the sweeps' top "
+                            f"frequency in rad/s, above 1, got {top!r}")
+    if top != HYBRID_OMEGA_MAX and not case.compare_hybrid:
+        raise DataFileError(f"{where}: [compare] hybrid_band_max applies to the hybrid "
+                            f"comparison only; add hybrid = true or drop it")
     for pair in case.compare_pairs:
         _wrapped(lambda: parse_pair(pair), where, "[compare] pairs")
     band_max = case.compare_band_max

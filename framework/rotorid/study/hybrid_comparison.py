@@ -6,8 +6,8 @@ pitch rate and cyclic terms, the flap equations, delays on the cyclic into flapp
 fitted with the case's estimator to the identification maneuvers, starting where the 6-DoF
 fit ended. Every model is judged on the same terms: its parameters, the RMSE and det R of its
 simulation of the identification maneuvers, and per verification pair the mismatch cost J
-over :data:`HYBRID_BAND` (γ² ≥ 0.8, from 1 to 20 rad/s where the sweeps reach it: the band
-where the rotor's lag shows). With a truth model, the hybrid's rotor terms
+over γ² ≥ 0.8 from 1 rad/s to the sweeps' top frequency, at most 20 rad/s (:func:`hybrid_band`:
+the band where the rotor's lag shows). With a truth model, the hybrid's rotor terms
 are set beside the truth's flap-coupled reference (its full linearisation with the flap rates,
 coning and inflow residualised).
 """
@@ -33,10 +33,18 @@ from rotorid.verification.verify import verify_model
 
 #: The models compared, in table order.
 HYBRID_MODELS = ("no delays", "with delays", "hybrid")
-#: Where J is taken: the verification coherence γ² ≥ 0.8 over 1–20 rad/s. At Tischler's 0.6
-#: the hover q/long estimate just past the sweeps' top frequency (14 rad/s) counted: at
-#: 15.6 rad/s, γ² = 0.64, every model erred by 25 dB and that point alone set J to about 400.
-HYBRID_BAND = VerificationBand(coherence=0.8, omega_min=1.0, omega_max=20.0)
+#: Highest frequency of the comparison's J, rad/s, unless the sweeps stop lower.
+HYBRID_OMEGA_MAX = 20.0
+
+
+def hybrid_band(omega_max: float = HYBRID_OMEGA_MAX) -> VerificationBand:
+    """Where J is taken: γ² ≥ 0.8 from 1 rad/s to ``omega_max``, the sweeps' top frequency.
+
+    Points past the top frequency are artefacts whatever their coherence: on the built-in
+    hover sweeps (0.45–14 rad/s) the p/lat estimate at 17.5 rad/s has γ² = 0.84 and every
+    model errs there by 28–29 dB, which alone sets J to about 700; at Tischler's γ² ≥ 0.6 the
+    q/long point at 15.6 rad/s (γ² 0.64, 25 dB off) did the same."""
+    return VerificationBand(coherence=0.8, omega_min=1.0, omega_max=omega_max)
 #: The hybrid's rotor terms set beside the truth's reference: flap damping (−1/τ_f), hub
 #: moments per disc tilt, cyclic into flapping.
 ROTOR_TERMS = ("Bc_beta1c", "Bs_beta1s", "M_beta1c", "L_beta1s", "Bc_long", "Bs_lat")
@@ -52,8 +60,9 @@ class HybridComparison:
         structure, estimate: the hybrid model and its fit.
         parameters: number of estimated parameters by model label (:data:`HYBRID_MODELS`).
         simulation: each model's simulation of the identification maneuvers.
-        verification: by model label, the sweeps' verification in :data:`HYBRID_BAND` with J
-            (empty without sweeps).
+        verification: by model label, the sweeps' verification in ``band`` with J (empty
+            without sweeps).
+        band: where J is taken (:func:`hybrid_band`).
         reference: the truth's flap-coupled values of the hybrid's derivatives by name, or
             None without a truth model.
         seconds: wall time of the hybrid fit, s.
@@ -66,10 +75,11 @@ class HybridComparison:
     verification: Mapping[str, VerificationResult]
     reference: Mapping[str, float] | None
     seconds: float
+    band: VerificationBand
 
     @property
     def costs(self) -> dict[str, dict[str, float | None]]:
-        """J by model label and pair over :data:`HYBRID_BAND` (None where no point)."""
+        """J by model label and pair over :attr:`band` (None where no point)."""
         return {label: {pair.pair: pair.checks["mismatch-cost"].cost for pair in result.pairs}
                 for label, result in self.verification.items()}
 
@@ -91,7 +101,7 @@ class HybridComparison:
 
     def summary(self) -> dict:
         """The ``result.json`` record."""
-        return {"band": attrs.asdict(HYBRID_BAND),
+        return {"band": attrs.asdict(self.band),
                 "models": {label: {"parameters": self.parameters[label],
                                    "simulation": (None if self.simulation[label] is None
                                                   else self.simulation[label].summary()),
@@ -106,7 +116,7 @@ class HybridComparison:
 
 def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[str, Estimate],
                    ident: ManeuverSet, sweeps: ManeuverSet | None, pairs, estimator,
-                   reference=None) -> HybridComparison:
+                   reference=None, omega_max: float = HYBRID_OMEGA_MAX) -> HybridComparison:
     """Build and fit the hybrid model on ``structures["no delays"]`` and compare it with the
     case's two models.
 
@@ -115,7 +125,9 @@ def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[
         ident: identification maneuvers; sweeps: verification maneuvers or None (no J).
         pairs: the verification pairs; estimator: the case's estimator.
         reference: ``reference(structure) -> {name: value}`` of the truth, or None.
+        omega_max: the sweeps' top frequency, rad/s (J's band, :func:`hybrid_band`).
     """
+    band = hybrid_band(omega_max)
     hybrid = hybrid_from_six_dof(structures["no delays"], estimates["no delays"].values)
     clock = time.perf_counter()
     with warnings.catch_warnings():
@@ -128,13 +140,13 @@ def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[
     if sweeps is not None and pairs:
         verification = {label: verify_model(structures[label], estimates[label].values,
                                             sweeps, pairs, ["mismatch-cost"],
-                                            band=HYBRID_BAND)
+                                            band=band)
                         for label in HYBRID_MODELS}
     return HybridComparison(
         hybrid, estimate, {label: structures[label].n_parameters for label in HYBRID_MODELS},
         {label: simulation_fit(structures[label], estimates[label], ident)
          for label in HYBRID_MODELS},
-        verification, None if reference is None else reference(hybrid), seconds)
+        verification, None if reference is None else reference(hybrid), seconds, band)
 
 
 def mean_cost(costs: Mapping[str, float | None]) -> float | None:

@@ -264,14 +264,15 @@ def _compare_hybrid(case: FlightCase, structures, estimates, ident: ManeuverSet,
         lambda hybrid: truth_derivatives(truth, condition, hybrid))
     pairs = [p.pair for p in verification["with delays"].pairs] if verification else []
     comparison = compare_hybrid(structures, estimates, ident, verif, pairs, estimator,
-                                reference)
+                                reference, case.compare_hybrid_band_max)
     taus = ", ".join(f"{t:.3f} s" for t, _ in comparison.flap_time_constants().values())
     costs = "; ".join(f"{label} {cost:.0f}" for label, costs in comparison.costs.items()
                       if (cost := mean_cost(costs)) is not None)
     report(case.name, f"hybrid model: {comparison.structure.n_parameters} parameters, "
                       f"{comparison.estimate.iterations} iter, RMSE "
                       f"{comparison.estimate.rmse:.4f}, flap time constants {taus}"
-                      + (f"; mean J over 1–20 rad/s: {costs}" if costs else ""))
+                      + (f"; mean J over {comparison.band.describe()}: {costs}" if costs
+                         else ""))
     return comparison
 
 
