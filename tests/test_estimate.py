@@ -105,10 +105,10 @@ def test_the_record_round_trips_through_json():
     for field in ("parameter_names", "output_names", "cost", "rmse", "cost_history",
                   "rmse_history", "iterations", "converged", "stop_reason", "n_samples",
                   "sign_violations", "at_bound", "unidentifiable", "fixed", "signs", "units",
-                  "notes", "estimator"):
+                  "notes", "estimator", "output_units", "parameter_units", "rmse_basis"):
         assert getattr(again, field) == getattr(estimate, field), field
     for field in ("values", "start", "cramer_rao", "insensitivity", "correlation",
-                  "information", "noise_covariance"):
+                  "information", "noise_covariance", "residual_rms"):
         np.testing.assert_array_equal(getattr(again, field), getattr(estimate, field))
 
 
@@ -118,8 +118,10 @@ def test_the_record_layout():
     assert record["delays"]["L_lat"] == {"value": 0.04, "cramer_rao": 0.1,
                                          "cramer_rao_pct": pytest.approx(250.0),
                                          "insensitivity": 0.1,
-                                         "insensitivity_pct": pytest.approx(250.0)}
+                                         "insensitivity_pct": pytest.approx(250.0),
+                                         "unit": "s"}
     assert record["parameters"]["L_p"]["sign"] == "negative"
+    assert record["parameters"]["L_lat"]["unit"] == "deg/s² per %"
     assert record["outputs"] == list(STRUCTURE.outputs)
     assert "signs" not in record and "values" not in record
 

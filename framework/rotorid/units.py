@@ -209,6 +209,26 @@ def units_like(unit: str) -> list[str]:
     return [u for u in UNITS if same_dimension(u, unit)]
 
 
+#: One unit of each dimension that the paper's RMSE guideline (eq. 18, RMSE ≤ 1.0 to 2.0; J_rms
+#: in deg, deg/s, ft/s, ft/s²) measures residuals in: a residual divided by its reference unit
+#: is a pure number, so the RMSE over outputs of different kinds is dimensionless.
+RMSE_REFERENCE_UNITS = {"speed": "ft/s", "acceleration": "ft/s²", "angle": "deg",
+                        "angular rate": "deg/s", "angular acceleration": "deg/s²"}
+
+
+def rmse_reference_factors(units) -> np.ndarray | None:
+    """Per-output factors turning residuals in ``units`` into multiples of their
+    :data:`RMSE_REFERENCE_UNITS`, shape (len(units),); ``None`` when an output has no
+    reference unit (an unknown unit, control travel, force)."""
+    factors = []
+    for unit in units:
+        dimension = UNITS.get(unit, (None,))[0]
+        if dimension not in RMSE_REFERENCE_UNITS:
+            return None
+        factors.append(conversion_factor(unit, RMSE_REFERENCE_UNITS[dimension]))
+    return np.array(factors)
+
+
 def conversion_factor(source: str, target: str) -> float:
     """Factor turning a value in unit ``source`` into unit ``target`` (same dimension).
 

@@ -41,9 +41,11 @@ from rotorid.data import ManeuverSet
 from rotorid.errors import EstimationError, SimulationDivergedError
 from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.models import LinearModel
+from rotorid.model.parameter_units import rate_unit
 from rotorid.model.structure import ModelStructure
 from rotorid.plugin.manager import notify
 from rotorid.simulation.discretisation import COMPLEX_STEP
+from rotorid.units import rmse_reference_factors
 from rotorid_output_error.levenberg_marquardt import Settings, run
 
 from .kalman import Records, innovation_blocks
@@ -219,6 +221,16 @@ class FilterErrorProblem:
                                 + tuple(f"D_{s}" for s in disturbances)
                                 + tuple(f"T_{s}" for s in disturbances)
                                 + tuple(f"R_{o}" for o in structure.outputs))
+        signals = structure.signals
+        self.output_units = signals.outputs.units
+        self.parameter_units = {
+            **{f"F_{s}": signals.states[s].unit for s in process_noise},
+            **{f"D_{s}": rate_unit(signals.states[s].unit) for s in disturbances},
+            **{f"T_{s}": "s" for s in disturbances},
+            **{f"R_{o.name}": f"({o.unit})²" for o in signals.outputs}}
+        # The innovations' RMSE counts each output in its reference unit (a pure number).
+        scale = rmse_reference_factors(self.output_units)
+        self.rmse_scale = np.ones(len(self.output_names)) if scale is None else scale
 
     def split(self, values) -> NoiseParameters:
         """The parts of a parameter vector."""
@@ -283,7 +295,7 @@ class FilterErrorProblem:
             cost = float(np.exp(quadratic + log_det))
         if sign <= 0 or not np.isfinite(cost):
             return np.inf, None, None, np.inf
-        rmse = float(np.sqrt(np.sum(innovations**2)
+        rmse = float(np.sqrt(np.sum((innovations * self.rmse_scale)**2)
                              / (len(self.output_names) * self.n_samples)))
         return cost, b, self.records.split(innovations), rmse
 
@@ -470,7 +482,8 @@ class FilterErrorEstimator:
         return Estimate.from_fit(
             problem, values, information, estimator=NAME, start=start,
             noise_covariance=np.diag(problem.split(values).measurement), cost=result.cost,
-            rmse=result.rmse, n_samples=problem.n_samples, cost_history=result.cost_history,
+            rmse=result.rmse, residual_rms=result.residual_rms, n_samples=problem.n_samples,
+            cost_history=result.cost_history,
             rmse_history=result.rmse_history, iterations=result.iterations,
             converged=result.converged, stop_reason=result.stop_reason, at_bound=at_bound,
             notes=tuple(notes))

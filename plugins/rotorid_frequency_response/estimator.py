@@ -230,8 +230,10 @@ class FrequencyResponseEstimator:
         return Estimate.from_fit(
             model, result.values, jacobian.T @ jacobian / HESSIAN_SCALE, estimator=NAME,
             start=start, noise_covariance=np.diag(costs),
-            output_names=tuple(p.pair for p in pairs), cost=result.mismatch.cost,
-            rmse=_equivalent_db(result.mismatch.cost, len(pairs)),
+            output_names=tuple(p.pair for p in pairs), output_units=(),
+            cost=result.mismatch.cost, rmse=_equivalent_db(result.mismatch.cost, len(pairs)),
+            rmse_basis="sqrt(J_ave/20): the uniform magnitude error in dB that alone gives "
+                       "the mean mismatch cost, dimensionless",
             cost_history=result.cost_history,
             rmse_history=tuple(_equivalent_db(c, len(pairs)) for c in result.cost_history),
             iterations=result.iterations, converged=result.converged,

@@ -19,9 +19,14 @@ class WithOutputBiases:
         self.model = model
         self.maneuver_names = tuple(maneuver_names)
         self.output_names = model.output_names
+        self.output_units = tuple(getattr(model, "output_units", ()))
         self.n_base = len(model.parameter_names)
         self.parameter_names = tuple(model.parameter_names) + tuple(
             f"bias_{m}_{o}" for m in self.maneuver_names for o in self.output_names)
+        self.parameter_units = dict(getattr(model, "parameter_units", {}))
+        self.parameter_units.update(
+            {f"bias_{m}_{o}": unit for m in self.maneuver_names
+             for o, unit in zip(self.output_names, self.output_units)})
 
     def initial_values(self) -> np.ndarray:
         extra = len(self.parameter_names) - self.n_base
@@ -78,9 +83,14 @@ class WithInitialStates:
         self.structure = model.structure
         self.maneuver_names = tuple(maneuver_names)
         self.output_names = model.output_names
+        self.output_units = model.output_units
         self.n_base = len(model.parameter_names)
         self.parameter_names = tuple(model.parameter_names) + tuple(
             f"x0_{m}_{s}" for m in self.maneuver_names for s in self.structure.states)
+        states = self.structure.signals.states
+        self.parameter_units = {**model.parameter_units,
+                                **{f"x0_{m}_{s.name}": s.unit for m in self.maneuver_names
+                                   for s in states}}
         self.n_states = self.structure.n_states
 
     def start_states(self, maneuvers) -> np.ndarray:

@@ -3,9 +3,10 @@
 Deviation from the paper's plain procedure (documented in docs/estimation.md): by default the
 fit does not start Levenberg-Marquardt from zero on the full records. When the structure
 declares no start information (every initial value zero), start values come from an
-equation-error fit, and the fit then runs on growing initial portions of the maneuvers
-(``horizons``, in s) before the full records. Both keep the intermediate simulations of
-unstable hover dynamics bounded, so the iteration neither stalls nor diverges. ``start=
+equation-error fit; when that start is zero, unstable or diverges on the full records, the
+fit first runs on growing initial portions of the maneuvers (``horizons``, in s). Both keep the
+intermediate simulations of unstable hover dynamics bounded, so the iteration neither stalls
+nor diverges; a stable, well-started fit goes straight to the full records. ``start=
 "initial"`` and ``horizons=()`` restore the paper's procedure.
 """
 
@@ -29,6 +30,7 @@ from rotorid.estimation.models import (
 from rotorid.model.derivatives import delayed_derivative
 from rotorid.model.structure import ModelStructure
 from rotorid.plugin.manager import notify
+from rotorid.units import rmse_reference_factors
 
 from .augment import WithInitialStates, WithOutputBiases
 from .levenberg_marquardt import Problem, Settings, run
@@ -38,6 +40,9 @@ NAME = "output-error"
 #: reproduced exactly: noise-free data, whose R rests on the floor.
 EXACT_FRACTION = 1e-6
 START_STRATEGIES = ("auto", "initial", "equation-error")
+#: Growth rate (1/s, largest real part of A's eigenvalues) above which a start model counts as
+#: unstable, so that the fit goes through the horizons first.
+UNSTABLE_GROWTH_RATE = 1e-6
 
 
 def _check_choice(options):
@@ -112,7 +117,7 @@ class OutputErrorEstimator:
                 [start_values, np.zeros(len(fitted.parameter_names) - start_values.size)])
         columns, weights = self._output_selection(fitted)
         notes = [start_note] if start_note else []
-        result, start_values = self._best_of_starts(fitted, maneuvers, columns, weights,
+        result, start_values = self._best_of_starts(base, fitted, maneuvers, columns, weights,
                                                     start_values, notes)
         if np.array_equal(result.values, np.clip(start_values, *fitted.bounds())):
             result = attrs.evolve(result, converged=False, stop_reason=(
@@ -126,44 +131,49 @@ class OutputErrorEstimator:
                               sum(m.n_samples for m in maneuvers), columns)
 
     # ----------------------------------------------------------------- steps
-    def _best_of_starts(self, fitted, maneuvers, columns, weights, start_values, notes):
+    def _best_of_starts(self, base, fitted, maneuvers, columns, weights, start_values, notes):
         """Fit from ``start_values``; fall back to the model's initial values when that
         start makes the simulation diverge or ends above the cost of the initial values
         (a local minimum worse than doing nothing). Returns the result and its start."""
         fallback = np.clip(fitted.initial_values(), *fitted.bounds())
         try:
-            result = self._run_stages(fitted, maneuvers, columns, weights, start_values, notes)
+            result = self._run_stages(base, fitted, maneuvers, columns, weights, start_values,
+                                      notes)
         except SimulationDivergedError:
             if np.array_equal(np.clip(start_values, *fitted.bounds()), fallback):
                 raise
             notes.append("the start values gave no finite cost; restarted from the "
                          "initial values")
-            return (self._run_stages(fitted, maneuvers, columns, weights, fallback, notes),
+            return (self._run_stages(base, fitted, maneuvers, columns, weights, fallback, notes),
                     fallback)
         if np.array_equal(np.clip(start_values, *fitted.bounds()), fallback):
             return result, start_values
-        problem = Problem(_SelectedOutputs(fitted, columns), maneuvers,
-                          [z[:, columns] for z in measured_outputs(fitted, maneuvers)],
-                          weights, Settings(noise=self.noise))
+        problem = _problem(fitted, maneuvers, columns, weights, Settings(noise=self.noise))
         if result.cost <= problem.evaluate(fallback)[0]:
             return result, start_values
         notes.append("the fit from the start values ended above the cost of the initial "
                       "values; refitted from the initial values")
         try:
-            retry = self._run_stages(fitted, maneuvers, columns, weights, fallback, notes)
+            retry = self._run_stages(base, fitted, maneuvers, columns, weights, fallback, notes)
         except SimulationDivergedError:
             return result, start_values
         return (retry, fallback) if retry.cost < result.cost else (result, start_values)
 
-    def _run_stages(self, fitted, maneuvers, columns, weights, values, notes):
-        """Horizon continuation, then the full records; returns the last run's result.
+    def _run_stages(self, base, fitted, maneuvers, columns, weights, values, notes):
+        """Horizon continuation where it helps (:meth:`_horizons_help`), then the full
+        records; returns the last run's result.
 
         A stage whose start (the previous stage's result) diverges on its longer records
         starts again from the values the continuation began with.
         """
         first = values
+        horizons = self._stages(maneuvers)
+        reason = (self._horizons_help(base, fitted, maneuvers, columns, weights, values)
+                  if horizons else None)
+        if reason:
+            notes.append(f"horizons {', '.join(f'{h:g} s' for h in horizons)} first: {reason}")
         stages = [(h, Settings(max_iterations=15, cost_tolerance=1e-4, noise=self.noise))
-                  for h in self._stages(maneuvers)]
+                  for h in (horizons if reason else ())]
         stages.append((None, Settings(self.max_iterations, self.cost_tolerance,
                                       self.step_tolerance, noise=self.noise)))
         for horizon, settings in stages:
@@ -185,6 +195,27 @@ class OutputErrorEstimator:
                 notes.append(f"horizon {label}: {result.iterations} iterations, "
                              f"RMSE {result.rmse:.4g}")
         return result
+
+    def _horizons_help(self, base, fitted, maneuvers, columns, weights,
+                       values) -> str | None:
+        """Why the fit of ``fitted`` (``base`` with any record parameters) from ``values``
+        goes through the horizons first, or None when it goes straight to the full records:
+        the horizons help a zero start, a start model that is unstable (``base``'s optional
+        ``growth_rate`` above :data:`UNSTABLE_GROWTH_RATE`) and a start whose simulation of
+        the full records diverges; on a stable, well-started fit they only cost iterations."""
+        own = values[:len(base.parameter_names)]         # the base model's, then the records'
+        derivatives = np.array([delayed_derivative(n) is None for n in base.parameter_names],
+                               dtype=bool)
+        if not np.any(own[derivatives]):
+            return "zero start"
+        if hasattr(base, "growth_rate"):
+            rate = base.growth_rate(own)
+            if rate > UNSTABLE_GROWTH_RATE:
+                return f"the start model is unstable (growth rate {rate:.3g} 1/s)"
+        problem = _problem(fitted, maneuvers, columns, weights, Settings(noise=self.noise))
+        if not np.isfinite(problem.evaluate(values)[0]):
+            return "the start diverges on the full records"
+        return None
 
     def _start_values(self, model, maneuvers, start):
         names = tuple(model.parameter_names)
@@ -232,9 +263,7 @@ class OutputErrorEstimator:
 
     def _run(self, model, maneuvers, columns, weights, start, settings, stage,
              final_information: bool = True):
-        selected = _SelectedOutputs(model, columns)
-        measured = [z[:, columns] for z in measured_outputs(model, maneuvers)]
-        problem = Problem(selected, maneuvers, measured, weights, settings)
+        problem = _problem(model, maneuvers, columns, weights, settings)
 
         def progress(record):
             notify("rotorid_estimation_iteration", estimator=NAME, stage=stage,
@@ -250,16 +279,27 @@ class OutputErrorEstimator:
         at_bound = tuple(n for n, v, lo, hi in zip(names, result.values, lower, upper)
                          if (np.isfinite(lo) and v <= lo) or (np.isfinite(hi) and v >= hi))
         structure = getattr(base, "structure", None)
+        selected = _SelectedOutputs(fitted, columns)
         return Estimate.from_fit(
             fitted, result.values, result.information, estimator=NAME, start=start,
             noise_covariance=result.noise_covariance, cost=result.cost, rmse=result.rmse,
-            n_samples=n_samples, output_names=tuple(fitted.output_names[c] for c in columns),
+            n_samples=n_samples, output_names=selected.output_names,
+            output_units=selected.output_units, residual_rms=result.residual_rms,
             cost_history=result.cost_history, rmse_history=result.rmse_history,
             iterations=result.iterations, converged=result.converged,
             stop_reason=result.stop_reason, at_bound=at_bound,
             fixed=getattr(base, "fixed", {}), signs=getattr(base, "signs", {}),
             units=structure.units.name if structure is not None else "model",
             notes=tuple(notes))
+
+
+def _problem(model, maneuvers, columns, weights, settings) -> Problem:
+    """The run's problem on the outputs ``columns`` of ``model``, its RMSE counted in the
+    outputs' reference units when they have them (:func:`rotorid.units.rmse_reference_factors`)."""
+    selected = _SelectedOutputs(model, columns)
+    measured = [z[:, columns] for z in measured_outputs(model, maneuvers)]
+    scale = rmse_reference_factors(selected.output_units) if selected.output_units else None
+    return Problem(selected, maneuvers, measured, weights, settings, rmse_scale=scale)
 
 
 def _warn_exact_outputs(result, measured, weights, names) -> None:
@@ -285,6 +325,8 @@ class _SelectedOutputs:
         self.columns = list(columns)
         self.parameter_names = model.parameter_names
         self.output_names = tuple(model.output_names[c] for c in self.columns)
+        units = tuple(getattr(model, "output_units", ()))
+        self.output_units = tuple(units[c] for c in self.columns) if units else ()
 
     def simulate(self, values, maneuvers):
         return [y[:, self.columns] for y in self.model.simulate(values, maneuvers)]

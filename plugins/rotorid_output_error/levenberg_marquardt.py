@@ -67,7 +67,8 @@ class Progress:
 
 @attrs.frozen(eq=False)
 class RunResult:
-    """Outcome of one run; ``information`` is F at the final values."""
+    """Outcome of one run; ``information`` is F at the final values, ``residual_rms`` the
+    root mean square of each output's unweighted residual there, (n_o,) in its unit."""
 
     values: np.ndarray
     cost: float
@@ -79,17 +80,22 @@ class RunResult:
     iterations: int
     converged: bool
     stop_reason: str
+    residual_rms: np.ndarray
 
 
 class Problem:
     """Residuals, cost and derivatives of one model on one maneuver set."""
 
-    def __init__(self, model, maneuvers, measured, weights, settings: Settings):
+    def __init__(self, model, maneuvers, measured, weights, settings: Settings,
+                 rmse_scale=None):
         self.model = model
         self.maneuvers = maneuvers
         self.measured = measured
         self.weights = weights
         self.settings = settings
+        # Per-output factors into the reference units that make the RMSE a pure number
+        # (rotorid.units.rmse_reference_factors); ones leave it in the outputs' own units.
+        self.rmse_scale = np.ones(len(weights)) if rmse_scale is None else rmse_scale
         self.n_samples = sum(z.shape[0] for z in measured)
         power = sum(np.sum((z * weights) ** 2, axis=0) for z in measured) / self.n_samples
         # R is floored at a tiny fraction of each output's power, so that an output reproduced
@@ -109,7 +115,8 @@ class Problem:
 
     def evaluate(self, values):
         """(cost, R, residuals z − y, rmse) at ``values``; cost = inf when the simulation
-        diverges. The RMSE is that of the weighted residuals."""
+        diverges. The RMSE is that of the weighted residuals, each output scaled by its
+        ``rmse_scale``."""
         try:
             outputs = self.model.simulate(values, self.maneuvers)
         except SimulationDivergedError:
@@ -124,7 +131,8 @@ class Problem:
         cost = float(np.linalg.det(r))
         if not cost > 0.0:
             return np.inf, None, None, np.inf
-        stacked_rmse = float(np.sqrt(np.mean(np.diag(r - self.noise_floor))))
+        stacked_rmse = float(np.sqrt(np.mean(np.diag(r - self.noise_floor)
+                                             * self.rmse_scale**2)))
         return (cost if np.isfinite(cost) else np.inf), r, residuals, stacked_rmse
 
     def failure(self, values) -> str:
@@ -232,5 +240,6 @@ def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | Non
             break
     if final_information and not current:
         f, _ = problem.gauss_newton(values, r, residuals)
+    residual_rms = np.sqrt(sum(np.sum(e**2, axis=0) for e in residuals) / problem.n_samples)
     return RunResult(values, cost, current_rmse, r, f, tuple(costs), tuple(rmses), iteration,
-                     converged, reason)
+                     converged, reason, residual_rms)

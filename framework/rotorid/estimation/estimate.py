@@ -23,8 +23,10 @@ import numpy as np
 from rotorid.errors import EstimationError, IdentifiabilityWarning
 from rotorid.frozen import readonly_array
 from rotorid.model.derivatives import delay_parameter, delayed_derivative
+from rotorid.model.parameter_units import structure_parameter_units
 from rotorid.model.structure import ModelStructure
 from rotorid.notebook import estimate_html, estimate_summary
+from rotorid.units import RMSE_REFERENCE_UNITS, UNITS, rmse_reference_factors
 
 #: Condition number of the scaled information matrix above which parameters count as nearly
 #: unidentifiable.
@@ -102,6 +104,16 @@ def rmse(residuals: np.ndarray) -> float:
     return float(np.sqrt(np.mean(residuals**2)))
 
 
+def rmse_basis(output_units) -> str:
+    """What makes the RMSE over outputs in ``output_units`` a pure number: the reference
+    units its residuals are counted in (:data:`rotorid.units.RMSE_REFERENCE_UNITS`); ``""``
+    when an output has none, so that the RMSE mixes units."""
+    if not output_units or rmse_reference_factors(output_units) is None:
+        return ""
+    references = dict.fromkeys(RMSE_REFERENCE_UNITS[UNITS[u][0]] for u in output_units)
+    return f"dimensionless: eq. 18 with the residuals counted in {', '.join(references)}"
+
+
 # attrs metadata that drive the JSON record (Estimate.as_dict / from_dict):
 #: (P,) array stored per parameter, under this key of the parameter's entry;
 _COLUMN = "column"
@@ -109,6 +121,8 @@ _COLUMN = "column"
 _NORMALISED = "normalised"
 #: a name → text mapping stored per derivative (not per delay) under this key;
 _PER_DERIVATIVE = "per_derivative"
+#: a name → text mapping stored per parameter (delays included) under this key;
+_PER_PARAMETER = "per_parameter"
 #: a field stored under another key of the record;
 _KEY = "key"
 #: a (P, P) array (reshaped on reading, so that P = 0 round-trips).
@@ -120,7 +134,8 @@ class ParameterEstimate:
     """One parameter of an :class:`Estimate` (``estimate["L_p"]``).
 
     ``cramer_rao_pct`` and ``insensitivity_pct`` are normalised by the value (inf at 0);
-    ``sign`` is the prior (``"negative"``, ``"positive"`` or ``"none"``).
+    ``sign`` is the prior (``"negative"``, ``"positive"`` or ``"none"``); ``unit`` the unit of
+    the value and the bounds (``""`` when the model does not say).
     """
 
     name: str
@@ -131,6 +146,7 @@ class ParameterEstimate:
     insensitivity: float
     insensitivity_pct: float
     sign: str
+    unit: str = ""
 
 
 @attrs.frozen(eq=False)
@@ -139,7 +155,10 @@ class Estimate:
 
     Array attributes are read-only; shapes: ``values``, ``start``, ``cramer_rao``,
     ``insensitivity`` (P,), ``correlation`` and ``information`` (P, P), ``noise_covariance``
-    (n_o, n_o). Units follow the model (flight-test by default); delays are in s.
+    (n_o, n_o), ``residual_rms`` (n_o,) or (0,) when the estimator gives none. Units follow
+    the model (flight-test by default): ``output_units`` per output, ``parameter_units`` per
+    parameter (delays in s). ``rmse`` is dimensionless when ``rmse_basis`` says how; an empty
+    ``rmse_basis`` means it mixes the outputs' units and is not reported.
     An estimator builds one with :meth:`from_fit`; ``estimate["L_p"]`` gives one parameter.
     """
 
@@ -173,6 +192,12 @@ class Estimate:
                                            metadata={_PER_DERIVATIVE: "sign"})
     units: str = "flight-test"
     notes: tuple[str, ...] = attrs.field(default=(), converter=tuple)
+    output_units: tuple[str, ...] = attrs.field(default=(), converter=tuple)
+    residual_rms: np.ndarray = attrs.field(factory=lambda: np.zeros(0),
+                                           converter=readonly_array)
+    parameter_units: Mapping[str, str] = attrs.field(factory=dict, converter=dict,
+                                                     metadata={_PER_PARAMETER: "unit"})
+    rmse_basis: str = ""
 
     # ----------------------------------------------------------------- building
     @classmethod
@@ -195,15 +220,23 @@ class Estimate:
                 cost and RMSE histories, ``start`` the model's initial values.
 
         Derived: Cramér-Rao bounds, insensitivities, correlations and unidentifiable
-        combinations from F (:func:`statistics`); R = Σ eᵀe / N, cost det R and the RMSE
-        (eq. 18) from the residuals; sign priors, fixed derivatives, units and sign violations
-        from the structure.
+        combinations from F (:func:`statistics`); R = Σ eᵀe / N, cost det R, each output's
+        residual RMS and the RMSE (eq. 18, each residual in its reference unit when the
+        outputs have one: :func:`rmse_basis`) from the residuals; sign priors, fixed
+        derivatives, unit system and sign violations from the structure; output and
+        parameter units from the structure or the model's ``output_units`` and
+        ``parameter_units``. An estimator that passes its own ``rmse`` computes it over the
+        same reference units (:func:`rotorid.units.rmse_reference_factors`) or passes
+        ``rmse_basis`` too.
         """
         names = tuple(model.parameter_names)
         values = np.asarray(values, dtype=float)
         stats = statistics(information, names)
-        derived = {**_structure_facts(model), **_residual_facts(residuals)}
+        derived = _structure_facts(model)
+        derived.update(_residual_facts(residuals,
+                                       fields.get("output_units", derived["output_units"])))
         derived.update(fields)
+        derived.setdefault("rmse_basis", rmse_basis(derived["output_units"]))
         signs = derived.get("signs", {})
         derived.setdefault("sign_violations", tuple(
             n for n, v in zip(names, values)
@@ -244,7 +277,8 @@ class Estimate:
         return ParameterEstimate(
             name, float(self.values[i]), float(self.start[i]), float(self.cramer_rao[i]),
             float(self.cramer_rao_pct[i]), float(self.insensitivity[i]),
-            float(self.insensitivity_pct[i]), self.signs.get(name, "none"))
+            float(self.insensitivity_pct[i]), self.signs.get(name, "none"),
+            self.parameter_units.get(name, ""))
 
     def __contains__(self, name: object) -> bool:
         return name in self.parameter_names
@@ -304,8 +338,9 @@ class Estimate:
 
         Each parameter gets an entry under ``"parameters"`` (delays: under ``"delays"``,
         keyed without ``tau_``) holding the per-parameter columns, their normalised forms
-        (null where not finite) and, for derivatives, the sign prior. Every other field is
-        stored under its name or its metadata ``key``.
+        (null where not finite), its unit when known and, for derivatives, the sign prior.
+        Every other field is stored under its name or its metadata ``key``; ``rmse`` and
+        ``rmse_history`` are null when ``rmse_basis`` is empty (the RMSE would mix units).
         """
         fields = attrs.fields(type(self))
         parameters, delays = {}, {}
@@ -316,6 +351,9 @@ class Estimate:
                 if _NORMALISED in field.metadata:
                     normalised = field.metadata[_NORMALISED]
                     entry[normalised] = _number(getattr(self, normalised)[i])
+            for field in (f for f in fields if _PER_PARAMETER in f.metadata):
+                if name in getattr(self, field.name):
+                    entry[field.metadata[_PER_PARAMETER]] = getattr(self, field.name)[name]
             derivative = delayed_derivative(name)
             if derivative is not None:
                 delays[derivative] = entry
@@ -324,14 +362,20 @@ class Estimate:
                 entry[field.metadata[_PER_DERIVATIVE]] = getattr(self, field.name).get(name,
                                                                                       "none")
             parameters[name] = entry
+        per_parameter = (_COLUMN, _PER_DERIVATIVE, _PER_PARAMETER)
         record = {field.metadata.get(_KEY, field.name): _plain(getattr(self, field.name))
                   for field in fields
-                  if _COLUMN not in field.metadata and _PER_DERIVATIVE not in field.metadata}
+                  if not any(key in field.metadata for key in per_parameter)}
+        if not self.rmse_basis:
+            record.update(rmse=None, rmse_history=None)
         return {**record, "parameters": parameters, "delays": delays}
 
     @classmethod
     def from_dict(cls, record: Mapping) -> "Estimate":
-        """Rebuild an estimate from :meth:`as_dict` output (e.g. a saved ``result.json``)."""
+        """Rebuild an estimate from :meth:`as_dict` output (e.g. a saved ``result.json``).
+
+        Fields the record lacks take their defaults when they have one (records written
+        before the field existed); a null ``rmse`` becomes NaN."""
         try:
             names = tuple(record["parameter_names"])
             entries = {**record["parameters"],
@@ -343,15 +387,22 @@ class Estimate:
                     key = metadata[_COLUMN]
                     fields[field.name] = [np.inf if entries[n][key] is None else entries[n][key]
                                           for n in names]
-                elif _PER_DERIVATIVE in metadata:
-                    key = metadata[_PER_DERIVATIVE]
-                    fields[field.name] = {n: e[key] for n, e in record["parameters"].items()
-                                          if key in e}
+                elif _PER_DERIVATIVE in metadata or _PER_PARAMETER in metadata:
+                    key = metadata.get(_PER_DERIVATIVE) or metadata[_PER_PARAMETER]
+                    table = (record["parameters"] if _PER_DERIVATIVE in metadata
+                             else entries)
+                    fields[field.name] = {n: e[key] for n, e in table.items() if key in e}
                 elif metadata.get(_SQUARE):
                     fields[field.name] = np.array(record[field.name], dtype=float).reshape(
                         len(names), len(names))
-                else:
+                elif metadata.get(_KEY, field.name) in record:
                     fields[field.name] = record[metadata.get(_KEY, field.name)]
+                elif field.default is attrs.NOTHING:
+                    raise KeyError(metadata.get(_KEY, field.name))
+            if fields.get("rmse", 0.0) is None:
+                fields["rmse"] = math.nan
+            if fields.get("rmse_history", ()) is None:
+                fields["rmse_history"] = ()
             return cls(**fields)
         except (KeyError, TypeError, ValueError) as error:
             raise EstimationError(f"not a complete rotorid estimate record: {error!r}") from None
@@ -360,16 +411,20 @@ class Estimate:
         return json.dumps(self.as_dict(), indent=2)
 
     def report(self, correlation_threshold: float = 0.9) -> str:
-        """Sectioned text report: fit statistics, parameters, flags, strong correlations."""
+        """Sectioned text report: fit statistics, each output's residual RMS and noise
+        standard deviation in its unit, parameters with their units and flags, fixed
+        derivatives, strong correlations and notes."""
         lines = ["[[Fit statistics]]",
                  f"    estimator          = {self.estimator}",
                  f"    converged          = {self.converged} ({self.stop_reason})",
                  f"    iterations         = {self.iterations}",
                  f"    samples            = {self.n_samples} × {len(self.output_names)} outputs",
                  f"    cost               = {self.cost:.6g}",
-                 f"    RMSE               = {self.rmse:.6g}",
-                 "[[Parameters]]",
-                 f"    {'name':<12}{'value':>14}{'CR bound':>13}{'CR %':>9}{'insens %':>10}  flags"]
+                 f"    RMSE               = {self._rmse_line()}"]
+        lines.extend(self._output_lines())
+        lines += ["[[Parameters]]",
+                  f"    {'name':<12}{'value':>14}{'CR bound':>13}{'CR %':>9}{'insens %':>10}"
+                  f"  {'unit':<24}flags"]
         for i, name in enumerate(self.parameter_names):
             flags = []
             if name in self.sign_violations:
@@ -380,7 +435,7 @@ class Estimate:
                 flags.append("unidentifiable")
             lines.append(f"    {name:<12}{self.values[i]:>14.6g}{self.cramer_rao[i]:>13.4g}"
                          f"{_pct(self.cramer_rao_pct[i]):>9}{_pct(self.insensitivity_pct[i]):>10}"
-                         f"  {', '.join(flags)}")
+                         f"  {self.parameter_units.get(name, '–'):<24}{', '.join(flags)}".rstrip())
         if self.fixed:
             lines.append("[[Fixed]]")
             lines.extend(f"    {name:<12}{value:>14.6g}" for name, value in self.fixed.items())
@@ -397,6 +452,30 @@ class Estimate:
             lines.append("[[Notes]]")
             lines.extend(f"    {note}" for note in self.notes)
         return "\n".join(lines)
+
+
+    def _rmse_line(self) -> str:
+        """The RMSE and what makes it dimensionless, or why it is not given."""
+        if self.rmse_basis:
+            return f"{self.rmse:.6g} ({self.rmse_basis})"
+        if self.output_units:
+            units = sorted({u for u in self.output_units
+                            if rmse_reference_factors([u]) is None})
+            return (f"not given: outputs in {', '.join(units)} have no reference unit, so the "
+                    f"RMSE would mix units; see [[Outputs]]")
+        return "not given: the model declares no output units, so the RMSE would mix units"
+
+    def _output_lines(self) -> list[str]:
+        """The [[Outputs]] section: residual RMS and √R_jj per output, in its unit."""
+        if not self.residual_rms.size:
+            return []
+        units = self.output_units or ("–",) * len(self.output_names)
+        noise = np.sqrt(np.diag(self.noise_covariance))
+        return ["[[Outputs]] (residual RMS and noise standard deviation √R_jj, output units)",
+                f"    {'name':<12}{'unit':<10}{'residual RMS':>14}{'√R_jj':>14}",
+                *(f"    {name:<12}{unit:<10}{rms:>14.4g}{sd:>14.4g}"
+                  for name, unit, rms, sd in zip(self.output_names, units, self.residual_rms,
+                                                 noise))]
 
 
 def _number(value: float) -> float | None:
@@ -416,27 +495,39 @@ def _plain(value):
 
 
 def _structure_facts(model) -> dict:
-    """Output names, sign priors, fixed derivatives and units of a fitted model."""
+    """Output names and units, parameter units, sign priors, fixed derivatives and unit
+    system of a fitted model (a structure, or a model with optional ``output_units``,
+    ``parameter_units`` and ``structure``)."""
     if isinstance(model, ModelStructure):
         structure, outputs = model, model.outputs
+        output_units, parameter_units = model.signals.outputs.units, {}
     else:
         structure, outputs = getattr(model, "structure", None), model.output_names
-    facts = {"output_names": tuple(outputs)}
+        output_units = getattr(model, "output_units", ())
+        parameter_units = getattr(model, "parameter_units", {})
+    facts = {"output_names": tuple(outputs), "output_units": tuple(output_units)}
     if isinstance(structure, ModelStructure):
+        parameter_units = {**structure_parameter_units(structure), **parameter_units}
         facts.update(signs={d.name: d.sign.value for d in structure.free_derivatives},
                      fixed={d.name: d.initial for d in structure.derivatives if d.fixed},
                      units=structure.units.name)
+    names = set(model.parameter_names)
+    facts["parameter_units"] = {n: u for n, u in parameter_units.items() if n in names and u}
     return facts
 
 
-def _residual_facts(residuals) -> dict:
-    """R = Σ eᵀe / N, its determinant (the cost), the RMSE and N from per-maneuver residuals."""
+def _residual_facts(residuals, output_units) -> dict:
+    """R = Σ eᵀe / N, its determinant (the cost), each output's residual RMS, the RMSE
+    (residuals in their reference units where ``output_units`` have them) and N, from
+    per-maneuver (N_i, n_o) residuals."""
     if residuals is None:
         return {}
     stacked = np.concatenate([np.asarray(e, dtype=float) for e in residuals])
     noise = stacked.T @ stacked / len(stacked)
+    factors = rmse_reference_factors(output_units) if output_units else None
     return {"noise_covariance": noise, "cost": float(np.linalg.det(noise)),
-            "rmse": rmse(stacked), "n_samples": len(stacked)}
+            "rmse": rmse(stacked if factors is None else stacked * factors),
+            "residual_rms": np.sqrt(np.diag(noise)), "n_samples": len(stacked)}
 
 
 def _pct(value: float) -> str:

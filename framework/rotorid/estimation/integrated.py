@@ -107,6 +107,11 @@ class IntegratedModel:
         self.parameter_names = tuple(parameters[k].name for k in self._free) + tuple(
             f"x0_{m}_{s}" for m in self._maneuver_names for s in initial.estimated)
         self.output_names = self.signals.outputs.names
+        self.output_units = self.signals.outputs.units
+        self.parameter_units = {p.name: p.unit for p in parameters if p.unit}
+        self.parameter_units.update(
+            {f"x0_{m}_{s}": self.signals.states[s].unit
+             for m in self._maneuver_names for s in initial.estimated})
         self.fixed = {p.name: p.start for p in parameters if p.fixed}
         self._cache: dict[int, tuple[ManeuverSet, list[_Record]]] = {}
         self._start_states = (np.concatenate([r.initial_state[self._estimated]

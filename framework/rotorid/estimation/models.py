@@ -10,7 +10,9 @@ is identifiable; ``sensitivities(values, maneuvers) -> (outputs, list of (N_i, P
 optional (central finite differences are used otherwise, see
 :func:`finite_difference_sensitivities`), and so is ``gauss_newton(values, maneuvers,
 residuals, weighting) -> (F, G)``, the products of :func:`gauss_newton_products` computed
-without storing the sensitivities. Outputs are compared with the maneuvers' measured outputs
+without storing the sensitivities. So are ``output_units`` (tuple of unit labels, one per
+output) and ``parameter_units`` (name → unit), which the fit report prints; a model without
+them is reported without units. Outputs are compared with the maneuvers' measured outputs
 picked by ``output_names``, or with those of the optional ``measured(maneuvers) -> list of
 (N_i, n_o)`` (a model that reads its own signals from the data, such as
 :class:`rotorid.estimation.integrated.IntegratedModel`). A nonlinear model of one's own
@@ -27,6 +29,7 @@ from rotorid.data import ManeuverSet
 from rotorid.errors import StructureError
 from rotorid.estimation.integrated import IntegratedModel
 from rotorid.model.nonlinear import NonlinearModel
+from rotorid.model.parameter_units import structure_parameter_units
 from rotorid.model.structure import ModelStructure
 from rotorid.simulation.simulator import Simulator, weighting_factor
 
@@ -112,6 +115,8 @@ class LinearModel:
         self.enforce_signs = enforce_signs
         self.parameter_names = structure.parameter_names
         self.output_names = structure.outputs
+        self.output_units = structure.signals.outputs.units
+        self.parameter_units = structure_parameter_units(structure)
         self._simulators: dict[int, tuple[ManeuverSet, Simulator]] = {}
 
     def initial_values(self) -> np.ndarray:
@@ -143,6 +148,12 @@ class LinearModel:
     @property
     def fixed(self) -> dict[str, float]:
         return {d.name: d.initial for d in self.structure.derivatives if d.fixed}
+
+    def growth_rate(self, values) -> float:
+        """The largest real part of the eigenvalues of A at ``values`` (1/s, delays left
+        out): positive when the model is unstable."""
+        a = self.structure.matrices(values)[0]
+        return float(np.max(np.linalg.eigvals(a).real)) if a.size else 0.0
 
     def start_values(self, maneuvers: ManeuverSet) -> np.ndarray:
         """Equation-error start values (see :mod:`rotorid.estimation.equation_error`)."""
