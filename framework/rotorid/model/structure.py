@@ -26,6 +26,7 @@ form the parameter vector in :attr:`ModelStructure.parameter_names` order.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Iterable, Mapping
 
@@ -33,6 +34,7 @@ import attrs
 import numpy as np
 
 from rotorid.errors import StructureError
+from rotorid.frozen import readonly_array
 from rotorid.model.derivatives import (
     DEFAULT_DELAY_UPPER,
     Delay,
@@ -179,6 +181,16 @@ class TermTable:
     delay: np.ndarray
     output: np.ndarray
     weight: np.ndarray
+
+
+@functools.lru_cache(maxsize=256)
+def _known_terms(template: StructureTemplate, condition: FlightCondition,
+                 units: UnitSystem) -> KnownTerms:
+    """The known terms, computed once per template, condition and units: every simulation,
+    discretisation and frequency response of a fit asks for them."""
+    terms = template.known_terms(condition, units)
+    return KnownTerms(*(readonly_array(getattr(terms, f.name))
+                        for f in attrs.fields(KnownTerms)))
 
 
 @attrs.frozen
@@ -428,8 +440,8 @@ class ModelStructure:
     # ----------------------------------------------------------------- matrices
     def known_terms(self) -> KnownTerms:
         """The template's known A0, C0, D0 and W at this condition, in this structure's units
-        (:class:`~rotorid.model.templates.KnownTerms`)."""
-        return self.template.known_terms(self.condition, self.units)
+        (:class:`~rotorid.model.templates.KnownTerms`, read-only arrays)."""
+        return _known_terms(self.template, self.condition, self.units)
 
     def known_state_matrix(self) -> np.ndarray:
         """The known terms of A (gravity, kinematics …), shape (n, n)."""
@@ -457,19 +469,23 @@ class ModelStructure:
         free = {n: v for n, v in zip(self.parameter_names, vector)}
         sources = self.states + self.controls
         measured = self.known_terms().measured
+        # Looked up once per call: every derivative fits the template (checked when built).
+        rows = {letter: self.states.index(state) for letter, state in self.template.equations}
+        readers = [np.flatnonzero(measured[:, row]) for row in range(self.n_states)]
         equation, source, gain, delay, output, weight = [], [], [], [], [], []
         for d in self.derivatives:
-            row = self.states.index(self.equation_of(d))
+            letter, variable = parse_name(d.name)
+            row = rows[letter]
             equation.append(row)
-            source.append(sources.index(d.variable))
+            source.append(sources.index(variable))
             gain.append(d.initial if d.fixed else free[d.name])
             if d.delay is None:
                 delay.append(0.0)
             else:
                 delay.append(d.delay.initial if d.delay.fixed else free[d.delay_name])
-            readers = np.flatnonzero(measured[:, row])
-            output.append(int(readers[0]) if readers.size else -1)
-            weight.append(float(measured[readers[0], row]) if readers.size else 0.0)
+            reader = readers[row]
+            output.append(int(reader[0]) if reader.size else -1)
+            weight.append(float(measured[reader[0], row]) if reader.size else 0.0)
         as_int = lambda x: np.array(x, dtype=int)  # noqa: E731
         return TermTable(as_int(equation), as_int(source), np.array(gain, dtype=float),
                          np.array(delay, dtype=float), as_int(output),
