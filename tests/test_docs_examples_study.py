@@ -4,7 +4,7 @@ study_hover.py and study_forward.py run the built-in cases' quick variants: by d
 from the reduction steps of the session's shared quick study (``quick_study`` in conftest.py),
 from scratch in the slow suite (about 20 s each); own_flight_data.py identifies from CSV files
 it writes itself, custom_estimator.py registers an equation-error estimator plugin and runs a
-case with it.
+case with it; turbulence_montecarlo.py (slow) repeats both estimators in turbulence.
 """
 
 import importlib.util
@@ -288,3 +288,24 @@ def _forget_example_modules():
     yield
     sys.path[:] = path
     sys.modules.pop("study_hover", None)
+
+
+@pytest.mark.slow
+def test_output_error_bounds_underestimate_the_spread_in_turbulence(tmp_path):
+    """docs/examples/turbulence_montecarlo.py reduced (docs/estimation.md has its 30 runs):
+    eight runs on half-length records: output error's median std/CR over the
+    longitudinal derivatives with finite bounds is above 2, filter error's below output
+    error's."""
+    _load("turbulence_montecarlo").main(["--runs", "8", "--duration-scale", "0.5",
+                                         "--out", str(tmp_path)])
+    ratios = {}
+    for name in ("output-error", "filter-error"):
+        record = json.loads((tmp_path / f"{name}.json").read_text())
+        derivatives = [n for n in record["parameter_names"] if n[0] in "XZM" and n[1] == "_"]
+        rows = [record["parameters"][n] for n in derivatives]
+        # runs that diverge leave infinite bounds (None in the record): no ratio there
+        ratios[name] = float(np.median([r["ratio"] for r in rows
+                                        if r["mean_cramer_rao"] is not None]))
+    assert (tmp_path / "turbulence_montecarlo.png").is_file()
+    assert ratios["output-error"] > 2.0, ratios
+    assert ratios["filter-error"] < ratios["output-error"], ratios
