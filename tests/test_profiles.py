@@ -64,3 +64,17 @@ def test_the_profile_figure_draws_one_line_and_one_marker_per_delay(fitted):
     assert axis.get_yscale() == "symlog"          # shallow and steep profiles both read
     legend = axis.get_legend()
     assert legend.get_bbox_to_anchor().x0 > axis.get_window_extent().x1 - 1   # outside the axes
+
+
+def test_a_refit_that_did_not_converge_is_a_cross_off_the_line():
+    from rotorid.estimation.profiles import DelayProfile
+    from rotorid.report.plots.profiles import plot_delay_profiles
+
+    profile = DelayProfile("tau_L_p", [0.0, 0.1, 0.2], [2.0, 1.0, 9.0], [1.02, 1.0, 1.7],
+                           [True, True, False], 0.1, 1.0, 1.0)
+    axis = plot_delay_profiles([profile]).axes[0]
+    line, star, cross, proxy = axis.get_lines()
+    assert np.isnan(line.get_ydata()[2]) and line.get_ydata()[:2] == pytest.approx([2.0, 0.0])
+    assert cross.get_marker() == "x" and cross.get_xdata().tolist() == [0.2]
+    assert cross.get_ydata() == pytest.approx([70.0])
+    assert "did not converge" in proxy.get_label()

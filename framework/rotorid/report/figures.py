@@ -56,7 +56,8 @@ def _profiles_caption(profiles) -> str:
     return ("Delay profiles of the model with delays: for each kept delay, the RMSE (eq. 18) "
             f"with that delay fixed at each of {points} values from 0 s and every other "
             "parameter (the other delays included) refitted, relative to the RMSE of the fit "
-            "with all delays free (%); the star marks the free fit's delay. A deep, narrow "
+            "with all delays free (%; linear within ±1 %, logarithmic beyond); the star marks "
+            "the free fit's delay, crosses refits that did not converge. A deep, narrow "
             "minimum is a delay the data determine; a shallow one is a trade between the delay "
             "and the gains, whatever its Cramér-Rao bound says. det R of every refit is in "
             "result.json (delay_profiles).")
