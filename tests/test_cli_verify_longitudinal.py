@@ -130,15 +130,7 @@ description = "longitudinal-only records"
 source = "files"
 identification = "{ident}"
 verification = "{sweeps}"
-
-[condition]
-u0_fps = 60.0
-w0_fps = 4.0
-theta0_deg = 4.0
-
-[structure]
-template = "longitudinal"
-
+""" + MODEL.split("\n", 1)[1] + """
 [reduction]
 continue_to_zero = false
 
