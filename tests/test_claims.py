@@ -29,8 +29,8 @@ def test_sign_claims_carry_the_truth_models_value_and_their_verdicts():
     result = _result(truth={"M_w": 0.34}, **{"no delays": model, "with delays": model})
     m_w = sign_claim(result, "M_w", -1)
     assert m_w.claim == "M_w < 0" and m_w.verdict == "does not hold"
-    assert m_w.evidence == ("identified +0.09 ± 0.01 (rad/s²)/(m/s); "
-                            "truth model +0.34 (rad/s²)/(m/s)")
+    assert m_w.evidence == ("identified +0.09 ± 0.01 rad/s² per m/s; "
+                            "truth model +0.34 rad/s² per m/s")
     assert sign_claim(result, "L_v", -1).verdict == "holds"
     undetermined = sign_claim(result, "N_v", +1)           # |value| < 2 Cramér-Rao bounds
     assert undetermined.verdict == "not checked" and "Cramér-Rao" in undetermined.reason

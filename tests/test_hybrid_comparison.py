@@ -80,7 +80,7 @@ def test_report_tables_of_the_three_models(comparison):
     assert [row[0] for row in models[1:]] == list(HYBRID_MODELS)
     assert models[0][4:6] == ["J q/long [-]", "J p/lat [-]"]
     terms = {row[0]: row for row in hybrid_term_rows(result)[1:]}
-    assert terms["M_beta1c"][1] == "(deg/s²)/(deg)"
+    assert terms["M_beta1c"][1] == "1/s²"
     assert float(terms["τ_f = −1/Bc_beta1c"][5]) == pytest.approx(1.0, abs=0.05)
     assert "tau_Bs_lat" in terms
     assert 'id="hybrid"' in hybrid_html(result)

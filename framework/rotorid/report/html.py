@@ -67,10 +67,13 @@ def _number(value, digits: int = 4) -> str:
     return f"{value:.{digits}g}"
 
 
-def parameter_unit(name: str, units: str) -> str:
-    """Unit of an estimated parameter: s for a delay, the state's unit for filter error's
-    process noise ``F_<state>`` (per sample), the output's unit squared for its measurement
-    noise ``R_<output>``, else the derivative's unit."""
+def parameter_unit(name: str, units: str, estimate=None) -> str:
+    """Unit of an estimated parameter: the one ``estimate`` states for it (its model's own
+    signals), else s for a delay, the state's unit for filter error's process noise
+    ``F_<state>`` (per sample), the output's unit squared for its measurement noise
+    ``R_<output>``, else the helicopter derivative's unit."""
+    if estimate is not None and estimate.parameter_units.get(name):
+        return estimate.parameter_units[name]
     if delayed_derivative(name):
         return "s"
     kind, _, signal = name.partition("_")
@@ -105,7 +108,8 @@ def parameter_rows(result) -> list[list[str]]:
     rows = [header]
     units = result.estimates["with delays"].units
     for name in names:
-        row = [name, parameter_unit(name, units)]
+        stating = next(e for e in result.estimates.values() if name in e.parameter_names)
+        row = [name, parameter_unit(name, units, stating)]
         for label in MODELS:
             estimate = result.estimates[label]
             if name not in estimate.parameter_names:
@@ -126,7 +130,7 @@ def key_derivative_rows(result) -> list[list[str]]:
         for name in KEY_DERIVATIVES:
             if name in estimate.parameter_names:
                 i = estimate.index(name)
-                rows.append([name, derivative_unit(name, estimate.units),
+                rows.append([name, parameter_unit(name, estimate.units, estimate),
                              _number(float(estimate.values[i])),
                              _number(float(estimate.cramer_rao[i]), 3)])
         return rows
@@ -261,7 +265,8 @@ def estimator_rows(result) -> list[list[str]]:
     rows = [header + ([] if truth is None else ["truth linearisation"])]
     names = list(dict.fromkeys(n for e in estimates.values() for n in e.parameter_names))
     for parameter in names:
-        row = [parameter, parameter_unit(parameter, units)]
+        stating = next(e for e in estimates.values() if parameter in e.parameter_names)
+        row = [parameter, parameter_unit(parameter, units, stating)]
         for estimate in estimates.values():
             if parameter in estimate:
                 item = estimate[parameter]

@@ -20,6 +20,8 @@ from collections.abc import Mapping
 import attrs
 
 from rotorid.model.derivatives import EQUATION_OF_LETTER, parse_name
+from rotorid.model.parameter_units import control_unit
+from rotorid.model.parameter_units import derivative_unit as unit_of_derivative
 from rotorid.model.templates import HYBRID, StructureTemplate
 from rotorid.units import CHANNEL_KINDS, channel_scale, unit_system
 
@@ -60,20 +62,18 @@ def derivative_scale(name: str, units: str) -> float:
     return float(row / column)
 
 
-#: The kind of a signal's time derivative.
-_RATE_OF = {"velocity": "acceleration", "rate": "angular-acceleration", "angle": "rate"}
-
-
 def derivative_unit(name: str, units: str, template: StructureTemplate = HYBRID) -> str:
-    """Unit label of a derivative of ``template``, e.g. ``'1/s'`` or ``'(deg/s²)/(ft/s)'``
-    (default: the hybrid's equations and signals, which include the six-dof's)."""
+    """Unit label of a derivative of ``template`` in the unit system ``units``, e.g. ``'1/s'``
+    or ``'deg/s² per ft/s'`` (default: the hybrid's equations and signals, which include the
+    six-dof's); spelled as a fit report spells it
+    (:func:`rotorid.model.parameter_units.derivative_unit`)."""
     letter, variable = parse_name(name)
     system = unit_system(units)
     kinds = {**CHANNEL_KINDS, **template.kind_of}
-    row = kinds[dict(template.equations)[letter]]
-    if row == kinds.get(variable):
-        return "1/s"
-    return f"({system.unit_of(_RATE_OF[row])})/({system.unit_of(kinds[variable])})"
+    state = dict(template.equations)[letter]
+    variable_unit = (control_unit(variable) if kinds[variable] == "control"
+                     else system.unit_of(kinds[variable]))
+    return unit_of_derivative(system.unit_of(kinds[state]), variable_unit)
 
 
 @attrs.frozen
