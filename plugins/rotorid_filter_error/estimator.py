@@ -138,7 +138,7 @@ def measuring_output(structure: ModelStructure, state: str) -> tuple[int | None,
     return (int(rate[0]), True) if rate.size else (None, False)
 
 
-def _innovation_ratio(problem: "FilterErrorProblem", values: np.ndarray):
+def _innovation_scatter(problem: "FilterErrorProblem", values: np.ndarray):
     """(mean square innovation (p,), B (p, p)) at ``values``; None when the filter does not
     exist or the innovations overflow there."""
     try:
@@ -167,7 +167,7 @@ def matched_measurement_noise(problem: "FilterErrorProblem", values: np.ndarray,
             if n.startswith("R_") and n not in keep]
     outputs = [problem.output_names.index(problem.parameter_names[i][2:]) for i in rows]
     for _ in range(_MATCH_PASSES if rows else 0):
-        found = _innovation_ratio(problem, values)
+        found = _innovation_scatter(problem, values)
         if found is None:
             return values
         mean_square = found[0][outputs]
