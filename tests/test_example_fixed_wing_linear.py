@@ -56,8 +56,9 @@ def _records():
             "mixed": (doublet, pulse(4.0, 5.0, 500.0))}, time
 
 
-def write_records(directory: Path, seed: int = 3) -> None:
-    """One CSV per record with the file's own column names and units."""
+def write_records(directory: Path, seed: int = 3, elevator_in_rad: bool = False) -> None:
+    """One CSV per record with the file's own column names and units (the elevator in deg,
+    or in rad with ``elevator_in_rad``)."""
     rng = np.random.default_rng(seed)
     system = scipy.signal.cont2discrete(hand_model(), DT, method="zoh")
     records, time = _records()
@@ -67,8 +68,9 @@ def write_records(directory: Path, seed: int = 3) -> None:
         u = np.column_stack([elevator_deg, thrust])
         _, y, _ = scipy.signal.dlsim(system[:4] + (DT,), u, time)
         y = y * to_file + rng.normal(0.0, NOISE, y.shape)
+        elevator = np.radians(elevator_deg) if elevator_in_rad else elevator_deg
         header = ",".join(("time", "DELE_deg", "THRUST_N") + COLUMNS)
-        table = np.column_stack([time, elevator_deg, thrust, y])
+        table = np.column_stack([time, elevator, thrust, y])
         np.savetxt(directory / f"{name}.csv", table, delimiter=",", header=header, comments="")
 
 
@@ -89,6 +91,22 @@ def test_the_declared_aeroplane_model_identifies_from_its_own_columns(tmp_path, 
         assert abs(row.value - truth) <= max(4 * row.cramer_rao, 0.02 * abs(truth)), (name, row)
     report = capsys.readouterr().out
     assert "M_elevator" in report
+
+
+def test_a_control_recorded_in_another_unit_is_converted_into_the_declared_one(tmp_path,
+                                                                               capsys):
+    model = tmp_path / "model.toml"
+    model.write_text(EXAMPLE.read_text().replace(
+        'DELE_deg = { signal = "elevator", unit = "deg" }',
+        'DELE_deg = { signal = "elevator", unit = "rad" }'))
+    data = tmp_path / "records"
+    data.mkdir()
+    write_records(data, elevator_in_rad=True)
+    out = tmp_path / "result.json"
+    assert main(["identify", str(model), str(data), "--out", str(out), "--quiet"]) == 0
+    estimate = load_result(out).estimate
+    assert estimate["M_elevator"].value == pytest.approx(TRUTH["M_elevator"], rel=0.02)
+    assert estimate.parameter_units["M_elevator"] == "rad/s² per deg"
 
 
 def test_the_declaration_round_trips_through_a_saved_model_file(tmp_path):
@@ -112,6 +130,7 @@ def test_the_structure_equals_the_hand_written_model():
     (('equations = { X = "V"', 'equations = { X = "U"'), "X drives 'U', which is not a state"),
     (('az = { "d(alpha)" = 50.0, q = -50.0 }', ''), "output az has no output equation"),
     (('q = "rate", theta', 'q = "spin", theta'), "unknown signal kind 'spin'"),
+    (('elevator = "deg"', 'elevator = "m/s"'), "controls.elevator = 'm/s'"),
     (('[derivatives.M_q]', '[derivatives.M_beta]'), "M_beta does not fit"),
     (('AOA_deg = { signal = "alpha", unit = "deg" }', 'AOA_deg = { signal = "alpha", unit = "m/s" }'),
      "does not fit"),

@@ -118,6 +118,21 @@ class Ingestion:
     signals: ModelSignals | None = None
     keep_columns: tuple[str, ...] = attrs.field(default=(), converter=tuple)
 
+    def _control_factor(self, link) -> float:
+        """Factor from a control column's unit into the unit the model states for that control
+        (1 where it states none: controls keep the data's unit)."""
+        if self.signals is None or link.signal not in self.signals.inputs:
+            return 1.0
+        stated = self.signals.inputs[link.signal].unit
+        if stated == link.unit or stated == "%":
+            return 1.0
+        try:
+            return conversion_factor(link.unit, stated)
+        except SignalError:
+            raise DataError(f"{self.channels.source}: column {link.column!r} is in {link.unit}, "
+                            f"which does not convert into {link.signal!r}'s {stated}; give the "
+                            f"column's unit in a {stated}-like unit") from None
+
     def kind(self, channel: str) -> str | None:
         """Physical kind of ``channel``: the model's signal's when :attr:`signals` declares
         it, else the shipped channel's, else ``None`` (read as recorded)."""
@@ -160,7 +175,7 @@ class Ingestion:
                                 f"does not fit {link.signal!r} ({kind}); give one of "
                                 f"{', '.join(units_of_kind(kind))}")
             result[link.signal] = (link.scale * np.asarray(columns[link.column], dtype=float)
-                                   + link.offset)
+                                   + link.offset) * self._control_factor(link)
             if kind not in (None, "control"):
                 units[link.signal] = link.unit
         return result, attrs.evolve(self, channels=ChannelMap(), channel_units=units)

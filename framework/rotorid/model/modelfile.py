@@ -66,7 +66,7 @@ from rotorid.io import atomic_write, require_file
 from rotorid.model.derivatives import Derivative
 from rotorid.model.signals import ChannelMap
 from rotorid.model.structure import FlightCondition, ModelStructure
-from rotorid.units import FLIGHT_TEST
+from rotorid.units import FLIGHT_TEST, canonical_unit, unit_fits_kind, units_of_kind
 from rotorid.model.templates import SIX_DOF, TEMPLATES, DeclaredTerms, StructureTemplate
 
 POPULATE = ("all", "none")
@@ -189,6 +189,20 @@ def _signals(settings: Mapping, key: str, where: str) -> dict[str, str]:
     return dict(table)
 
 
+def _control_unit(name: str, value: str, where: str) -> str:
+    """A declared control's unit: ``"control"`` (% of travel) or a unit label of a travel, a
+    deflection or a force."""
+    try:
+        unit = canonical_unit(value)
+    except RotoridError:
+        unit = None
+    if unit is None or not unit_fits_kind(unit, "control"):
+        raise DataFileError(f"{where} controls.{name} = {value!r}: give \"control\" (% of "
+                            f"travel) or the unit the data record it in, one of "
+                            f"{', '.join(units_of_kind('control'))}")
+    return unit
+
+
 def _coefficients(table, where: str) -> list[tuple[str, str, float]]:
     rows = []
     for target, terms in _require("table", table, where).items():
@@ -207,6 +221,9 @@ def _declared_template(settings: Mapping, where: str) -> StructureTemplate:
     states = _signals(settings, "states", where)
     controls = _signals(settings, "controls", where)
     outputs = _signals(settings, "outputs", where)
+    control_units = {name: _control_unit(name, value, where) for name, value in controls.items()
+                     if value != "control"}
+    controls = {name: "control" for name in controls}
     kinds = {**outputs, **controls, **states}
     clash = [n for n in outputs if n in states and outputs[n] != states[n]]
     if clash:
@@ -228,7 +245,7 @@ def _declared_template(settings: Mapping, where: str) -> StructureTemplate:
     name = _require("string", settings.get("name", "declared"), f"{where} name")
     template = StructureTemplate(name, tuple(states), tuple(controls), tuple(outputs),
                                  f"declared in the model file ({len(states)} states)",
-                                 equations, variables, kinds, known)
+                                 equations, variables, kinds, known, control_units)
     silent = [o for o in outputs if o not in {row[0] for row in output_terms}]
     if silent:
         raise DataFileError(f"{where}: output {silent[0]} has no output equation; write one in "
@@ -323,7 +340,7 @@ def _template_lines(template: StructureTemplate) -> list[str]:
     """``template = "…"`` for a shipped template, else the whole declaration."""
     if TEMPLATES.get(template.name) == template:
         return [f'template = "{template.name}"']
-    kinds = template.kind_of
+    kinds = {**template.kind_of, **dict(template.control_units)}
     known: DeclaredTerms = template.known
     lines = [f'name = "{template.name}"']
     for key, names in (("states", template.states), ("controls", template.controls),

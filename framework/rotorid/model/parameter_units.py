@@ -3,8 +3,9 @@
 A derivative ``<letter>_<variable>`` adds ``value · variable`` to the rate of change of the
 state its equation drives, so its unit is (unit of that state)/s per unit of the variable:
 ``L_p`` in 1/s, ``M_long`` in deg/s² per % (flight-test units), ``X_alpha`` in m/s² per rad
-(SI). A delay is in s. Controls stay in the data's own unit: the helicopter's four stick
-channels in % of travel (the default data layout), any other control in its "control unit".
+(SI). A delay is in s. Controls stay in the data's own unit: the one a declared structure
+states for them (``deg``, ``N``), else % of travel for the helicopter's four stick channels
+(the default data layout) and "control unit" for any other control.
 """
 
 from __future__ import annotations
@@ -63,7 +64,8 @@ def structure_parameter_units(structure) -> dict[str, str]:
     units = {}
     for derivative in structure.derivatives:
         variable = derivative.variable
-        variable_unit = (control_unit(variable) if variable in structure.controls
+        stated = dict(structure.template.control_units).get(variable)
+        variable_unit = (stated or control_unit(variable) if variable in structure.controls
                          else signals.states[variable].unit)
         driven = signals.states[structure.equation_of(derivative)].unit
         units[derivative.name] = derivative_unit(driven, variable_unit)

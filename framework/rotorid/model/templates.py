@@ -102,9 +102,11 @@ class StructureTemplate:
             it drives, in the order of a fully populated structure (a mapping is accepted).
         variables: states and controls a derivative may multiply, in the order of a fully
             populated structure.
-        kinds: (signal, kind) pairs: the physical kind of every signal (:data:`rotorid.units.KIND_DIMENSIONS`); the unit
-            system turns it into a unit.
+        kinds: (signal, kind) pairs: the physical kind of every signal
+            (:data:`rotorid.units.KIND_DIMENSIONS`); the unit system turns it into a unit.
         known: ``known(template, condition, units) -> KnownTerms``.
+        control_units: (control, unit) pairs for controls recorded in a stated unit (``deg``,
+            ``N``); a control without one is in % of travel. Unit systems never rescale them.
     """
 
     name: str
@@ -116,6 +118,7 @@ class StructureTemplate:
     variables: tuple[str, ...] = attrs.field(converter=_tuple_of_names)
     kinds: tuple[tuple[str, str], ...] = attrs.field(converter=_pairs)
     known: Callable
+    control_units: tuple[tuple[str, str], ...] = attrs.field(default=(), converter=_pairs)
 
     def __attrs_post_init__(self):
         where = f"template {self.name!r}"
@@ -184,9 +187,11 @@ class StructureTemplate:
 
     def signals(self, units: UnitSystem) -> ModelSignals:
         """The states, inputs and outputs as named signals in the unit system ``units``."""
+        kinds, stated = self.kind_of, dict(self.control_units)
+
         def signal_set(names):
-            kinds = self.kind_of
-            return SignalSet(Signal(n, units.unit_of(kinds[n]), kinds[n]) for n in names)
+            return SignalSet(Signal(n, stated.get(n) or units.unit_of(kinds[n]), kinds[n])
+                             for n in names)
 
         return ModelSignals(signal_set(self.states), signal_set(self.controls),
                             signal_set(self.outputs))
