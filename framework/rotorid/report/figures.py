@@ -37,7 +37,7 @@ def file_stem(text: str) -> str:
 
 def flight_label(condition) -> str:
     """``"hover"`` or the airspeed, e.g. ``"70 kt"``: how titles name a flight condition."""
-    return "hover" if abs(condition.airspeed_kt) < 0.5 else f"{condition.airspeed_kt:g} kt"
+    return "hover" if abs(condition.airspeed_kt) < 0.5 else f"{condition.airspeed_kt:.0f} kt"
 
 
 def rmse_caption(path) -> str:
