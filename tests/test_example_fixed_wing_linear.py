@@ -147,3 +147,60 @@ def test_bad_declarations_are_one_line_errors_naming_the_file(tmp_path, capsys, 
     assert fragment in error and "model.toml" in error
     assert len(error.strip().splitlines()) == 1
     assert "Traceback" not in error
+
+
+def _sweep(directory: Path, seed: int = 5) -> None:
+    """A 60 s elevator sweep (0.05–2.5 Hz) in the files' own columns and units."""
+    rng = np.random.default_rng(seed)
+    time = np.arange(0.0, 60.0, DT)
+    frequency = 2 * np.pi * (0.05 + (2.5 - 0.05) * time / 60.0)
+    elevator_deg = 1.5 * np.sin(np.cumsum(frequency) * DT)
+    system = scipy.signal.cont2discrete(hand_model(), DT, method="zoh")
+    _, y, _ = scipy.signal.dlsim(system[:4] + (DT,),
+                                 np.column_stack([elevator_deg, 0.0 * time]), time)
+    to_file = np.array([1.0, 180 / math.pi, 180 / math.pi, 180 / math.pi, 1.0, 1 / G, 1.0])
+    y = y * to_file + rng.normal(0.0, NOISE, y.shape)
+    header = ",".join(("time", "DELE_deg", "THRUST_N") + COLUMNS)
+    np.savetxt(directory / "elevator_sweep.csv",
+               np.column_stack([time, elevator_deg, 0.0 * time, y]), delimiter=",",
+               header=header, comments="")
+
+
+def _case_text() -> str:
+    """A files case holding the example's structure and channel map."""
+    text = EXAMPLE.read_text()
+    structure = text[text.index("[structure]"):text.index("[channels]")]
+    links = [line.split("#")[0].strip() for line in
+             text[text.index("[channels]") + len("[channels]"):].splitlines()]
+    channels = "{ " + ", ".join(link for link in links if link) + " }"
+    return (f'name = "aeroplane"\ndescription = "fixed-wing longitudinal from flight-test files"'
+            f'\n\n[data]\nsource = "files"\nunits = "si"\nidentification = "ident/*.csv"\n'
+            f'verification = "sweeps/*.csv"\nchannels = {channels}\n\n[condition]\n'
+            f'u0_mps = 50.0\n\n{structure}')
+
+
+def test_a_study_of_the_aeroplane_speaks_about_the_aeroplane(tmp_path, capsys):
+    (tmp_path / "ident").mkdir()
+    (tmp_path / "sweeps").mkdir()
+    write_records(tmp_path / "ident")
+    _sweep(tmp_path / "sweeps")
+    case = tmp_path / "case.toml"
+    case.write_text(_case_text())
+    status = main(["study", str(case), "--out", str(tmp_path / "out")])
+    assert status == 0, capsys.readouterr().err
+    identified = load_result(tmp_path / "out" / "aeroplane" / "result.json", "no delays")
+    assert identified.structure.outputs == ("V", "alpha", "q", "theta", "q_dot", "ax", "az")
+    assert not identified.structure.free_delays                # no rotor, no default delays
+    report = (tmp_path / "out" / "aeroplane" / "report.html").read_text()
+    for absent in ("Bo-105", "paper's claims", "truth"):
+        assert absent not in report
+    assert "rad/s per m/s" in report and "q/elevator" in report       # Z_V
+    assert "[%]" not in report.split('id="time-histories"')[1].split('id="verification"')[0]
+
+
+def test_a_declared_structure_in_a_case_needs_its_unit_system(tmp_path, capsys):
+    case = tmp_path / "case.toml"
+    case.write_text(_case_text().replace('units = "si"\n', ""))
+    assert main(["study", str(case), "--out", str(tmp_path / "out")]) != 0
+    error = capsys.readouterr().err
+    assert "[data] units" in error and len(error.strip().splitlines()) == 1

@@ -123,6 +123,15 @@ def parameter_rows(result) -> list[list[str]]:
     return rows
 
 
+def _key_table(result, truth) -> str:
+    """The key-derivative table, or a sentence when the model has none of them."""
+    rows = key_derivative_rows(result)
+    if len(rows) == 1:
+        return (f"<p>The model has none of the helicopter's key derivatives "
+                f"({html.escape(', '.join(KEY_DERIVATIVES))}).</p>")
+    return _html_table(rows, None if not truth else 8)
+
+
 def key_derivative_rows(result) -> list[list[str]]:
     if not has_truth_model(result):
         estimate = result.estimates["with delays"]
@@ -608,7 +617,7 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         "<p>CR: Cramér-Rao bound (in the parameter's unit); CR % and I %: Cramér-Rao bound and "
         "insensitivity relative to the value.</p>", _html_table(parameter_rows(result)),
         '<h2 id="key-derivatives">Key derivatives</h2>', f"<p>{key_text}</p>",
-        _html_table(key_derivative_rows(result), None if not truth else 8),
+        _key_table(result, truth),
         reference_html(result),
         '<h2 id="time-histories">Time histories of the identification maneuvers</h2>',
         figures_html(figures.get("time", [])),

@@ -32,6 +32,9 @@ import attrs
 from rotorid.errors import DataFileError, MissingFileError, VerificationError
 from rotorid.io import require_file
 from rotorid.model.structure import PAPER_DELAYED
+
+#: Templates whose rotor dynamics the paper's delays stand for.
+HELICOPTER_TEMPLATES = ("six-dof", "longitudinal", "lateral")
 from rotorid.plugin.manager import create
 from rotorid.study.checks import check_case, check_registered
 from rotorid.study.hybrid_comparison import HYBRID_OMEGA_MAX
@@ -137,11 +140,13 @@ class FlightCase:
     quick_settings: Mapping = attrs.field(factory=dict, converter=dict)
     is_quick: bool = False
 
-    @property
-    def delayed(self) -> tuple[str, ...]:
-        """The derivatives to delay: ``[delays] derivatives``, by default the paper's eight
-        (those the reduced structure still has are delayed)."""
-        return PAPER_DELAYED if self.delay_derivatives is None else self.delay_derivatives
+    def delayed(self, template: str) -> tuple[str, ...]:
+        """The derivatives to delay in a structure of ``template`` (its name):
+        ``[delays] derivatives``, by default the paper's eight for the helicopter templates
+        (those the reduced structure still has are delayed) and none for any other model."""
+        if self.delay_derivatives is not None:
+            return self.delay_derivatives
+        return PAPER_DELAYED if template in HELICOPTER_TEMPLATES else ()
 
     @property
     def data_source(self) -> str:

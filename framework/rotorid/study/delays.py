@@ -30,8 +30,9 @@ def with_delays(case: FlightCase, selected: ReductionStep, ident: ManeuverSet, e
                 directory: Path) -> tuple[ModelStructure, Estimate, tuple[str, ...]]:
     """The selected structure with the case's delays, its estimate and the derivatives whose
     delays were dropped; reused from ``directory/delays.json`` when it holds this step's."""
-    delayed = selected.structure.with_delays(case.delayed, case.delay_initial,
-                                             case.delay_upper)
+    structure = selected.structure
+    delayed = structure.with_delays(case.delayed(structure.template.name), case.delay_initial,
+                                    case.delay_upper)
     saved = load_delays(directory, selected.index)
     if saved is not None:
         dropped, estimate = saved

@@ -168,7 +168,7 @@ def _delays_line(estimate, dropped: tuple[str, ...]) -> str:
     """Progress line of the delay step: the delays, the RMSE and what was dropped."""
     delays = ", ".join(f"{delayed_derivative(n)} {estimate.value(n):.3f} s"
                        for n in estimate.parameter_names if delayed_derivative(n))
-    line = f"delays: {delays}; RMSE {estimate.rmse:.4f}"
+    line = f"delays: {delays or 'none'}; RMSE {estimate.rmse:.4f}"
     return line + (f"; dropped undetermined delays on {', '.join(dropped)}" if dropped else "")
 
 
