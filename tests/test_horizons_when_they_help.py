@@ -1,7 +1,8 @@
 """The output-error fit goes through the horizon continuation only where it helps: a zero
 start, an unstable start model or a start whose simulation diverges. A stable aeroplane started
 at its equation-error values goes straight to the full records and costs no more iterations
-than a fit told to skip the horizons.
+than a fit told to skip the horizons; initial values that diverge restart from the
+equation-error start.
 
 The aeroplane and its records are those of docs/examples/full_vs_diagonal_noise.py
 (uncorrelated noise here)."""
@@ -9,8 +10,9 @@ The aeroplane and its records are those of docs/examples/full_vs_diagonal_noise.
 import warnings
 
 import numpy as np
+import pytest
 import rotorid
-from rotorid.errors import IdentifiabilityWarning
+from rotorid.errors import IdentifiabilityWarning, SimulationDivergedError
 from rotorid.estimation.models import LinearModel
 from test_docs_full_vs_diagonal_noise import _example
 
@@ -51,3 +53,22 @@ def test_zero_and_unstable_starts_go_through_the_horizons():
     assert np.all(np.abs(started.values - well_started.values)
                   <= 0.01 * well_started.cramer_rao)
 
+
+
+def test_initial_values_that_diverge_restart_from_the_equation_error_start():
+    example = _example()
+    structure = example.aeroplane()
+    data = example.flight_records(structure, seed=4)
+    diverging = dict(example.TRUTH, M_w=40.0)                 # doubles in a few ms
+    started = structure.with_initial(diverging)
+    estimate = rotorid.create("estimators", "output-error").estimate(started, data)
+    assert estimate.notes == (
+        "horizons 3 s, 6 s first: the start model is unstable (growth rate 42.5 1/s)",
+        "the start values gave no finite cost; restarted from the equation-error start")
+    assert estimate.converged
+    well_started = rotorid.create("estimators", "output-error").estimate(structure, data)
+    assert np.all(np.abs(estimate.values - well_started.values)
+                  <= 0.01 * well_started.cramer_rao)
+    plain = rotorid.create("estimators", "output-error", start="initial")
+    with pytest.raises(SimulationDivergedError, match="the start values give no finite cost"):
+        plain.estimate(started, data)

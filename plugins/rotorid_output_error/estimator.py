@@ -134,18 +134,21 @@ class OutputErrorEstimator:
     def _best_of_starts(self, base, fitted, maneuvers, columns, weights, start_values, notes):
         """Fit from ``start_values``; fall back to the model's initial values when that
         start makes the simulation diverge or ends above the cost of the initial values
-        (a local minimum worse than doing nothing). Returns the result and its start."""
+        (a local minimum worse than doing nothing), and to the equation-error start when
+        the initial values themselves diverge (``start="auto"``). Returns the result and
+        its start."""
         fallback = np.clip(fitted.initial_values(), *fitted.bounds())
         try:
             result = self._run_stages(base, fitted, maneuvers, columns, weights, start_values,
                                       notes)
         except SimulationDivergedError:
-            if np.array_equal(np.clip(start_values, *fitted.bounds()), fallback):
+            found = self._restart(base, fitted, maneuvers, start_values, fallback)
+            if found is None:
                 raise
-            notes.append("the start values gave no finite cost; restarted from the "
-                         "initial values")
-            return (self._run_stages(base, fitted, maneuvers, columns, weights, fallback, notes),
-                    fallback)
+            restart, label = found
+            notes.append(f"the start values gave no finite cost; restarted from {label}")
+            return (self._run_stages(base, fitted, maneuvers, columns, weights, restart, notes),
+                    restart)
         if np.array_equal(np.clip(start_values, *fitted.bounds()), fallback):
             return result, start_values
         problem = _problem(fitted, maneuvers, columns, weights, Settings(noise=self.noise))
@@ -158,6 +161,19 @@ class OutputErrorEstimator:
         except SimulationDivergedError:
             return result, start_values
         return (retry, fallback) if retry.cost < result.cost else (result, start_values)
+
+    def _restart(self, base, fitted, maneuvers, start_values, initial):
+        """Where a fit whose ``start_values`` diverged starts again, and its name: the
+        ``initial`` values when the start was something else, else (``start="auto"``) the
+        equation-error start of ``base`` with the record parameters' starts kept; None when
+        there is neither."""
+        if not np.array_equal(np.clip(start_values, *fitted.bounds()), initial):
+            return initial, "the initial values"
+        if self.start == "auto" and hasattr(base, "start_values"):
+            n_base = len(base.parameter_names)
+            restart = np.concatenate([base.start_values(maneuvers), start_values[n_base:]])
+            return np.clip(restart, *fitted.bounds()), "the equation-error start"
+        return None
 
     def _run_stages(self, base, fitted, maneuvers, columns, weights, values, notes):
         """Horizon continuation where it helps (:meth:`_horizons_help`), then the full
