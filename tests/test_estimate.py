@@ -93,6 +93,7 @@ def test_restricted_keeps_the_full_fits_statistics_of_the_named_parameters():
     assert part.insensitivity.tolist() == [1.0, 0.5]
     assert part.information.tolist() == [[1.0, 0.0], [0.0, 4.0]]
     assert part.sign_violations == ("L_p",) and part.cost == estimate.cost
+    assert part.parameter_units == {"M_q": "1/s", "L_p": "1/s"}
     assert estimate.restricted(estimate.parameter_names) is estimate
     with pytest.raises(EstimationError, match="no estimated parameter 'F_q'"):
         estimate.restricted(("F_q",))

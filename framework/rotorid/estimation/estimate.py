@@ -315,7 +315,8 @@ class Estimate:
             correlation=self.correlation[block], information=self.information[block],
             sign_violations=[n for n in self.sign_violations if n in kept],
             at_bound=[n for n in self.at_bound if n in kept],
-            unidentifiable=[c for c in self.unidentifiable if kept.intersection(c)])
+            unidentifiable=[c for c in self.unidentifiable if kept.intersection(c)],
+            parameter_units={n: u for n, u in self.parameter_units.items() if n in kept})
 
     @property
     def cramer_rao_pct(self) -> np.ndarray:
