@@ -219,6 +219,8 @@ def test_equation_error_plugin_recovers_a_known_linear_model():
     data = with_outputs(structure, structure.as_vector(TRUE), doublet_maneuvers())
     estimate = example.EquationErrorEstimator().estimate(structure, data)
     assert isinstance(estimate, Estimate) and estimate.converged
+    assert estimate.output_units == ("ft/s²",) * 3 + ("deg/s²",) * 3   # the equations' own
+    assert estimate.rmse_basis.startswith("dimensionless")
     truth = structure.as_vector(TRUE)
     # Written per sample interval, the equations hold exactly for held controls: only the
     # trapezoid means of the states differ from the true interval means.

@@ -134,10 +134,13 @@ class EquationErrorEstimator:
             residuals.append(residual)
         residuals = np.column_stack(residuals)         # (intervals of all maneuvers, 6)
         # The builder derives the bounds, R, det R, the RMSE and the sign checks.
+        units = structure.units
         return Estimate.from_fit(
             structure, values, information, [residuals], estimator=NAME,
             start=structure.initial_values() if start is None else structure.as_vector(start),
-            output_names=EQUATION_NAMES, iterations=1,
+            output_names=EQUATION_NAMES,
+            output_units=(units.unit_of("acceleration"),) * 3
+            + (units.unit_of("angular-acceleration"),) * 3, iterations=1,
             stop_reason="linear least squares: closed-form solution",
             notes=("equation error: values are biased by noise on the regressors",))
 

@@ -233,6 +233,8 @@ class Estimate:
         values = np.asarray(values, dtype=float)
         stats = statistics(information, names)
         derived = _structure_facts(model)
+        if "output_names" in fields:          # outputs of the estimator's own: their units
+            derived["output_units"] = ()      # only when it gives them
         derived.update(_residual_facts(residuals,
                                        fields.get("output_units", derived["output_units"])))
         derived.update(fields)
