@@ -37,15 +37,21 @@ def test_si_helicopter_and_declared_fixed_wing_units_by_hand():
     si = structure_parameter_units(ModelStructure.six_dof(HOVER, units="si"))
     assert si["M_u"] == "rad/s² per m/s" and si["N_ped"] == "rad/s² per %"
     units = structure_parameter_units(load_model(FIXED_WING))
-    # States V [m/s], alpha [rad], q [rad/s]; controls declared by the file: "control unit".
+    # States V [m/s], alpha [rad], q [rad/s]; controls in the units the file states for them
+    # (elevator deg, thrust N).
     assert units["X_V"] == "1/s"
     assert units["X_alpha"] == "m/s² per rad"       # V̇ from α
     assert units["Z_V"] == "rad/s per m/s"          # α̇ from V
     assert units["Z_alpha"] == "1/s"                # α̇ from α
     assert units["M_alpha"] == "1/s²"               # q̇ [rad/s²] from α [rad]
     assert units["M_q"] == "1/s"
-    assert units["X_thrust"] == "m/s² per control unit"
-    assert units["M_elevator"] == "rad/s² per control unit"
+    assert units["X_thrust"] == "m/s² per N"
+    assert units["Z_elevator"] == "rad/s per deg"
+    assert units["M_elevator"] == "rad/s² per deg"
+    # The built-in fixed-wing template states none: its controls are in "control unit".
+    template = structure_parameter_units(ModelStructure.populated(
+        FlightCondition(u0=50.0), "fixed-wing-longitudinal", "si"))
+    assert template["M_elevator"] == "rad/s² per control unit"
 
 
 def _residuals(n_outputs):
