@@ -1,22 +1,15 @@
 """docs/examples/nonlinear_model.py runs and identifies its aircraft (docs/estimation.md)."""
 
-import importlib.util
-from pathlib import Path
-
 import matplotlib
 import numpy as np
+from docs_examples import load_example
 from rotorid.model.nonlinear import has_own_jacobians
 
 matplotlib.use("Agg")
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "docs" / "examples" / "nonlinear_model.py"
-
 
 def _load():
-    spec = importlib.util.spec_from_file_location("nonlinear_model_example", EXAMPLE)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_example("nonlinear_model")
 
 
 def test_nonlinear_example_identifies_the_aerodynamic_coefficients(tmp_path, capsys):

@@ -7,16 +7,15 @@ it writes itself, custom_estimator.py registers an equation-error estimator plug
 case with it; turbulence_montecarlo.py (slow) repeats both estimators in turbulence.
 """
 
-import importlib.util
 import json
 import shutil
 import sys
-from pathlib import Path
 
 import matplotlib
 import numpy as np
 import pytest
 import rotorid
+from docs_examples import EXAMPLES, load_example
 from rotorid import Delay, Derivative, FlightCondition, ModelStructure
 from rotorid.estimation.estimate import Estimate
 from rotorid.study.case import FlightCase
@@ -24,15 +23,11 @@ from test_output_error import doublet_maneuvers, with_outputs
 
 matplotlib.use("Agg")
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "docs" / "examples"
 ON_AXIS = ("q/long", "p/lat", "az/coll", "r/ped")
 
 
 def _load(name):
-    spec = importlib.util.spec_from_file_location(f"{name}_example", EXAMPLES / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_example(name)
 
 
 def _assert_on_axis_pairs_verify(result):

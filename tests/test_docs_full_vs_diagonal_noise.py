@@ -1,17 +1,11 @@
 """docs/examples/full_vs_diagonal_noise.py, the worked example of full against diagonal R in
 docs/estimation.md, on a few seeds."""
 
-import importlib.util
-from pathlib import Path
-
-EXAMPLE = Path(__file__).resolve().parents[1] / "docs" / "examples" / "full_vs_diagonal_noise.py"
+from docs_examples import load_example
 
 
 def _example():
-    spec = importlib.util.spec_from_file_location("full_vs_diagonal_noise", EXAMPLE)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_example("full_vs_diagonal_noise")
 
 
 def test_the_full_noise_covariance_uses_the_correlation_the_diagonal_ignores():

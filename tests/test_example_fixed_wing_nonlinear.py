@@ -7,27 +7,23 @@ The records are flown by ``scipy.integrate.solve_ivp`` (the example's ``write_re
 by rotorid's integrator, from level trim, with seeded sensor noise.
 """
 
-import importlib.util
 import json
 import re
 import shutil
-from pathlib import Path
 
 import numpy as np
 import pytest
+from docs_examples import EXAMPLES, load_example
 from rotorid import Maneuver, ManeuverSet
 from rotorid.cli.main import main
 from rotorid.estimation.integrated import InitialConditions, IntegratedModel
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "docs" / "examples" / "fixed_wing_nonlinear.py"
+EXAMPLE = EXAMPLES / "fixed_wing_nonlinear.py"
 
 
 @pytest.fixture(scope="module")
 def example():
-    spec = importlib.util.spec_from_file_location("fixed_wing_nonlinear_example", EXAMPLE)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_example("fixed_wing_nonlinear")
 
 
 def test_identify_fits_the_aeroplane_from_its_own_columns(example, tmp_path, capsys):

@@ -112,12 +112,19 @@ def test_filtered_output_sensitivities_match_finite_differences():
     values = np.concatenate([model.as_vector({**SMALL_TRUTH, "tau_L_lat": 0.05}),
                              list(PROCESS.values()), VARIANCE])
     system, steady = problem.filter(values, directions=True)
+    _assert_matches_central_differences(problem, system, steady, values,
+                                        ("M_q", "tau_L_lat", "F_p", "R_q"), floor=1e-2)
+
+
+def _assert_matches_central_differences(problem, system, steady, values, names, floor=0.0):
+    """The innovations' exact sensitivities and those of B (the innovation covariance)
+    against central differences of ``problem.innovations``, for the parameters ``names``
+    (relative step 1e-6 of the value, at least of ``floor``)."""
     sens = np.concatenate([d for _, _, d in innovation_blocks(system, steady, problem.records)])
     d_innovation = steady.innovation.imag / COMPLEX_STEP
-    names = problem.parameter_names
-    for name in ("M_q", "tau_L_lat", "F_p", "R_q"):
-        k = names.index(name)
-        step = 1e-6 * max(abs(values[k]), 1e-2)
+    for name in names:
+        k = problem.parameter_names.index(name)
+        step = 1e-6 * max(abs(values[k]), floor)
         up, down = values.copy(), values.copy()
         up[k] += step
         down[k] -= step
@@ -141,20 +148,7 @@ def test_disturbance_sensitivities_match_finite_differences():
                              VARIANCE])
     system, steady = problem.filter(values, directions=True)
     assert system.size == 8 + 2
-    sens = np.concatenate([d for _, _, d in innovation_blocks(system, steady, problem.records)])
-    d_innovation = steady.innovation.imag / COMPLEX_STEP
-    for name in ("L_p", "D_q", "T_p"):
-        k = problem.parameter_names.index(name)
-        step = 1e-6 * abs(values[k])
-        up, down = values.copy(), values.copy()
-        up[k] += step
-        down[k] -= step
-        (nu_up, b_up), (nu_down, b_down) = problem.innovations(up), problem.innovations(down)
-        expected = (nu_up - nu_down) / (2 * step)
-        assert sens[..., k] == pytest.approx(expected, rel=1e-5, abs=1e-6 * np.abs(
-            expected).max()), name
-        assert d_innovation[k] == pytest.approx((b_up - b_down) / (2 * step), rel=1e-5,
-                                                abs=1e-9), name
+    _assert_matches_central_differences(problem, system, steady, values, ("L_p", "D_q", "T_p"))
 
 
 def test_recovers_derivatives_and_coloured_disturbances_within_3_cr():
