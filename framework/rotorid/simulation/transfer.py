@@ -34,7 +34,8 @@ def response_sensitivities(structure: ModelStructure, values, omega
     With R = (jωI − A)⁻¹, X = R·B and Y = C·R, a term of gain g and delay τ that drives
     equation row e from source s (and output row o when it also feeds a specific force)
     enters as t = g·e^(−jωτ), and ∂H/∂t = (Y[:, e] + w·1_o) ⊗ X[s, :] for a state source,
-    (Y[:, e] + w·1_o) in control column s for a control (w: the term's weight in output o). Then ∂H/∂g = e^(−jωτ)·∂H/∂t and
+    (Y[:, e] + w·1_o) in control column s for a control (w: the term's weight in output o).
+    Then ∂H/∂g = e^(−jωτ)·∂H/∂t and
     ∂H/∂τ = −jω·g·e^(−jωτ)·∂H/∂t.
 
     Args: as :func:`frequency_response`.
