@@ -58,8 +58,8 @@ from rotorid.units import CHANNEL_KINDS, KIND_DIMENSIONS, UnitSystem
 STATES = ("u", "w", "q", "theta", "v", "p", "phi", "r")
 CONTROLS = CONTROL_VARIABLES
 OUTPUTS = ("ax", "az", "q", "theta", "ay", "p", "phi", "r")
-#: Output measuring each rigid-body force equation's specific force.
-ACCELERATION_OUTPUT = {"u": "ax", "v": "ay", "w": "az"}
+#: The velocity whose equation's term sum (specific force) each accelerometer output reads.
+ACCELEROMETER_EQUATION = {"ax": "u", "ay": "v", "az": "w"}
 #: Prefix of an output that reads a state's derivative (``q_dot`` reads q̇'s term sum).
 DERIVATIVE_SUFFIX = "_dot"
 
@@ -257,7 +257,7 @@ def rigid_body_terms(template: StructureTemplate, condition, units: UnitSystem) 
     n, m, p = len(template.states), len(template.controls), len(template.outputs)
     c, measured = np.zeros((p, n)), np.zeros((p, n))
     for row, name in enumerate(template.outputs):
-        state = {out: velocity for velocity, out in ACCELERATION_OUTPUT.items()}.get(name)
+        state = ACCELEROMETER_EQUATION.get(name)
         if name.endswith(DERIVATIVE_SUFFIX):
             state = name[: -len(DERIVATIVE_SUFFIX)]
         if state is not None and state in template.states:
