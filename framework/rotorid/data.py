@@ -267,10 +267,14 @@ class Maneuver:
 
     def head(self, duration: float) -> "Maneuver":
         """The first ``duration`` seconds (at least two samples)."""
-        n = max(2, int(np.floor(duration / self.dt + 1e-9)) + 1)
-        return attrs.evolve(self, time=self.time[:n], inputs=self.inputs[:n],
-                            outputs=self.outputs[:n],
-                            extra_channels={k: v[:n] for k, v in self.extra_channels.items()})
+        return self.samples(0, max(2, int(np.floor(duration / self.dt + 1e-9)) + 1))
+
+    def samples(self, start: int, stop: int) -> "Maneuver":
+        """Samples ``start`` to ``stop`` (exclusive) of every channel, extras included."""
+        rows = slice(start, stop)
+        return attrs.evolve(self, time=self.time[rows], inputs=self.inputs[rows],
+                            outputs=self.outputs[rows],
+                            extra_channels={k: v[rows] for k, v in self.extra_channels.items()})
 
 
 def _check_hold(instance, attribute, value):

@@ -35,9 +35,7 @@ def segmented_simulation(structure, values, maneuvers, segment: float) -> list[n
             starts.pop()
         for first, stop in zip(starts, starts[1:] + [m.n_samples]):
             pieces.append(attrs.evolve(
-                m, name=f"{m.name}#{first}", time=m.time[first:stop],
-                inputs=m.inputs[first:stop], outputs=m.outputs[first:stop],
-                extra_channels={k: v[first:stop] for k, v in m.extra_channels.items()},
+                m.samples(first, stop), name=f"{m.name}#{first}",
                 initial_state=states[first], state_names=structure.states))
         counts.append(len(starts))
     simulated = iter(simulate(structure, values, ManeuverSet(pieces, hold=maneuvers.hold)))
