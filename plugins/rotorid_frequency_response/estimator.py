@@ -135,7 +135,8 @@ class FrequencyResponseEstimator:
         start_values, start_note = self._start_values(model, maneuvers, start)
         notes = [note for note in (start_note,) if note] + notes
         problem = MismatchProblem(model, fitted)
-        initial = problem.evaluate(np.clip(start_values, *self._bounds(model)))
+        bounds = self._bounds(model)
+        initial = problem.evaluate(np.clip(start_values, *bounds))
         if not np.isfinite(initial.cost):
             silent = [p.pair for p, cost in zip(fitted, initial.pair_costs)
                       if not np.isfinite(cost)]
@@ -152,10 +153,8 @@ class FrequencyResponseEstimator:
         starts, results = varied_starts(model, start_values, self.starts, self.seed), []
         with blas.single_threaded():
             for values in starts:
-                if np.isfinite(problem.evaluate(np.clip(values, *self._bounds(model)),
-                                                jacobian=False).cost):
-                    results.append(run(problem, values, self._bounds(model), settings,
-                                       progress))
+                if np.isfinite(problem.evaluate(np.clip(values, *bounds), jacobian=False).cost):
+                    results.append(run(problem, values, bounds, settings, progress))
                 else:
                     results.append(None)       # a random start without a response
         best, selection_notes = best_start(model, results, max(p.omega.max() for p in fitted))
