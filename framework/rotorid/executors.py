@@ -31,7 +31,7 @@ from collections.abc import Callable, Hashable, Iterator, Mapping
 from concurrent.futures import Executor, ProcessPoolExecutor
 
 from rotorid.errors import PluginError, StudyError
-from rotorid.lease import Lease, writing_for
+from rotorid.lease import Lease, process_alive, writing_for
 from rotorid.progress import Countdown
 
 #: Executor names accepted by the commands (``--executor``).
@@ -115,13 +115,7 @@ def _stop_with(parent: int) -> None:
     def watch():
         while True:
             time.sleep(PARENT_CHECK_INTERVAL)
-            try:
-                os.kill(parent, 0)
-            except ProcessLookupError:
-                os._exit(1)
-            except PermissionError:       # alive, owned by someone else
-                pass
-            if os.getppid() != started_by:
+            if not process_alive(parent) or os.getppid() != started_by:
                 os._exit(1)
 
     threading.Thread(target=watch, name="rotorid-parent-watch", daemon=True).start()

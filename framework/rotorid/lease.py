@@ -68,7 +68,7 @@ def _process_state(pid: int) -> tuple[str, int] | None:
     return fields[0], int(fields[19])
 
 
-def _is_alive(pid: int, started: int | None) -> bool:
+def process_alive(pid: int, started: int | None = None) -> bool:
     """Whether process ``pid`` runs (not a zombie) and, when ``started`` is known, is the one
     that started at that time."""
     state = _process_state(pid)
@@ -103,7 +103,7 @@ class Lease:
     def owner_alive(self) -> bool:
         """Whether the run is alive, seen from this process (see the module docstring)."""
         if self.machine == _machine():
-            return _is_alive(self.pid, self.started)
+            return process_alive(self.pid, self.started)
         try:
             age = time.time() - self.path.stat().st_mtime
         except OSError:
