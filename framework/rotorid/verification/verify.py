@@ -32,7 +32,8 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] | None = None,
     Simulates ``structure`` at ``values`` (vector, name→value mapping or None) on the
     recorded inputs of every sweep (:func:`rotorid.simulation.simulator.simulate`, with the sweeps'
     input hold) and compares the pairs ``pairs`` of its outputs and inputs (default
-    :func:`rotorid.verification.pairs.default_pairs` of the structure's signals), estimates truth and model responses with identical processing and holds
+    :func:`rotorid.verification.pairs.default_pairs` of the structure's signals), estimates
+    truth and model responses with identical processing and holds
     ``ε = H_model/H_truth`` against the envelopes; also compares the analytic response with
     exact delays (:func:`rotorid.simulation.transfer.frequency_response`) with the truth's conditioned
     response. ``envelopes`` may be envelope objects by name or registered envelope names.

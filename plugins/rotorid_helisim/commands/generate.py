@@ -8,7 +8,6 @@ import time
 from rotorid.cli.arguments import output_directory, seed
 
 
-
 def add_arguments(parser) -> None:
     parser.add_argument("condition", choices=("hover", "forward"),
                         help="hover, or forward flight at 70 kt")
