@@ -60,15 +60,14 @@ class RunResult:
     stop_reason: str
 
 
-def _accelerated_step(problem: MismatchProblem, current: Mismatch, values, lam, bounds,
-                      settings: Settings) -> np.ndarray | None:
+def _accelerated_step(problem: MismatchProblem, current: Mismatch, information, gradient,
+                      values, lam, bounds, settings: Settings) -> np.ndarray | None:
     """The step v + a/2 at damping ``lam`` (P,), or None when the acceleration a is too
-    large against the velocity v (the quadratic model is not trusted at this λ)."""
+    large against the velocity v (the quadratic model is not trusted at this λ);
+    ``information`` F = JᵀJ (P, P) and ``gradient`` G = Jᵀe (P,) are those of ``current``."""
     lower, upper = bounds
     jacobian = current.jacobian
-    information = jacobian.T @ jacobian
-    velocity = bounded_step(information, jacobian.T @ current.residuals, lam, values,
-                            lower, upper)
+    velocity = bounded_step(information, gradient, lam, values, lower, upper)
     h = settings.acceleration_step
     ahead = problem.evaluate(np.clip(values + h * velocity, lower, upper), jacobian=False)
     if not np.all(np.isfinite(ahead.residuals)):
@@ -97,8 +96,11 @@ def run(problem: MismatchProblem, start: np.ndarray, bounds, settings: Settings,
         if current.cost == 0.0:
             reason, converged = "the model reproduces the responses exactly", True
             break
+        information = current.jacobian.T @ current.jacobian
+        gradient = current.jacobian.T @ current.residuals
         for _ in range(settings.max_tries):
-            step = _accelerated_step(problem, current, values, lam, bounds, settings)
+            step = _accelerated_step(problem, current, information, gradient, values, lam,
+                                     bounds, settings)
             if step is not None:
                 trial_values = np.clip(values + step, lower, upper)
                 trial = problem.evaluate(trial_values)
