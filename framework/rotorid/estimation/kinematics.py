@@ -21,6 +21,7 @@ import warnings
 
 import attrs
 import numpy as np
+from scipy.integrate import cumulative_trapezoid
 
 from rotorid.data import ManeuverSet
 from rotorid.errors import DataWarning
@@ -82,8 +83,8 @@ def _states(maneuver) -> np.ndarray:
 def _fit(targets, drivers, times) -> tuple[float, np.ndarray, float]:
     """Least-squares k, the biases b_i and the residual RMS (see the module docstring)."""
     n = len(targets)
-    columns = [np.concatenate([np.concatenate([[0.0], np.cumsum(
-        0.5 * (f[1:] + f[:-1]) * np.diff(t))]) for f, t in zip(drivers, times)])]
+    columns = [np.concatenate([cumulative_trapezoid(f, t, initial=0.0)
+                               for f, t in zip(drivers, times)])]
     for i in range(n):
         for basis in (np.ones_like, lambda t: t - t[0]):
             columns.append(np.concatenate([basis(t) if j == i else np.zeros_like(t)
