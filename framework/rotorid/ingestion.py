@@ -136,10 +136,8 @@ class Ingestion:
     def kind(self, channel: str) -> str | None:
         """Physical kind of ``channel``: the model's signal's when :attr:`signals` declares
         it, else the shipped channel's, else ``None`` (read as recorded)."""
-        if self.signals is not None:
-            declared = {s.name: s.kind for s in self.signals.all}
-            if channel in declared:
-                return declared[channel]
+        if self.signals is not None and channel in self.signals.all:
+            return self.signals.all[channel].kind
         return CHANNEL_KINDS.get(channel)
 
     def __attrs_post_init__(self):

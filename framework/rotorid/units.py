@@ -144,6 +144,12 @@ def unit_system(name: str | UnitSystem) -> UnitSystem:
         ) from None
 
 
+def channel_kind(channel: str, kinds=None) -> str | None:
+    """Physical kind of ``channel``: ``kinds(channel)`` when that function gives one (a
+    model's own signals), else :data:`CHANNEL_KINDS`'s, else ``None``."""
+    return (kinds(channel) if kinds is not None else None) or CHANNEL_KINDS.get(channel)
+
+
 def channel_scale(channels, target: UnitSystem, source: UnitSystem = SI,
                   kinds=None) -> np.ndarray:
     """Per-channel factors that convert values in ``source`` units into ``target`` units.
@@ -156,7 +162,7 @@ def channel_scale(channels, target: UnitSystem, source: UnitSystem = SI,
         array of shape ``(len(channels),)``.
     """
     def kind(channel):
-        found = (kinds(channel) if kinds is not None else None) or CHANNEL_KINDS.get(channel)
+        found = channel_kind(channel, kinds)
         if found is None:
             raise StructureError(f"channel {channel!r} has no physical kind, so it cannot be "
                                  f"converted between unit systems; declare it as a signal of "

@@ -26,7 +26,7 @@ from rotorid.errors import DataError, DataFileError, MissingFileError, RotoridEr
 from rotorid.ingestion import Ingestion
 from rotorid.io import atomic_write, require_file
 from rotorid.plugin.contracts import CaseData
-from rotorid.units import CHANNEL_KINDS, channel_scale, unit_system
+from rotorid.units import channel_kind, channel_scale, unit_system
 
 from . import arrays, csvfile
 
@@ -83,8 +83,7 @@ def convert_units(maneuver: Maneuver, units, kinds=None) -> Maneuver:
     return attrs.evolve(maneuver, outputs=maneuver.outputs * channel_scale(
         maneuver.output_names, target, source, kinds), units=target.name, initial_state=state,
         extra_channels={name: values * (channel_scale((name,), target, source, kinds)[0]
-                                        if (kinds and kinds(name)) or name in CHANNEL_KINDS
-                                        else 1.0)
+                                        if channel_kind(name, kinds) else 1.0)
                         for name, values in maneuver.extra_channels.items()})
 
 
