@@ -577,15 +577,7 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         f"Time: {html.escape(seconds)}.</p>",
         "<p>Machine-readable results: <a href=\"result.json\">result.json</a>; tables: "
         + ", ".join(f'<a href="tables/{t}.csv">{t}.csv</a>'
-                    for t in ("removed", "parameters", "key_derivatives", "verification",
-                              *(("checks",) if claims else ()),
-                              *(("reference",) if result.case.reference else ()),
-                              *(("comparison_costs", "comparison_parameters")
-                                if result.frequency_comparison else ()),
-                              *(("estimator_fits", "estimators")
-                                if result.estimator_comparison is not None else ()),
-                              *(("hybrid_models", "hybrid_terms")
-                                if result.hybrid_comparison is not None else ())))
+                    for t in case_table_names(result, claims))
         + ".</p>",
         '<h2 id="summary">Summary</h2>', summary_html(result, claims)]
     if claims:
@@ -650,6 +642,37 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
     return _page(f"rotorid study — case {result.name}", "\n".join(body), contents)
 
 
+def case_claims(result) -> list:
+    """The paper's claims measured on a case with a truth model; none for a case about
+    measured data only (:func:`has_truth_model`)."""
+    return paper_claims(result) if has_truth_model(result) else []
+
+
+#: Row builders of a case's tables by CSV name (``checks`` is built from the claims).
+_TABLE_ROWS = {
+    "removed": removed_rows, "parameters": parameter_rows,
+    "key_derivatives": key_derivative_rows, "verification": verification_rows,
+    "reference": reference_rows, "comparison_costs": comparison_cost_rows,
+    "comparison_parameters": comparison_parameter_rows, "estimator_fits": estimator_fit_rows,
+    "estimators": estimator_rows, "hybrid_models": hybrid_model_rows,
+    "hybrid_terms": hybrid_term_rows,
+}
+
+
+def case_table_names(result, claims) -> list[str]:
+    """The case's tables (``tables/<name>.csv``) in the report's order: the four every case
+    has, then those of its ``claims``, ``[reference]`` values and comparisons it ran."""
+    return ["removed", "parameters", "key_derivatives", "verification",
+            *(("checks",) if claims else ()),
+            *(("reference",) if result.case.reference else ()),
+            *(("comparison_costs", "comparison_parameters")
+              if result.frequency_comparison else ()),
+            *(("estimator_fits", "estimators")
+              if result.estimator_comparison is not None else ()),
+            *(("hybrid_models", "hybrid_terms")
+              if result.hybrid_comparison is not None else ())]
+
+
 def write_case_outputs(result, directory: str | Path) -> Path:
     """Write the figures, tables and ``report.html`` of one case; returns the report path.
     A case about measured data only (no truth model) gets no claims table."""
@@ -657,26 +680,10 @@ def write_case_outputs(result, directory: str | Path) -> Path:
     figures = case_figures(result, directory / "figures")
     tables = directory / "tables"
     tables.mkdir(exist_ok=True)
-    claims = paper_claims(result) if has_truth_model(result) else []
-    written = [("removed", removed_rows(result)), ("parameters", parameter_rows(result)),
-               ("key_derivatives", key_derivative_rows(result)),
-               ("verification", verification_rows(result))]
-    if claims:
-        written.append(("checks", claim_rows(claims)))
-    if result.case.reference:
-        written.append(("reference", reference_rows(result)))
-    for name, rows in written:
-        atomic_write(tables / f"{name}.csv", _csv(rows))
-    if result.frequency_comparison:
-        atomic_write(tables / "comparison_costs.csv", _csv(comparison_cost_rows(result)))
-        atomic_write(tables / "comparison_parameters.csv",
-                     _csv(comparison_parameter_rows(result)))
-    if result.estimator_comparison is not None:
-        atomic_write(tables / "estimator_fits.csv", _csv(estimator_fit_rows(result)))
-        atomic_write(tables / "estimators.csv", _csv(estimator_rows(result)))
-    if result.hybrid_comparison is not None:
-        atomic_write(tables / "hybrid_models.csv", _csv(hybrid_model_rows(result)))
-        atomic_write(tables / "hybrid_terms.csv", _csv(hybrid_term_rows(result)))
+    claims = case_claims(result)
+    rows_of = {**_TABLE_ROWS, "checks": lambda _: claim_rows(claims)}
+    for name in case_table_names(result, claims):
+        atomic_write(tables / f"{name}.csv", _csv(rows_of[name](result)))
     return atomic_write(directory / "report.html", case_html(result, figures, claims))
 
 
@@ -687,7 +694,7 @@ def write_study_report(results: Mapping[str, object], out_dir: str | Path) -> Pa
              "RMSE with delays [mixed units]", "delays [s]", "claims holding [-]"]]
     sections, contents = [], [("overview", "Overview")]
     for name, result in results.items():
-        checks = paper_claims(result) if has_truth_model(result) else []
+        checks = case_claims(result)
         decided, failed = claims_tally(checks)
         rows.append([name, result.condition.describe(),
                      f"{result.path.selected.n_parameters} ({len(result.path.removed)})",
