@@ -32,9 +32,6 @@ import attrs
 from rotorid.errors import DataFileError, MissingFileError, VerificationError
 from rotorid.io import require_file
 from rotorid.model.structure import PAPER_DELAYED
-
-#: Templates whose rotor dynamics the paper's delays stand for.
-HELICOPTER_TEMPLATES = ("six-dof", "longitudinal", "lateral")
 from rotorid.plugin.manager import create
 from rotorid.study.checks import check_case, check_registered
 from rotorid.study.hybrid_comparison import HYBRID_OMEGA_MAX
@@ -43,6 +40,8 @@ from rotorid.verification.band import BAND_KEYS, DEFAULT_BAND, VerificationBand
 from rotorid.verification.compare import PAPER_ENVELOPES
 
 BUILTIN = ("hover", "forward")
+#: Templates whose rotor dynamics the paper's delays stand for.
+HELICOPTER_TEMPLATES = ("six-dof", "longitudinal", "lateral")
 #: Tables of a case file and the keys each may hold (``None``: checked where it is used).
 _TABLES = {
     "data": None, "condition": None, "structure": None, "derivatives": None, "estimator": None,

@@ -35,6 +35,11 @@ from rotorid.verification.verify import verify_model
 HYBRID_MODELS = ("no delays", "with delays", "hybrid")
 #: Highest frequency of the comparison's J, rad/s, unless the sweeps stop lower.
 HYBRID_OMEGA_MAX = 20.0
+#: The hybrid's rotor terms set beside the truth's reference: flap damping (−1/τ_f), hub
+#: moments per disc tilt, cyclic into flapping.
+ROTOR_TERMS = ("Bc_beta1c", "Bs_beta1s", "M_beta1c", "L_beta1s", "Bc_long", "Bs_lat")
+#: The flap equations' own damping terms, each giving a flap time constant τ_f = −1/value.
+FLAP_DAMPING = ("Bc_beta1c", "Bs_beta1s")
 
 
 def hybrid_band(omega_max: float = HYBRID_OMEGA_MAX) -> VerificationBand:
@@ -45,11 +50,6 @@ def hybrid_band(omega_max: float = HYBRID_OMEGA_MAX) -> VerificationBand:
     model errs there by 28–29 dB, which alone sets J to about 700; at Tischler's γ² ≥ 0.6 the
     q/long point at 15.6 rad/s (γ² 0.64, 25 dB off) did the same."""
     return VerificationBand(coherence=0.8, omega_min=1.0, omega_max=omega_max)
-#: The hybrid's rotor terms set beside the truth's reference: flap damping (−1/τ_f), hub
-#: moments per disc tilt, cyclic into flapping.
-ROTOR_TERMS = ("Bc_beta1c", "Bs_beta1s", "M_beta1c", "L_beta1s", "Bc_long", "Bs_lat")
-#: The flap equations' own damping terms, each giving a flap time constant τ_f = −1/value.
-FLAP_DAMPING = ("Bc_beta1c", "Bs_beta1s")
 
 
 @attrs.frozen(eq=False)
