@@ -225,7 +225,10 @@ RMSE_REFERENCE_UNITS = {"speed": "ft/s", "acceleration": "ft/s²", "angle": "deg
 def rmse_reference_factors(units) -> np.ndarray | None:
     """Per-output factors turning residuals in ``units`` into multiples of their
     :data:`RMSE_REFERENCE_UNITS`, shape (len(units),); ``None`` when an output has no
-    reference unit (an unknown unit, control travel, force)."""
+    reference unit (an unknown unit, control travel, force) or ``units`` is empty (the
+    model declares none)."""
+    if not units:
+        return None
     factors = []
     for unit in units:
         dimension = UNITS.get(unit, (None,))[0]

@@ -314,8 +314,8 @@ def _problem(model, maneuvers, columns, weights, settings) -> Problem:
     outputs' reference units when they have them (:func:`rotorid.units.rmse_reference_factors`)."""
     selected = _SelectedOutputs(model, columns)
     measured = [z[:, columns] for z in measured_outputs(model, maneuvers)]
-    scale = rmse_reference_factors(selected.output_units) if selected.output_units else None
-    return Problem(selected, maneuvers, measured, weights, settings, rmse_scale=scale)
+    return Problem(selected, maneuvers, measured, weights, settings,
+                   rmse_scale=rmse_reference_factors(selected.output_units))
 
 
 def _warn_exact_outputs(result, measured, weights, names) -> None:

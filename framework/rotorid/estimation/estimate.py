@@ -108,7 +108,7 @@ def rmse_basis(output_units) -> str:
     """What makes the RMSE over outputs in ``output_units`` a pure number: the reference
     units its residuals are counted in (:data:`rotorid.units.RMSE_REFERENCE_UNITS`); ``""``
     when an output has none, so that the RMSE mixes units."""
-    if not output_units or rmse_reference_factors(output_units) is None:
+    if rmse_reference_factors(output_units) is None:
         return ""
     references = dict.fromkeys(RMSE_REFERENCE_UNITS[UNITS[u][0]] for u in output_units)
     return f"dimensionless: eq. 18 with the residuals counted in {', '.join(references)}"
@@ -527,7 +527,7 @@ def _residual_facts(residuals, output_units) -> dict:
         return {}
     stacked = np.concatenate([np.asarray(e, dtype=float) for e in residuals])
     noise = stacked.T @ stacked / len(stacked)
-    factors = rmse_reference_factors(output_units) if output_units else None
+    factors = rmse_reference_factors(output_units)
     return {"noise_covariance": noise, "cost": float(np.linalg.det(noise)),
             "rmse": rmse(stacked if factors is None else stacked * factors),
             "residual_rms": np.sqrt(np.diag(noise)), "n_samples": len(stacked)}
