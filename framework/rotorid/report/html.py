@@ -137,11 +137,10 @@ def key_derivative_rows(result) -> list[list[str]]:
         estimate = result.estimates["with delays"]
         rows = [["derivative", "unit", "identified", "CR bound"]]
         for name in KEY_DERIVATIVES:
-            if name in estimate.parameter_names:
-                i = estimate.index(name)
+            if name in estimate:
+                item = estimate[name]
                 rows.append([name, parameter_unit(name, estimate.units, estimate),
-                             _number(float(estimate.values[i])),
-                             _number(float(estimate.cramer_rao[i]), 3)])
+                             _number(item.value), _number(item.cramer_rao, 3)])
         return rows
     rows = [["derivative", "unit", "identified", "CR bound", "truth linearisation",
              "identified / truth [-]", "published reference", "expected sign from", "sign"]]
@@ -232,9 +231,8 @@ def comparison_parameter_rows(result) -> list[list[str]]:
         for name in fits[1].parameter_names:
             row = [label, name]
             for estimate in fits:
-                i = estimate.index(name)
-                row += [_number(float(estimate.values[i])),
-                        _number(float(estimate.cramer_rao[i]), 3)]
+                item = estimate[name]
+                row += [_number(item.value), _number(item.cramer_rao, 3)]
             rows.append(row)
     return rows
 

@@ -132,10 +132,9 @@ def compare_with_reference(estimate, reference: Mapping[str, ReferenceValue]
     """Each reference value beside the identified ``estimate``'s, in the table's order."""
     rows = []
     for name, value in reference.items():
-        kept = name in estimate.parameter_names
-        index = estimate.index(name) if kept else None
+        item = estimate[name] if name in estimate else None
         rows.append(ReferenceComparison(
             name, derivative_unit(name, estimate.units),
-            float(estimate.values[index]) if kept else None,
-            float(estimate.cramer_rao[index]) if kept else None, value))
+            None if item is None else item.value,
+            None if item is None else item.cramer_rao, value))
     return rows
