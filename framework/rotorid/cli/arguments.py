@@ -13,27 +13,26 @@ from pathlib import Path
 from rotorid.io import parse_number
 
 
+def _number(text: str, convert, accepted, rule: str):
+    """``convert(text)`` when it reads and ``accepted`` holds for it; else the ``rule``."""
+    try:
+        value = convert(text)
+    except ValueError:
+        value = None
+    if value is None or not accepted(value):
+        raise argparse.ArgumentTypeError(f"{rule}, got {text!r}")
+    return value
+
+
 def seed(text: str) -> int:
     """A noise seed: a whole number ≥ 0."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"a seed is a whole number ≥ 0, got {text!r}")
-    return value
+    return _number(text, int, lambda value: value >= 0, "a seed is a whole number ≥ 0")
 
 
 def run_count(text: str) -> int:
     """The number of Monte Carlo runs: a whole number ≥ 2 (one run has no spread)."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 2:
-        raise argparse.ArgumentTypeError(f"a Monte Carlo needs a whole number ≥ 2 of runs to "
-                                         f"estimate a spread, got {text!r}")
-    return value
+    return _number(text, int, lambda value: value >= 2,
+                   "a Monte Carlo needs a whole number ≥ 2 of runs to estimate a spread")
 
 
 def output_directory(text: str) -> str:
@@ -86,10 +85,5 @@ def trim(text: str) -> str | dict[str, float]:
 
 def seconds(text: str) -> float:
     """A positive time in s."""
-    try:
-        value = parse_number(text)
-    except ValueError:
-        value = -1.0
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"a time in s is a positive number, got {text!r}")
-    return value
+    return _number(text, parse_number, lambda value: value > 0,
+                   "a time in s is a positive number")
