@@ -106,8 +106,8 @@ def _bode_caption(pair: str, item) -> str:
     return text + (". Phases share one 360° branch; markers as in the error plots.")
 
 
-def _muad_range(result) -> str:
-    envelopes = envelopes_by_name(result.case.envelopes, band=result.case.band)
+def _muad_range(envelopes) -> str:
+    """The MUAD envelope's frequency range of the case's ``envelopes`` (by name), as text."""
     muad = envelopes.get("muad")
     if muad is None or getattr(muad, "omega_range", None) is None:
         return "the envelope's range"
@@ -144,11 +144,10 @@ def case_figures(result, figures_dir: Path) -> dict[str, list[ReportFigure]]:
         name = f"time_{file_stem(maneuver.name)}"
         save_figure(figure, figures_dir / name)
         written["time"].append(ReportFigure(f"{name}.png", _time_caption(maneuver, MODELS)))
-    envelopes = [e for e in envelopes_by_name(result.case.envelopes,
-                                              band=result.case.band).values()
-                 if e.kind == "bounds"]
+    by_name = envelopes_by_name(result.case.envelopes, band=result.case.band)
+    envelopes = [e for e in by_name.values() if e.kind == "bounds"]
     reference = result.verification.get("with delays")
-    muad_range = _muad_range(result)
+    muad_range = _muad_range(by_name)
     for item in () if reference is None else reference.pairs:
         output, control = parse_pair(item.pair, signals.outputs.names, signals.inputs.names)
         errors = {label: result.verification[label][item.pair] for label in MODELS
