@@ -61,13 +61,16 @@ def test_delays_and_verification_use_the_structures_parameters(filtered):
 
 def test_the_result_file_gives_the_model_without_the_noise_parameters(filtered):
     """rotorid.load_result (behind verify, simulate and export) reads the filter-error model:
-    its derivatives and delays, F and R left out as parameters of the estimation."""
+    its derivatives and delays, F and R kept apart as parameters of the estimation."""
     result, directory = filtered
     identified = load_result(directory / "result.json")
     structure = result.structures["with delays"]
+    estimate = result.estimates["with delays"]
     assert identified.structure.parameter_names == structure.parameter_names
-    assert identified.values == {n: result.estimates["with delays"].value(n)
-                                 for n in structure.parameter_names}
+    assert identified.values == {n: estimate.value(n) for n in structure.parameter_names}
+    noise = [n for n in estimate.parameter_names if n not in structure.parameter_names]
+    assert noise and all(n[:2] in ("F_", "R_") for n in noise)
+    assert identified.noise == {n: estimate.value(n) for n in noise}
 
 
 def test_estimators_side_by_side_in_result_and_report(filtered):

@@ -9,8 +9,14 @@ Two kinds of file hold identified models:
   with the case's structure declaration and the trim condition.
 
 Either gives an :class:`IdentifiedModel`: the identified structure (the derivatives the
-reduction removed are gone, the estimated delays are on), its parameter values and the
-estimate, and from them the state-space system (:mod:`rotorid.model.statespace`).
+reduction removed are gone, the estimated delays are on), its parameter values, an estimator's
+own noise parameters and the estimate, and from them the state-space system
+(:mod:`rotorid.model.statespace`).
+
+Each parameter of a record has a role (:func:`parameter_role`): a parameter of the model, of
+the records (output biases, initial states), or an estimator's own noise parameter. A name
+that is none of these is a derivative the structure cannot hold, most likely because the
+result is read with another model file than the one it was estimated with; it is refused.
 """
 
 from __future__ import annotations
@@ -35,6 +41,8 @@ STUDY_MODELS = ("with delays", "no delays")
 #: Parameters that belong to the identification records, not to the model: output biases and
 #: initial states per maneuver.
 RECORD_PARAMETER_PREFIXES = ("bias_", "x0_")
+#: The roles of an estimate's parameters (:func:`parameter_role`).
+PARAMETER_ROLES = ("model", "record", "noise", "unknown")
 
 
 @attrs.frozen(eq=False)
@@ -47,6 +55,10 @@ class IdentifiedModel:
             in the structure's units.
         estimate: the full estimate, or None for a file that lists only values.
         source: the file read; model: the study model chosen, None for an identify result.
+        noise: name → value of the estimator's own noise parameters (filter error's process
+            noise ``F_<state>``, disturbances ``D_<state>`` and ``T_<state>``, measurement
+            noise ``R_<output>``; units in the estimate's ``parameter_units``); empty for an
+            output-error result.
     """
 
     structure: ModelStructure
@@ -54,6 +66,7 @@ class IdentifiedModel:
     estimate: Estimate | None
     source: str
     model: str | None = None
+    noise: Mapping[str, float] = attrs.field(factory=dict, converter=dict)
 
     def __repr__(self) -> str:
         label = f", model {self.model!r}" if self.model else ""
@@ -80,23 +93,33 @@ def to_statespace(estimate: Estimate, structure: ModelStructure, pade_order: int
                        pade_order=pade_order).to_scipy()
 
 
-def is_model_parameter(structure: ModelStructure, name: str) -> bool:
-    """Whether ``name`` is a parameter of the model rather than of its estimation: a delay, or
-    a name whose letter is one of the structure's equation letters (a derivative; one the
-    structure cannot hold is then refused where it is used). The records' parameters
-    (:data:`RECORD_PARAMETER_PREFIXES`) and an estimator's own, such as filter error's process
-    and measurement noise ``F_*`` and ``R_*``, are not."""
+def parameter_role(structure: ModelStructure, name: str) -> str:
+    """The role of the estimated parameter ``name`` for ``structure`` (:data:`PARAMETER_ROLES`):
+
+    - ``"model"``: a delay, or a derivative whose letter is one of the structure's equation
+      letters (one the structure cannot hold is refused where it is used);
+    - ``"record"``: a parameter of the identification records
+      (:data:`RECORD_PARAMETER_PREFIXES`);
+    - ``"noise"``: an estimator's own noise parameter, ``<P>_<signal>`` with ``P`` no equation
+      letter and ``signal`` one of the structure's states or outputs (filter error's
+      ``F_<state>``, ``D_<state>``, ``T_<state>``, ``R_<output>``);
+    - ``"unknown"``: anything else, such as a derivative of another structure.
+    """
     if name.startswith(RECORD_PARAMETER_PREFIXES):
-        return False
-    return (delayed_derivative(name) is not None
-            or name.partition("_")[0] in structure.template.letters)
+        return "record"
+    prefix, _, signal = name.partition("_")
+    if delayed_derivative(name) is not None or prefix in structure.template.letters:
+        return "model"
+    if signal in (*structure.states, *structure.outputs):
+        return "noise"
+    return "unknown"
 
 
 def model_values(structure: ModelStructure, values: Mapping[str, float]) -> dict[str, float]:
-    """``values`` of the model's parameters (:func:`is_model_parameter`), as a mapping over
-    ``structure``'s parameters."""
+    """``values`` of the model's parameters (role ``"model"``, :func:`parameter_role`), as a
+    mapping over ``structure``'s parameters."""
     return structure.as_mapping({n: v for n, v in values.items()
-                                 if is_model_parameter(structure, n)})
+                                 if parameter_role(structure, n) == "model"})
 
 
 def load_result(path: str | os.PathLike, model: str | None = None,
@@ -128,9 +151,9 @@ def load_result(path: str | os.PathLike, model: str | None = None,
     if not isinstance(entry.get("parameters"), Mapping):
         raise DataFileError(f"{path}: no 'parameters' table; give a result written by "
                             f"`rotorid identify` or `rotorid study`")
-    identified, values = _identified(declared, entry, path)
+    identified, values, noise = _identified(declared, entry, path)
     estimate = Estimate.from_dict(entry) if "parameter_names" in entry else None
-    return IdentifiedModel(identified, values, estimate, str(path), chosen)
+    return IdentifiedModel(identified, values, estimate, str(path), chosen, noise)
 
 
 def named_model_file(path: str | os.PathLike) -> Path | None:
@@ -184,15 +207,25 @@ def _number(entry, name: str, path: Path) -> float:
 
 
 def _identified(structure: ModelStructure, entry: Mapping, path: Path):
-    """The identified structure and its values from an estimate record: fixed values set,
-    free derivatives the record does not list removed, its delays added."""
+    """The identified structure, its values and the estimator's noise parameters from an
+    estimate record: fixed values set, free derivatives the record does not list removed,
+    its delays added. A parameter of no known role is refused."""
     declared = entry.get("units")
     if declared is not None and unit_system(declared).name != structure.units.name:
         raise DataFileError(f"{path}: the estimate is in {declared!r} units but the model "
                             f"structure in {structure.units.name!r}; use the model file it "
                             f"was estimated with")
-    parameters = {n: _number(e, n, path) for n, e in entry["parameters"].items()
-                  if is_model_parameter(structure, n)}
+    by_role = {role: {} for role in PARAMETER_ROLES}
+    for name, item in entry["parameters"].items():
+        by_role[parameter_role(structure, name)][name] = _number(item, name, path)
+    if by_role["unknown"]:
+        raise DataFileError(
+            f"{path}: parameter(s) {', '.join(by_role['unknown'])} are neither derivatives of "
+            f"the model structure (equation letters {' '.join(structure.template.letters)}; "
+            f"states {' '.join(structure.states)}) nor an estimator's noise parameters: the "
+            f"result was most likely estimated with another model file; give that one "
+            f"(structure=... or the result's 'structure')")
+    parameters = by_role["model"]
     for name, value in dict(entry.get("fixed") or {}).items():
         if name in structure.names:
             structure = structure.fixing(name, _number(value, name, path))
@@ -203,8 +236,8 @@ def _identified(structure: ModelStructure, entry: Mapping, path: Path):
                                        is None], missing="error")
     values = dict(parameters)
     values.update({delay_parameter(n): v for n, v in delays.items()})
-    return structure, structure.as_mapping(values)
+    return structure, structure.as_mapping(values), by_role["noise"]
 
 
-__all__ = ["IdentifiedModel", "STUDY_MODELS", "is_model_parameter", "load_result",
-           "model_values", "named_model_file", "to_statespace"]
+__all__ = ["IdentifiedModel", "STUDY_MODELS", "load_result", "model_values", "named_model_file",
+           "parameter_role", "to_statespace"]
