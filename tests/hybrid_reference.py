@@ -5,6 +5,7 @@ trim."""
 
 from __future__ import annotations
 
+import attrs
 import numpy as np
 from hover_reference import multistep
 from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
@@ -16,6 +17,8 @@ from rotorid_helisim.linearize import PADFIELD_STATES, linearize
 
 #: white-noise standard deviations per output (ft/s², deg/s, deg), ax az q θ ay p φ r
 NOISE = np.array([0.1, 0.1, 0.1, 0.05, 0.1, 0.1, 0.05, 0.1])
+#: white-noise standard deviation of a measured rotor state (deg, ft/s)
+ROTOR_NOISE = 0.1
 
 
 def hybrid_reference(truth_model, trim) -> tuple[FlightCondition, np.ndarray, np.ndarray]:
@@ -35,7 +38,8 @@ def six_dof_of(condition, a, b) -> tuple[ModelStructure, np.ndarray]:
 
 def open_loop_maneuvers(structure, values, seed, duration=10.0, dt=0.02) -> ManeuverSet:
     """3211 and 2311 multisteps (0.15 s unit, 2 % of travel) on every control, both
-    directions, open loop, outputs with white noise :data:`NOISE`."""
+    directions, open loop, outputs with white noise :data:`NOISE`. Outputs beyond the body's
+    eight (measured rotor states) become extra channels with noise :data:`ROTOR_NOISE`."""
     n = int(round(duration / dt)) + 1
     time = np.arange(n) * dt
     clean = []
@@ -48,5 +52,11 @@ def open_loop_maneuvers(structure, values, seed, duration=10.0, dt=0.02) -> Mane
                                       np.zeros((n, 8))))
     clean = ManeuverSet(clean)
     rng = np.random.default_rng(seed)
-    return ManeuverSet([m.with_outputs(y + rng.normal(size=y.shape) * NOISE)
-                        for m, y in zip(clean, simulate(structure, values, clean))])
+    noise = np.concatenate([NOISE, np.full(structure.n_outputs - NOISE.size, ROTOR_NOISE)])
+    noisy = []
+    for maneuver, y in zip(clean, simulate(structure, values, clean)):
+        y = y + rng.normal(size=y.shape) * noise
+        rotor = dict(zip(structure.outputs[NOISE.size:], y[:, NOISE.size:].T))
+        noisy.append(attrs.evolve(maneuver.with_outputs(y[:, :NOISE.size]),
+                                  extra_channels=rotor))
+    return ManeuverSet(noisy)

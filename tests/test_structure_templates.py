@@ -42,7 +42,8 @@ def test_subsets_hold_their_axes_derivatives_in_six_dof_order():
     assert ModelStructure.six_dof(CONDITION).equation_rows == (0, 1, 2, 4, 5, 7)
     assert longitudinal.equation_rows == (0, 1, 2)
     assert set(TEMPLATES) == {"six-dof", "longitudinal", "lateral", "fixed-wing-longitudinal",
-                              "fixed-wing-lateral", "hybrid"}
+                              "fixed-wing-lateral", "hybrid", "hybrid-flap", "hybrid-inflow",
+                              "hybrid-inflow-flap"}
 
 
 def test_longitudinal_known_terms_match_the_hand_derived_values():

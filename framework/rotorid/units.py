@@ -57,6 +57,7 @@ CHANNEL_KINDS = {
     "ax": "acceleration", "ay": "acceleration", "az": "acceleration",
     "p_dot": "angular-acceleration", "q_dot": "angular-acceleration",
     "r_dot": "angular-acceleration",
+    "beta0": "angle", "beta1c": "angle", "beta1s": "angle", "vi": "velocity",
     "long": "control", "lat": "control", "coll": "control", "ped": "control",
     "elevator": "control", "aileron": "control", "rudder": "control", "throttle": "control",
 }

@@ -2,7 +2,7 @@
 :class:`~rotorid.data.Maneuver`.
 
 A file holds one maneuver as named columns (``time``, controls, outputs and optionally the
-body velocities ``u v w``) plus a flat header: ``name``, ``units``, ``initial_state`` (and
+body velocities ``u v w`` and the rotor angles ``beta0 beta1c beta1s``) plus a flat header: ``name``, ``units``, ``initial_state`` (and
 ``state_names``, the states it gives values for, when not ``u w q theta v p phi r``),
 ``channel_units`` (channel → the unit it was recorded in, when not its unit system's) and any
 metadata key (``condition``, ``kind``, ``axis``, ``direction`` …). Header values are JSON
@@ -27,6 +27,11 @@ from rotorid.units import unit_system
 #: Optional body-velocity columns, kept as extra channels (the kinematic consistency check
 #: integrates the accelerations against them, :mod:`rotorid.estimation.kinematics`).
 VELOCITIES = ("u", "v", "w")
+#: Optional rotor columns: coning and tip-path-plane tilts, kept as extra channels (a hybrid
+#: model measuring its rotor states reads them, docs/hybrid.md).
+ROTOR_ANGLES = ("beta0", "beta1c", "beta1s")
+#: Columns beyond the fixed layout that a file may hold without a model naming them.
+OPTIONAL_COLUMNS = VELOCITIES + ROTOR_ANGLES
 #: Header keys that are not metadata.
 RESERVED = ("name", "units", "initial_state", "state_names", "channel_units")
 #: Allowed metadata keys (also the ``# key: value`` syntax of CSV files).
@@ -66,9 +71,9 @@ def header_of(maneuver: Maneuver, where: str) -> dict:
 
 def columns_of(maneuver: Maneuver) -> dict[str, np.ndarray]:
     """Channel name → 1-D array: time, the inputs and the outputs the maneuver holds, and its
-    body velocities if it has them."""
-    velocities = [v for v in VELOCITIES if v in maneuver.extra_channels]
-    return {name: maneuver.channel(name) for name in (*maneuver.channel_names, *velocities)}
+    body velocities and rotor angles if it has them."""
+    optional = [c for c in OPTIONAL_COLUMNS if c in maneuver.extra_channels]
+    return {name: maneuver.channel(name) for name in (*maneuver.channel_names, *optional)}
 
 
 def vector(path: Path, channel: str, array) -> np.ndarray:
@@ -103,7 +108,7 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
     except DataError as error:
         raise DataFileError(str(error)) from None
     declared = () if ingestion.signals is None else ingestion.signals.all.names
-    known = tuple(dict.fromkeys(ALL_CHANNELS + VELOCITIES + declared + ingestion.keep_columns))
+    known = tuple(dict.fromkeys(ALL_CHANNELS + OPTIONAL_COLUMNS + declared + ingestion.keep_columns))
     unknown = [c for c in columns if c not in known]
     if unknown:
         raise DataFileError(f"{path}: unknown channel(s) {', '.join(map(repr, unknown))}; "

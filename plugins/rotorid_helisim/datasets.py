@@ -32,7 +32,13 @@ from rotorid.units import KNOT
 from rotorid_signals.signals import Multistep, Sweep
 
 from .loops import AXES, LoopDesign, design_loops, quasi_steady_model
-from .sensors import SensorNoise, perturbations, with_noise
+from .sensors import (
+    SensorNoise,
+    perturbations,
+    rotor_perturbations,
+    with_noise,
+    with_rotor_noise,
+)
 from .turbulence import Turbulence, gust_generator, turbulence_setting
 
 KINDS = ("3211", "2311", "sweep")
@@ -51,6 +57,10 @@ SWEEP_TIME = 40.0
 SWEEP_AMPLITUDE_RATIO = 3.0
 MULTISTEP_START = 2.0  #: s of trim before the first pulse
 MULTISTEP_RECORD = 15.0  #: s, whole record at duration_scale 1
+
+
+#: Settings left out of :meth:`DataSetConfig.as_dict` (and so of the digest) at these values.
+_OPTIONAL = {"turbulence": None, "rotor_channels": False}
 
 
 def _choice(allowed):
@@ -101,6 +111,8 @@ class DataSetConfig:
         loops: loop bandwidths (or a mapping of :class:`~.loops.LoopDesign` fields).
         turbulence: None (still air), a :class:`~.turbulence.Turbulence`, ``"light"``,
             ``"moderate"`` or a mapping (:func:`~.turbulence.turbulence_setting`).
+        rotor_channels: also write the coning and tip-path-plane tilts ``beta0 beta1c
+            beta1s`` (deg, perturbations from trim, with sensor noise) as extra channels.
     """
 
     condition: str = "hover"
@@ -123,6 +135,8 @@ class DataSetConfig:
     loops: LoopDesign = attrs.field(factory=LoopDesign, converter=lambda v: v if isinstance(
         v, LoopDesign) else LoopDesign(**v))
     turbulence: Turbulence | None = attrs.field(default=None, converter=turbulence_setting)
+    rotor_channels: bool = attrs.field(default=False, validator=attrs.validators.instance_of(
+        bool))
 
     @classmethod
     def for_condition(cls, name: str, **options) -> "DataSetConfig":
@@ -154,9 +168,12 @@ class DataSetConfig:
 
     def as_dict(self) -> dict:
         """Plain JSON-able settings (also the content hashed by :meth:`digest`). Still air
-        leaves ``turbulence`` out, so still-air sets keep the keys they had before
-        turbulence existed."""
-        return attrs.asdict(self, filter=lambda a, v: not (a.name == "turbulence" and v is None),
+        leaves ``turbulence`` out and a set without rotor channels ``rotor_channels``, so
+        such sets keep the keys they had before either existed."""
+        def stated(attribute, value):
+            return attribute.name not in _OPTIONAL or value != _OPTIONAL[attribute.name]
+
+        return attrs.asdict(self, filter=stated,
                             value_serializer=lambda _, __, v: list(v)
                             if isinstance(v, tuple) else v)
 
@@ -285,9 +302,14 @@ def fly_jobs(plant, jobs, progress=None, plant_id: str = "", with_record: bool =
                                           plant.state_names)
         if job.config.turbulence is not None:
             metadata["turbulence"] = job.config.as_dict()["turbulence"]
+        rotor = {}
+        if job.config.rotor_channels:
+            rotor = with_rotor_noise(rotor_perturbations(record.states[row, :n], job.trim_state,
+                                                         plant.state_names),
+                                     job.config.noise, job.config.seed, spec.name)
         by_job[id(job)].append(Maneuver(spec.name, record.time[:n],
                                         record.stick[row, :n] - job.trim_stick, outputs,
-                                        metadata))
+                                        metadata, extra_channels=rotor))
     sets = [ManeuverSet(by_job[id(job)]) for job in jobs]
     if with_record:
         return sets, record, [spec.name for _, spec in rows]

@@ -25,7 +25,7 @@ from rotorid.plugin.contracts import CaseData
 
 from . import store
 from .datasets import DataSetConfig, Job, fly_jobs
-from .sensors import NoiseRealisations, SensorNoise
+from .sensors import NoiseRealisations
 
 #: The paper's split of a data set: multisteps identify, sweeps verify.
 IDENTIFICATION_KINDS = ("3211", "2311")
@@ -160,7 +160,7 @@ class HelisimSource:
             return TurbulentFlights(self, attrs.evolve(config, kinds=identification),
                                     Path(directory))
         quiet = attrs.evolve(config, kinds=identification,
-                             noise=SensorNoise({c: 0.0 for c in config.noise.sigma}))
+                             noise=config.noise.silenced(config.rotor_channels))
         clean, _ = self.generate_into(quiet, directory)
         return NoiseRealisations(clean, config.noise)
 

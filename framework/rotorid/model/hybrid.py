@@ -38,6 +38,8 @@ CYCLIC = ("long", "lat")
 DIRECT_DERIVATIVES = ("L_p", "L_q", "M_p", "M_q", "L_long", "L_lat", "M_long", "M_lat")
 #: Derivatives that carry a delay for the actuators between stick and blade angle.
 FLAP_CONTROL_DELAYS = ("Bc_long", "Bc_lat", "Bs_long", "Bs_lat")
+#: The templates of the hybrid model without coning and inflow: flap states unmeasured, measured.
+FLAP_TEMPLATES = ("hybrid", "hybrid-flap")
 #: Start of the flap time constant when nothing better is known, s (hingeless rotors: 0.05–0.1).
 DEFAULT_FLAP_TIME_CONSTANT = 0.07
 
@@ -76,7 +78,8 @@ def hybrid_start(six_dof: Mapping[str, float],
 
 def hybrid_from_six_dof(structure: ModelStructure, values,
                         flap_time_constant: float = DEFAULT_FLAP_TIME_CONSTANT,
-                        delay_upper: float | None = 0.1) -> ModelStructure:
+                        delay_upper: float | None = 0.1,
+                        template: str = "hybrid") -> ModelStructure:
     """The hybrid structure of a 6-DoF structure and its estimate, started at
     :func:`hybrid_start`.
 
@@ -89,10 +92,15 @@ def hybrid_from_six_dof(structure: ModelStructure, values,
     Args:
         structure: a ``six-dof`` structure; values: its parameter vector or mapping.
         flap_time_constant: τ of the start in s.
+        template: ``hybrid``, or ``hybrid-flap`` for data that measure the tip-path-plane
+            tilts (extra channels ``beta1c beta1s``).
     """
     if structure.template.name != "six-dof":
         raise StructureError(f"the hybrid model is built on a six-dof structure, got the "
                              f"{structure.template.name} template")
+    if template not in FLAP_TEMPLATES:
+        raise StructureError(f"a hybrid model built on a six-dof model uses one of the "
+                             f"templates {', '.join(FLAP_TEMPLATES)}, not {template!r}")
     six_dof = {d.name: d.initial for d in structure.derivatives if d.fixed}
     six_dof.update(structure.as_mapping(values))
     controls = [c for c in structure.controls
@@ -100,7 +108,7 @@ def hybrid_from_six_dof(structure: ModelStructure, values,
     keep = ((set(structure.names) - set(DIRECT_DERIVATIVES)) | set(FLAP_DERIVATIVES)
             | set(DISC_MOMENTS)
             | {f"{letter}_{c}" for letter in ("Bc", "Bs") for c in controls})
-    populated = ModelStructure.populated(structure.condition, "hybrid", structure.units, SIGNS)
+    populated = ModelStructure.populated(structure.condition, template, structure.units, SIGNS)
     hybrid = populated.without(*(n for n in populated.names if n not in keep))
     for derivative in structure.derivatives:
         if derivative.fixed and derivative.name in hybrid.names:

@@ -28,7 +28,11 @@ in the structure's unit system, :func:`rigid_body_terms`):
   ``beta p phi r ay`` (β = v/U0), 15 derivatives;
 * ``hybrid``: the six-dof model plus the rotor's tip-path-plane tilts ``beta1c beta1s`` as
   first-order states driven by the equations ``Bc`` and ``Bs``, with the known rate feedback
-  β̇1c = q, β̇1s = p (docs/hybrid.md); 96 derivatives.
+  β̇1c = q, β̇1s = p (docs/hybrid.md); 96 derivatives. ``hybrid-flap`` measures the tilts
+  (outputs ``beta1c beta1s`` after the body's);
+* ``hybrid-inflow``: the hybrid model plus coning ``beta0`` and the uniform induced velocity
+  ``vi`` as first-order states (equations ``B0`` and ``Vi``); 140 derivatives.
+  ``hybrid-inflow-flap`` measures ``beta0 beta1c beta1s``.
 
 A subset's known terms are the six-dof's rows and columns of its states, so a subset is the
 six-dof model with the other axes' states held at trim. A model file may also declare a template
@@ -313,32 +317,63 @@ FLAP_EQUATIONS = (("Bc", "beta1c"), ("Bs", "beta1s"))
 #: Known rate feedback: the disc keeps its orientation in space, so relative to the shaft it
 #: tilts at the body rate, β̇1c = q + …, β̇1s = p + … (derived in docs/hybrid.md).
 RATE_FEEDBACK = (("beta1c", "q"), ("beta1s", "p"))
+#: Coning (angle, up) and the uniform induced velocity through the disc (velocity, down the
+#: shaft) of the ``hybrid-inflow`` templates (docs/hybrid.md, "Coning and inflow").
+CONING_INFLOW_STATES = ("beta0", "vi")
+#: Letters of the coning and inflow equations: ``B0`` drives β̇0, ``Vi`` drives v̇i.
+CONING_INFLOW_EQUATIONS = (("B0", "beta0"), ("Vi", "vi"))
 
 
 def hybrid_terms(template: StructureTemplate, condition, units: UnitSystem) -> KnownTerms:
-    """The six-dof rigid body's known terms (its outputs, flap states unmeasured) plus the
-    flap's rate feedback."""
+    """The six-dof rigid body's known terms, the flap's rate feedback, and a rotor output
+    (``beta1c`` …) reading its state; the coning and inflow equations have no known term."""
     body = rigid_body_terms(SIX_DOF, condition, units)
-    states = template.states
-    n, p = len(states), len(OUTPUTS)
+    states, outputs = template.states, template.outputs
+    n, p = len(states), len(outputs)
     rows = [states.index(s) for s in STATES]
+    body_outputs = [outputs.index(y) for y in OUTPUTS]
     a, c, measured = np.zeros((n, n)), np.zeros((p, n)), np.zeros((p, n))
     a[np.ix_(rows, rows)] = body.a
-    c[:, rows], measured[:, rows] = body.c, body.measured
+    c[np.ix_(body_outputs, rows)] = body.c
+    measured[np.ix_(body_outputs, rows)] = body.measured
     for flap, rate in RATE_FEEDBACK:
         a[states.index(flap), states.index(rate)] = 1.0
+    for row, name in enumerate(outputs[len(OUTPUTS):], start=len(OUTPUTS)):
+        c[row, states.index(name)] = 1.0
     return KnownTerms(a, c, np.zeros((p, len(template.controls))), measured)
 
 
-HYBRID = StructureTemplate(
-    "hybrid", STATES + FLAP_STATES, CONTROLS, OUTPUTS,
-    "six-dof rigid body with first-order tip-path-plane flapping (docs/hybrid.md)",
-    SIX_DOF.equations + FLAP_EQUATIONS,
-    STATE_VARIABLES + FLAP_STATES + CONTROLS,
-    SIX_DOF.kinds + tuple((s, "angle") for s in FLAP_STATES), hybrid_terms)
+def _hybrid_template(name: str, rotor_states: tuple[str, ...],
+                     rotor_equations: tuple[tuple[str, str], ...],
+                     measured: tuple[str, ...], summary: str) -> StructureTemplate:
+    """A hybrid template: the six-dof body, the rotor states with their equations, and the
+    body's outputs followed by the ``measured`` rotor states."""
+    states = STATES + rotor_states
+    return StructureTemplate(
+        name, states, CONTROLS, OUTPUTS + measured, summary,
+        SIX_DOF.equations + rotor_equations, STATE_VARIABLES + rotor_states + CONTROLS,
+        SIX_DOF.kinds + tuple((s, CHANNEL_KINDS[s]) for s in rotor_states), hybrid_terms)
+
+
+HYBRID = _hybrid_template(
+    "hybrid", FLAP_STATES, FLAP_EQUATIONS, (),
+    "six-dof rigid body with first-order tip-path-plane flapping (docs/hybrid.md)")
+HYBRID_FLAP = _hybrid_template(
+    "hybrid-flap", FLAP_STATES, FLAP_EQUATIONS, FLAP_STATES,
+    "the hybrid model with the tip-path-plane tilts measured (docs/hybrid.md)")
+HYBRID_INFLOW = _hybrid_template(
+    "hybrid-inflow", FLAP_STATES + CONING_INFLOW_STATES,
+    FLAP_EQUATIONS + CONING_INFLOW_EQUATIONS, (),
+    "the hybrid model with coning and uniform inflow states (docs/hybrid.md)")
+HYBRID_INFLOW_FLAP = _hybrid_template(
+    "hybrid-inflow-flap", FLAP_STATES + CONING_INFLOW_STATES,
+    FLAP_EQUATIONS + CONING_INFLOW_EQUATIONS, ("beta0",) + FLAP_STATES,
+    "the coning/inflow hybrid model with coning and tip-path-plane tilts measured "
+    "(docs/hybrid.md)")
 
 TEMPLATES = {t.name: t for t in (SIX_DOF, LONGITUDINAL, LATERAL, FIXED_WING_LONGITUDINAL,
-                                 FIXED_WING_LATERAL, HYBRID)}
+                                 FIXED_WING_LATERAL, HYBRID, HYBRID_FLAP, HYBRID_INFLOW,
+                                 HYBRID_INFLOW_FLAP)}
 
 
 # ----------------------------------------------------------------- declared templates

@@ -19,6 +19,9 @@ def add_arguments(parser) -> None:
                         choices=("still", "light", "moderate"),
                         help="Dryden turbulence, MIL-F-8785C presets at 100 ft "
                              "(docs/truth-model.md); default still air")
+    parser.add_argument("--rotor-channels", action="store_true",
+                        help="also write the coning and tip-path-plane tilts beta0 beta1c "
+                             "beta1s (deg, with sensor noise; docs/hybrid.md)")
     parser.add_argument("--quick", action="store_true",
                         help="shorter records (duration scale 0.3), for trying things out")
 
@@ -47,6 +50,8 @@ def run(args) -> int:
     settings = {"condition": args.condition, "seed": args.seed, "turbulence": args.turbulence}
     if args.quick:
         settings["quick"] = True
+    if args.rotor_channels:
+        settings["rotor_channels"] = True
     source = HelisimSource(progress=_Progress(f"flying the {args.condition} maneuvers"))
     maneuvers, cached = source.generate_into(settings, args.out)
     state = "unchanged, read from the cache" if cached else "written"
