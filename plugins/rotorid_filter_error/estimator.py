@@ -10,8 +10,11 @@ F is diagonal over the process-noise states (``F_<state>``: standard deviation o
 added to that state over one sample, structure units; by default the states of the structure's
 force and moment equations) and R diagonal over the structure's outputs (``R_<output>``, the
 measurement-noise variance, units²). States, controls and outputs are the structure's own
-(:attr:`~rotorid.model.structure.ModelStructure.states` …), so any linear structure fits. Both are estimated with the derivatives and delays. The
-steady-state Kalman filter (:mod:`.riccati`, :mod:`.kalman`) turns the data into innovations ν_n
+(:attr:`~rotorid.model.structure.ModelStructure.states` …), so any linear structure fits.
+Both are estimated with the derivatives and delays. Optional coloured disturbances, states of
+the filter with their own sizes and correlation times, add accelerations to chosen equations
+or translational gusts acting through the derivatives
+(:meth:`FilterErrorProblem._coloured_inputs`). The steady-state Kalman filter (:mod:`.riccati`, :mod:`.kalman`) turns the data into innovations ν_n
 with covariance B = H P Hᵀ + R; the negative log-likelihood is
 
     L = ½ Σ_n ν_nᵀ B⁻¹ ν_n + ½ N ln det B.
@@ -68,6 +71,11 @@ _SIZE_FLOOR = 1e-4
 _CORRELATION_START = 1.0
 #: Longest correlation time of a disturbance, s (a random walk for the record lengths flown).
 _LONGEST_CORRELATION = 1000.0
+#: Shortest correlation time of a gust, in samples: the outputs reading a gust's derivative
+#: terms (the accelerometers) see it directly, so a gust of a few samples' correlation is their
+#: measurement noise; with one sample allowed the linear tests' fit went there (T_wg 0.027 s,
+#: R_az at its floor) and the filter's covariance overflowed.
+_SHORTEST_GUST_SAMPLES = 10
 #: Lowest matched R, relative to the output's mean square innovation.
 _MATCH_FLOOR = 0.05
 
@@ -103,6 +111,26 @@ def process_noise_states(structure: ModelStructure, names: tuple[str, ...] | Non
     return tuple(s for s in structure.states if s in names)
 
 
+def gust_states(structure: ModelStructure, names: tuple[str, ...]) -> tuple[str, ...]:
+    """The states ``names`` that get a translational gust, in the structure's state order,
+    checked: a gust acts as the state's negative in its derivative terms, which the filter
+    makes exact over a sample only when no known term (gravity, kinematics) and no delayed
+    derivative reads the state."""
+    states = process_noise_states(structure, names, "gusts") if names else ()
+    known = structure.known_terms().a
+    for state in states:
+        if np.any(known[:, structure.states.index(state)] != 0):
+            raise EstimationError(f"gusts names {state}, which known terms of the structure "
+                                  f"read (a gust does not act on them); leave it out")
+        delayed = [d.name for d in structure.derivatives
+                   if d.variable == state and d.delay is not None]
+        if delayed:
+            raise EstimationError(f"gusts names {state}, which the delayed derivatives "
+                                  f"{', '.join(delayed)} read; a gust acts without delay, so "
+                                  f"remove their delays or leave {state} out")
+    return states
+
+
 def process_noise_start(structure: ModelStructure, states: tuple[str, ...],
                         variance: np.ndarray, dt: float) -> dict[str, float]:
     """Default start of ``F_<state>`` (structure units per sample): a tenth of the noise size
@@ -122,6 +150,22 @@ def process_noise_start(structure: ModelStructure, states: tuple[str, ...],
                 f"sample) or leave {state} out of process_noise")
         size = np.sqrt(variance[output]) * (dt if reads_rate else 1.0)
         starts[state] = _PROCESS_START * float(size)
+    return starts
+
+
+def gust_start(structure: ModelStructure, states: tuple[str, ...],
+               records: Records) -> dict[str, float]:
+    """Default start of ``D_<state>g`` (state units): the standard deviation of the recorded
+    output measuring the state (:func:`measuring_output`), or of the accelerometer reading its
+    equation times the correlation time's start (the speed that acceleration builds in that
+    time). Measured, not a fraction of the noise: from a gust far smaller than the data's
+    the fit ends with the gust switched off through its derivative (on the linear tests'
+    data, from a tenth of the noise size, L_v and L_p near zero, 50–560 CR off)."""
+    starts = {}
+    for state in states:
+        output, reads_rate = measuring_output(structure, state)
+        signal = records.outputs[..., output][records.mask]
+        starts[state] = float(np.std(signal)) * (_CORRELATION_START if reads_rate else 1.0)
     return starts
 
 
@@ -185,8 +229,9 @@ def _start_choice(instance, attribute, value):
 @attrs.frozen(eq=False)
 class NoiseParameters:
     """A filter-error parameter vector in parts: the structure's parameters, the white
-    process noise F (one per process-noise state), the disturbances' stationary standard
-    deviations D and correlation times T (s), and the measurement-noise variances R."""
+    process noise F (one per process-noise state), the coloured disturbances' (accelerations,
+    then gusts) stationary standard deviations D and correlation times T (s), and the
+    measurement-noise variances R."""
 
     structure: np.ndarray
     process: np.ndarray
@@ -201,7 +246,7 @@ class FilterErrorProblem:
 
     def __init__(self, structure: ModelStructure, maneuvers: ManeuverSet,
                  process_noise: tuple[str, ...], settings: Settings,
-                 disturbances: tuple[str, ...] = ()):
+                 disturbances: tuple[str, ...] = (), gusts: tuple[str, ...] = ()):
         self.structure = structure
         self.hold = maneuvers.hold
         self.records = Records.from_maneuvers(maneuvers, structure)
@@ -214,19 +259,25 @@ class FilterErrorProblem:
         self.disturbance_rows = [kept.index(s) for s in disturbances]
         self.disturbance_reading = structure.known_terms().measured[
             :, [structure.states.index(s) for s in disturbances]]
+        self.gusts = gusts
+        self.gust_columns = [kept.index(s) for s in gusts]
+        self.gust_known_reading = structure.known_terms().c[
+            :, [structure.states.index(s) for s in gusts]]
+        coloured = disturbances + tuple(f"{s}g" for s in gusts)
         self.n_structure = structure.n_parameters
         self.output_names = structure.outputs
         self.parameter_names = (tuple(structure.parameter_names)
                                 + tuple(f"F_{s}" for s in process_noise)
-                                + tuple(f"D_{s}" for s in disturbances)
-                                + tuple(f"T_{s}" for s in disturbances)
+                                + tuple(f"D_{c}" for c in coloured)
+                                + tuple(f"T_{c}" for c in coloured)
                                 + tuple(f"R_{o}" for o in structure.outputs))
         signals = structure.signals
         self.output_units = signals.outputs.units
         self.parameter_units = {
             **{f"F_{s}": signals.states[s].unit for s in process_noise},
             **{f"D_{s}": rate_unit(signals.states[s].unit) for s in disturbances},
-            **{f"T_{s}": "s" for s in disturbances},
+            **{f"D_{s}g": signals.states[s].unit for s in gusts},
+            **{f"T_{c}": "s" for c in coloured},
             **{f"R_{o.name}": f"({o.unit})²" for o in signals.outputs}}
         # The innovations' RMSE counts each output in its reference unit (a pure number).
         scale = rmse_reference_factors(self.output_units)
@@ -234,8 +285,8 @@ class FilterErrorProblem:
 
     def split(self, values) -> NoiseParameters:
         """The parts of a parameter vector."""
-        sizes = np.cumsum([self.n_structure, len(self.noise_rows),
-                           len(self.disturbance_rows), len(self.disturbance_rows)])
+        n_coloured = len(self.disturbances) + len(self.gusts)
+        sizes = np.cumsum([self.n_structure, len(self.noise_rows), n_coloured, n_coloured])
         return NoiseParameters(*np.split(np.asarray(values), sizes))
 
     def filter(self, values, directions: bool = False):
@@ -267,13 +318,36 @@ class FilterErrorProblem:
         if directions:
             d_dir[k + n_f + np.arange(n_d), np.arange(n_d)] += (
                 2j * COMPLEX_STEP * sigma * (1 - decay[0].real**2))
-        system = with_disturbances(system, self.disturbance_rows, self.disturbance_reading,
-                                   decay, self.records.dt)
+        system = with_disturbances(system, *self._coloured_inputs(system), decay)
         process = np.zeros((n_dir, system.size, system.size), dtype=system.transition.dtype)
         process[:, self.noise_rows, self.noise_rows] = q_dir
         extra = system.size - n_d + np.arange(n_d)
         process[:, extra, extra] = d_dir
         return system, steady_state_filter(system.transition, system.output, process, r_dir)
+
+    def _coloured_inputs(self, system) -> tuple[np.ndarray, np.ndarray]:
+        """How the coloured disturbances enter ``system``: state inputs (D, S, m) and output
+        readings (D, p, m), the accelerations first, then the gusts.
+
+        An acceleration d adds dt·d to its equation's state over a sample, and the outputs
+        reading that equation (the accelerometers) read d. A translational gust g acts as
+        the state's negative in every derivative term: held over a sample it adds
+        −(Φ − I)·e_j·g (Φ − I = Γ·A, Γ = ∫₀^dt e^(As) ds; exact because no known term and no
+        delayed derivative reads the state, :func:`gust_states`), and the outputs read
+        −(H − C0)·e_j·g, their derivative terms only (an output measuring the state itself
+        measures the aircraft's motion, not the air's).
+        """
+        n_dir, size = system.transition.shape[:2]
+        n_d = len(self.disturbances)
+        accelerations = np.zeros((n_dir, size, n_d))
+        accelerations[:, self.disturbance_rows, np.arange(n_d)] = self.records.dt
+        columns = self.gust_columns
+        gusts = -(system.transition[:, :, columns] - np.eye(size)[:, columns])
+        reading = -(system.output[:, :, columns] - self.gust_known_reading)
+        return (np.concatenate([accelerations, gusts], axis=2),
+                np.concatenate([np.broadcast_to(self.disturbance_reading,
+                                                (n_dir,) + self.disturbance_reading.shape),
+                                reading], axis=2))
 
     def innovations(self, values) -> tuple[np.ndarray, np.ndarray]:
         """Time-major innovations (N, M, p) and their covariance B (p, p) at ``values``."""
@@ -283,7 +357,10 @@ class FilterErrorProblem:
 
     def evaluate(self, values):
         """(cost exp(2L/N), B, innovations per maneuver, innovation RMSE); cost = inf when the
-        filter does not exist or the innovations overflow."""
+        filter does not exist, the innovations overflow or ``values`` are not finite (a
+        step from a non-finite information matrix)."""
+        if not np.all(np.isfinite(values)):
+            return np.inf, None, None, np.inf
         try:
             innovations, b = self.innovations(values)
         except (EstimationError, np.linalg.LinAlgError):
@@ -353,6 +430,12 @@ class FilterErrorEstimator:
             both estimated, which the outputs reading that equation (the accelerometers) see
             too; for turbulence, whose gusts are far from white at the sample rate.
             D starts at the process-noise start per second, T at 1 s.
+        gusts: states (velocities) that get a translational gust (default none): a
+            first-order Gauss-Markov air velocity g acting as the state's negative in every
+            derivative term (−A's column of the state times g, so through the derivatives
+            themselves), with stationary standard deviation ``D_<state>g`` (state units) and
+            correlation time ``T_<state>g`` (s), both estimated; D starts at
+            :func:`gust_start`, T at 1 s.
         enforce_signs: use the sign priors as bounds.
         start: ``"auto"`` (equation error when every derivative's initial value is zero, else
             the initial values), ``"initial"`` or ``"equation-error"`` for the derivatives and delays.
@@ -366,6 +449,7 @@ class FilterErrorEstimator:
     process_noise: tuple[str, ...] | None = attrs.field(default=None, converter=_names)
     process_noise_start: Mapping[str, float] | None = None
     disturbances: tuple[str, ...] = attrs.field(default=(), converter=_names)
+    gusts: tuple[str, ...] = attrs.field(default=(), converter=_names)
     enforce_signs: bool = False
     start: str = attrs.field(default="auto", validator=_start_choice)
     callback: Callable | None = None
@@ -388,7 +472,8 @@ class FilterErrorEstimator:
                                 shorten_steps=False)
             problem = FilterErrorProblem(
                 structure, maneuvers, process_noise_states(structure, self.process_noise),
-                settings, process_noise_states(structure, self.disturbances, "disturbances"))
+                settings, process_noise_states(structure, self.disturbances, "disturbances"),
+                gust_states(structure, self.gusts))
             values, note, given = self._start_values(problem, maneuvers, start)
             values = matched_measurement_noise(problem, values, given)
             bounds = self._bounds(problem, values)
@@ -431,10 +516,12 @@ class FilterErrorEstimator:
         steps = {**process_noise_start(structure, missing, variance, dt),
                  **{name[2:]: float(value) for name, value in given.items()}}
         disturbances = process_noise_start(structure, problem.disturbances, variance, dt)
+        gusts = gust_start(structure, problem.gusts, problem.records)
+        coloured = len(problem.disturbances) + len(problem.gusts)
         values = np.concatenate([initial, [steps[s] for s in states],
                                  [disturbances[s] / dt for s in problem.disturbances],
-                                 np.full(len(problem.disturbances), _CORRELATION_START),
-                                 variance])
+                                 [gusts[s] for s in problem.gusts],
+                                 np.full(coloured, _CORRELATION_START), variance])
         if start is None:
             return values, note, ()
         if isinstance(start, Mapping):
@@ -463,8 +550,10 @@ class FilterErrorEstimator:
         lower, upper = problem.structure.bounds(enforce_signs=self.enforce_signs)
         parts = problem.split(values)
         n_f, n_d = parts.process.size, parts.disturbance.size
-        return (np.concatenate([lower, np.zeros(n_f), _SIZE_FLOOR * parts.disturbance,
-                                np.full(n_d, problem.records.dt),
+        dt = problem.records.dt
+        shortest = np.concatenate([np.full(len(problem.disturbances), dt),
+                                   np.full(len(problem.gusts), _SHORTEST_GUST_SAMPLES * dt)])
+        return (np.concatenate([lower, np.zeros(n_f), _SIZE_FLOOR * parts.disturbance, shortest,
                                 _VARIANCE_FLOOR * parts.measurement]),
                 np.concatenate([upper, np.full(n_f + n_d, np.inf),
                                 np.full(n_d, _LONGEST_CORRELATION),

@@ -125,23 +125,26 @@ def companion_system(structure: ModelStructure, values, dt: float, hold: str,
                            output_forcing)
 
 
-def with_disturbances(system: CompanionSystem, rows, reading: np.ndarray, decay: np.ndarray,
-                      dt: float) -> CompanionSystem:
-    """``system`` with one first-order Gauss-Markov disturbance state d_j per entry of
-    ``rows`` (indices of the system's states) appended: d_j,n+1 = decay[:, j]·d_j,n (plus its
-    driving noise, which the caller puts in Q) and x_rows[j],n+1 gains dt·d_j,n, so d_j is an
-    acceleration of that state's equation held over the sample; the outputs that read that
-    equation's terms (the accelerometers) read d_j too, with weights ``reading`` (p, m).
-    ``decay`` (D, m) per direction (complex directions carry the derivatives of a
-    correlation time)."""
-    if not len(rows):
+def with_disturbances(system: CompanionSystem, inputs: np.ndarray, reading: np.ndarray,
+                      decay: np.ndarray) -> CompanionSystem:
+    """``system`` with one first-order Gauss-Markov disturbance state d_j per column of
+    ``inputs`` appended: d_j,n+1 = decay[:, j]·d_j,n (plus its driving noise, which the caller
+    puts in Q), the system's states gain inputs[:, :, j]·d_j,n and the outputs read
+    reading[:, :, j]·d_j,n.
+
+    Args:
+        inputs: (D, S, m) per direction (complex directions carry the parameters' derivatives).
+        reading: (D, p, m) or (1, p, m).
+        decay: (D, m) e^(−dt/T) of each disturbance's correlation time T.
+    """
+    m = inputs.shape[-1]
+    if not m:
         return system
     n_dir, size = system.transition.shape[:2]
-    m = len(rows)
-    dtype = np.result_type(system.transition, decay)
+    dtype = np.result_type(system.transition, inputs, decay)
     transition = np.zeros((n_dir, size + m, size + m), dtype)
     transition[:, :size, :size] = system.transition
-    transition[:, list(rows), size + np.arange(m)] = dt
+    transition[:, :size, size:] = inputs
     transition[:, size + np.arange(m), size + np.arange(m)] = decay
     output = np.concatenate([system.output, np.broadcast_to(
         reading, system.output.shape[:2] + (m,))], axis=2)
