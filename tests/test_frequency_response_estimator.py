@@ -9,7 +9,11 @@ import rotorid
 from rotorid.data import Maneuver, ManeuverSet
 from rotorid.errors import IdentifiabilityWarning
 from rotorid.model.derivatives import Derivative
-from rotorid.simulation.transfer import frequency_response, response_sensitivities
+from rotorid.simulation.transfer import (
+    compared_response,
+    frequency_response,
+    response_sensitivities,
+)
 from rotorid.verification.compare import default_omega
 from rotorid.verification.frequency import FrequencyResponse, response_from_maneuvers
 from rotorid_envelopes.cost import MismatchCost
@@ -59,6 +63,32 @@ def test_response_sensitivities_match_central_differences():
         step[k] = 1e-6
         central = (frequency_response(structure, values + step, omega)
                    - frequency_response(structure, values - step, omega)) / 2e-6
+        assert np.abs(dh[:, k] - central).max() <= 1e-7 * np.abs(central).max()
+
+
+def test_compared_response_is_the_mixed_entry_with_central_difference_derivatives():
+    structure = rotorid.ModelStructure.six_dof(
+        rotorid.FlightCondition.from_airspeed(60.0, theta0_deg=3.0)).with_delays(
+        ["L_lat", "M_long", "L_p"]).fixing("N_r", -1.0)
+    rng = np.random.default_rng(2)
+    values = rng.normal(size=structure.n_parameters) * 0.3
+    values[structure.is_delay()] = [0.03, 0.05, 0.07]
+    omega = np.geomspace(0.3, 20.0, 15)
+    rows = rng.integers(0, structure.n_outputs, omega.size)
+    mixing = rng.normal(size=(omega.size, 4)) + 1j * rng.normal(size=(omega.size, 4))
+
+    def mixed(parameters):
+        full = frequency_response(structure, parameters, omega)
+        return np.einsum("fi,fi->f", full[np.arange(omega.size), rows], mixing)
+
+    h, dh = compared_response(structure, values, omega, rows, mixing)
+    reference = mixed(values)
+    np.testing.assert_allclose(h, reference, rtol=1e-12, atol=1e-14 * np.abs(reference).max())
+    assert compared_response(structure, values, omega, rows, mixing, False)[1] is None
+    for k in range(structure.n_parameters):
+        step = np.zeros_like(values)
+        step[k] = 1e-6
+        central = (mixed(values + step) - mixed(values - step)) / 2e-6
         assert np.abs(dh[:, k] - central).max() <= 1e-7 * np.abs(central).max()
 
 

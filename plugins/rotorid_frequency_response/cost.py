@@ -12,7 +12,8 @@ H_i of the pair's output to each input i (exact delays) mixed as the pair's data
 
 whose Jacobian is exact: ∂|H|_dB/∂θ = (20/ln 10)·Re(∂H/∂θ / H) and
 ∂∠H_deg/∂θ = (180/π)·Im(∂H/∂θ / H), with ∂H/∂θ = Σ_i κ_i·∂H_i/∂θ from
-:func:`rotorid.simulation.transfer.response_sensitivities`.
+:func:`rotorid.simulation.transfer.compared_response`, which forms only the compared
+entry of each point.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ import numpy as np
 from rotorid.data import OUTPUT_CHANNELS
 from rotorid.frozen import readonly_array
 from rotorid.model.structure import ModelStructure
-from rotorid.simulation.transfer import frequency_response, response_sensitivities
+from rotorid.simulation.transfer import compared_response
 from rotorid.verification.envelopes import wrap180
 from rotorid_envelopes.cost import W_GAIN, W_PHASE
 
@@ -73,12 +74,8 @@ class MismatchProblem:
 
     def evaluate(self, values, jacobian: bool = True) -> Mismatch:
         """Residuals e (2n,), their Jacobian ∂e/∂θ (2n, P) when asked, and J per pair."""
-        points = np.arange(self.omega.size)
-        if jacobian:
-            full, derivatives = response_sensitivities(self.structure, values, self.omega)
-        else:
-            full, derivatives = frequency_response(self.structure, values, self.omega), None
-        response = np.einsum("fi,fi->f", full[points, self.rows], self.mixing)
+        response, derivatives = compared_response(self.structure, values, self.omega,
+                                                  self.rows, self.mixing, jacobian)
         with np.errstate(divide="ignore", invalid="ignore"):
             magnitude = _DB_PER_NEPER * np.log(np.abs(response)) - self.measured_db
             phase = wrap180(np.degrees(np.angle(response)) - self.measured_deg)
@@ -90,8 +87,7 @@ class MismatchProblem:
         if derivatives is None:
             return Mismatch(residuals, None, costs)
         with np.errstate(divide="ignore", invalid="ignore"):
-            relative = np.einsum("fpi,fi->fp", derivatives[points, :, self.rows],
-                                 self.mixing) / response[:, None]
+            relative = derivatives / response[:, None]
         matrix = np.concatenate([_DB_PER_NEPER * relative.real,
                                  np.degrees(relative.imag)]) * self.scale[:, None]
         return Mismatch(residuals, matrix, costs)

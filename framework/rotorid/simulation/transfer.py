@@ -74,6 +74,61 @@ def response_sensitivities(structure: ModelStructure, values, omega
     return c @ x + d, sensitivities
 
 
+def compared_response(structure: ModelStructure, values, omega, rows, mixing,
+                      derivatives: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
+    """One compared response per frequency and, when asked, its exact derivatives: at
+    frequency f the response of output ``rows[f]`` to the inputs mixed by ``mixing[f]``,
+    h_f = Σ_i mixing[f, i]·H[f, rows[f], i] (e.g. a fit's apparent response on a sweep).
+
+    The same terms as :func:`response_sensitivities`, reduced to the one mixed entry before
+    they are formed: with x = R·B·mixing and y = C[rows]·R per frequency, a term of gain g
+    and delay τ gives ∂h/∂t = (y[e] + w·[o = rows]) · (x[s] for a state source, mixing[s]
+    for a control), ∂h/∂g = e^(−jωτ)·∂h/∂t and ∂h/∂τ = −jω·g·e^(−jωτ)·∂h/∂t.
+
+    Args:
+        structure, values: as :func:`frequency_response`; omega: frequencies in rad/s (F,).
+        rows: output index per frequency (F,), in ``structure.outputs`` order.
+        mixing: complex (F, m): the weight of each control, ``structure.controls`` order.
+        derivatives: also return ∂h/∂θ.
+    Returns:
+        ``(h, dh)``: h complex (F,) in the output's unit per control unit; dh complex
+        (F, P) in ``structure.parameter_names`` order (per s for a delay), or None.
+    """
+    omega = _checked_omega(omega)
+    rows, mixing = np.asarray(rows, dtype=int), np.asarray(mixing, dtype=complex)
+    table = structure.terms(values)
+    a, b, c, d = _delayed_matrices(structure, table, omega)
+    n_x, points = structure.n_states, np.arange(omega.size)
+    system = 1j * omega[:, None, None] * np.eye(n_x) - a
+    c_row = c[points, rows]                                                # (F, n)
+    x = np.linalg.solve(system, np.einsum("fnm,fm->fn", b, mixing)[..., None])[..., 0]
+    h = np.einsum("fn,fn->f", c_row, x) + np.einsum("fm,fm->f", d[points, rows], mixing)
+    if not derivatives:
+        return h, None
+    y = np.linalg.solve(np.swapaxes(system, 1, 2), c_row[..., None])[..., 0]   # (F, n)
+    left = y[:, table.equation] + table.weight * (table.output == rows[:, None])
+    state = table.source < n_x
+    right = np.where(state, x[:, np.where(state, table.source, 0)],
+                     mixing[:, np.where(state, 0, table.source - n_x)])
+    unit = left * right * np.exp(-1j * np.outer(omega, table.delay))      # (F, K)
+    gains, delays = _parameter_columns(structure)
+    return h, unit @ gains + (unit * (-1j * np.outer(omega, table.gain))) @ delays
+
+
+def _parameter_columns(structure: ModelStructure) -> tuple[np.ndarray, np.ndarray]:
+    """(K, P) 0/1 matrices taking each derivative term's value to its gain's and its delay's
+    parameter column (a zero row where the gain or the delay is fixed)."""
+    index = {name: i for i, name in enumerate(structure.parameter_names)}
+    shape = (len(structure.derivatives), len(index))
+    gains, delays = np.zeros(shape), np.zeros(shape)
+    for k, derivative in enumerate(structure.derivatives):
+        if derivative.name in index:
+            gains[k, index[derivative.name]] = 1.0
+        if derivative.delay and derivative.delay_name in index:
+            delays[k, index[derivative.delay_name]] = 1.0
+    return gains, delays
+
+
 def _checked_omega(omega) -> np.ndarray:
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
     if omega.ndim != 1 or not np.all(np.isfinite(omega)):
