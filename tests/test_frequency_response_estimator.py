@@ -3,11 +3,12 @@
 import types
 import warnings
 
+import attrs
 import numpy as np
 import pytest
 import rotorid
 from rotorid.data import Maneuver, ManeuverSet
-from rotorid.errors import IdentifiabilityWarning
+from rotorid.errors import IdentifiabilityWarning, VerificationError
 from rotorid.model.derivatives import Derivative
 from rotorid.simulation.transfer import (
     compared_response,
@@ -25,7 +26,7 @@ from rotorid_frequency_response.estimator import (
     varied_starts,
 )
 from rotorid_frequency_response.levenberg_marquardt import Settings, run
-from rotorid_frequency_response.pairs import pair_data
+from rotorid_frequency_response.pairs import excited_band, pair_data
 from rotorid_signals.signals import Sweep
 
 HOVER = rotorid.FlightCondition.from_airspeed(0.0)
@@ -161,6 +162,23 @@ def test_recovery_within_three_cramer_rao_bounds_from_noisy_sweeps():
     derivatives = ~structure.is_delay()
     assert np.all(estimate.cramer_rao_pct[derivatives] < 25.0)     # the bounds say something
     assert np.mean(np.diag(estimate.noise_covariance)) < 20.0       # J per pair on the diagonal
+
+
+def test_j_points_end_at_the_highest_frequency_the_sweeps_excite():
+    sweeps = _sweeps(_structure(), TRUTH, noise=0.1, seed=7)
+    recorded = ManeuverSet([attrs.evolve(m, metadata={**m.metadata, "omega_max": 5.0})
+                            for m in sweeps])
+    open_ended = FrequencyResponseEstimator(pairs=PAIRS).fit_data(sweeps)
+    ended = FrequencyResponseEstimator(pairs=PAIRS).fit_data(recorded)
+    assert max(p.omega.max() for p in open_ended) > 8.0
+    assert max(p.omega.max() for p in ended) <= 5.0
+    assert min(p.omega.size for p in ended) >= 15            # the points move, not vanish
+    assert excited_band(recorded, (1.0, 4.0)) == (1.0, 4.0)  # a narrower band stays
+    broken = ManeuverSet([attrs.evolve(sweeps[0], metadata={**sweeps[0].metadata,
+                                                             "omega_max": -1.0})])
+    with pytest.raises(VerificationError, match="omega_max must be the sweep's "
+                                                        "highest frequency"):
+        excited_band(broken)
 
 
 def test_sweeps_with_a_correlated_second_input_are_fitted_through_the_apparent_response():

@@ -3,7 +3,8 @@ the points of its cost J, and how the model's responses combine into the one com
 
 The points follow the mismatch cost of :mod:`rotorid_envelopes.cost` (Tischler & Remple,
 eq. 12.20): ``n_points`` log-spaced frequencies over the pair's coherent range (γ² ≥ 0.6),
-points below the threshold dropped.
+points below the threshold dropped; from sweeps, the range ends at the highest frequency
+they excite (:func:`excited_band`).
 
 From sweeps, each pair's measured response is the single-input composite estimate of its
 output over its sweep axis, and the model's response is its *apparent* response on the same
@@ -23,7 +24,7 @@ import numpy as np
 from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS, ManeuverSet
 from rotorid.errors import EstimationError
 from rotorid.frozen import readonly_array
-from rotorid.verification.compare import default_omega
+from rotorid.verification.compare import default_omega, sweep_frequency
 from rotorid.verification.frequency import (
     FrequencyResponse,
     apparent_response,
@@ -96,6 +97,17 @@ def pair_data(response: FrequencyResponse, n_points: int = 20,
                     coherence_weight(coherence[kept]), mixing[kept])
 
 
+def excited_band(sweeps: ManeuverSet, band=(0.0, np.inf)) -> tuple[float, float]:
+    """``band`` (lowest, highest frequency in rad/s) ended at the highest frequency the
+    ``sweeps`` excite, when every one's metadata records it (``omega_max``): above it the
+    input holds no excitation, only the loops' and the signal's harmonics, whose coherence
+    can stay high while the estimate is no response of the aircraft."""
+    tops = [sweep_frequency(m, "omega_max") for m in sweeps]
+    if any(top is None for top in tops):
+        return band
+    return band[0], min(band[1], max(tops))
+
+
 def all_pairs(maneuvers: ManeuverSet) -> tuple[str, ...]:
     """Every output over every input that a sweep of ``maneuvers`` excites."""
     axes = {primary_axis(m) for m in maneuvers}
@@ -116,7 +128,7 @@ def sweep_pair_data(maneuvers: ManeuverSet, pairs: Sequence[str] | None = None,
         subset = sweeps_exciting(maneuvers, control, name, EstimationError)
         points = cost_points(response_from_maneuvers(subset, control, output, grid,
                                                      windows=windows),
-                             n_points, threshold, band)
+                             n_points, threshold, excited_band(subset, band))
         if points.size == 0:
             found.append(name)
             continue

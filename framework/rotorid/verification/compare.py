@@ -240,13 +240,13 @@ class VerificationResult:
         return "\n".join(lines)
 
 
-def sweep_omega_min(maneuver) -> float | None:
-    """The lowest frequency a sweep's signal excites, rad/s, when its metadata records it
-    (``omega_min``, or ``signal.omega_min`` as the input-signal plugins write it)."""
+def sweep_frequency(maneuver, bound: str = "omega_min") -> float | None:
+    """The lowest (``bound = "omega_min"``) or highest (``"omega_max"``) frequency a sweep's
+    signal excites, rad/s, when its metadata records it (under ``bound``, or
+    ``signal.<bound>`` as the input-signal plugins write it)."""
     metadata = maneuver.metadata
     signal = metadata.get("signal")
-    value = metadata.get("omega_min",
-                         signal.get("omega_min") if isinstance(signal, Mapping) else None)
+    value = metadata.get(bound, signal.get(bound) if isinstance(signal, Mapping) else None)
     if value is None:
         return None
     try:
@@ -254,9 +254,10 @@ def sweep_omega_min(maneuver) -> float | None:
     except (TypeError, ValueError):
         value = float("nan")
     if not (np.isfinite(value) and value > 0):
-        raise VerificationError(f"maneuver {maneuver.name!r}: metadata omega_min must be the "
-                                f"sweep's lowest frequency in rad/s (> 0), got "
-                                f"{metadata.get('omega_min', value)!r}")
+        extreme = "lowest" if bound == "omega_min" else "highest"
+        raise VerificationError(f"maneuver {maneuver.name!r}: metadata {bound} must be the "
+                                f"sweep's {extreme} frequency in rad/s (> 0), got "
+                                f"{metadata.get(bound, value)!r}")
     return value
 
 
@@ -266,13 +267,13 @@ def default_omega(sweeps, n: int = 200, upper: float = 20.0) -> np.ndarray:
 
     The lower end is the longest default window's lowest frequency (4π/(T_rec/2)), raised to
     the lowest frequency the sweeps excite where their metadata records it
-    (:func:`sweep_omega_min`): below it the inputs' spectra hold only the window's leakage of
+    (:func:`sweep_frequency`): below it the inputs' spectra hold only the window's leakage of
     the lowest sweep frequency, not excitation at the nominal one.
     """
     shortest = min(m.duration for m in sweeps)
     dt = max(m.dt for m in sweeps)
     low = lowest_frequency(default_windows(shortest)[0])
-    excited = [w for w in (sweep_omega_min(m) for m in sweeps) if w is not None]
+    excited = [w for w in (sweep_frequency(m) for m in sweeps) if w is not None]
     if excited:
         low = max(low, min(excited))
     return log_grid(low, min(upper, 0.2 * np.pi / dt), n)
