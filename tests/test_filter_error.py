@@ -175,13 +175,13 @@ def test_gust_sensitivities_match_finite_differences():
     data = noisy_data({}, disturbances={"p": (3.0, 0.8)}, gusts=gusts)
     problem = FilterErrorProblem(model, data, (), Settings(), ("p",), ("u", "w", "v"))
     assert problem.parameter_names[model.n_parameters:model.n_parameters + 8] == (
-        "D_p", "D_ug", "D_wg", "D_vg", "T_p", "T_ug", "T_wg", "T_vg")
+        "D_p", "G_u", "G_w", "G_v", "T_p", "Tg_u", "Tg_w", "Tg_v")
     values = np.concatenate([model.as_vector({**SMALL_TRUTH, "tau_L_lat": 0.05}),
                              [3.0, 6.0, 3.0, 4.0, 0.8, 2.0, 1.0, 1.0], VARIANCE])
     system, steady = problem.filter(values, directions=True)
     assert system.size == 8 + 4                  # one roll disturbance, three gusts
     _assert_matches_central_differences(problem, system, steady, values,
-                                        ("X_u", "L_v", "tau_L_lat", "D_vg", "T_ug"), floor=1e-2)
+                                        ("X_u", "L_v", "tau_L_lat", "G_v", "Tg_u"), floor=1e-2)
 
 
 def test_recovers_derivatives_and_gusts_within_3_cr():
@@ -195,7 +195,7 @@ def test_recovers_derivatives_and_gusts_within_3_cr():
         model, data)
     assert result.converged, result.stop_reason
     assert result.parameter_names[model.n_parameters:model.n_parameters + 6] == (
-        "D_r", "D_wg", "D_vg", "T_r", "T_wg", "T_vg")
+        "D_r", "G_w", "G_v", "T_r", "Tg_w", "Tg_v")
     truth = np.concatenate([model.as_vector(SMALL_TRUTH), [2.0, 3.0, 4.0, 0.8, 1.0, 1.0],
                             VARIANCE])
     error = np.abs(result.values - truth) / result.cramer_rao

@@ -73,7 +73,7 @@ _CORRELATION_START = 1.0
 _LONGEST_CORRELATION = 1000.0
 #: Shortest correlation time of a gust, in samples: the outputs reading a gust's derivative
 #: terms (the accelerometers) see it directly, so a gust of a few samples' correlation is their
-#: measurement noise; with one sample allowed the linear tests' fit went there (T_wg 0.027 s,
+#: measurement noise; with one sample allowed the linear tests' fit went there (Tg_w 0.027 s,
 #: R_az at its floor) and the filter's covariance overflowed.
 _SHORTEST_GUST_SAMPLES = 10
 #: Lowest matched R, relative to the output's mean square innovation.
@@ -155,7 +155,7 @@ def process_noise_start(structure: ModelStructure, states: tuple[str, ...],
 
 def gust_start(structure: ModelStructure, states: tuple[str, ...],
                records: Records) -> dict[str, float]:
-    """Default start of ``D_<state>g`` (state units): the standard deviation of the recorded
+    """Default start of ``G_<state>`` (state units): the standard deviation of the recorded
     output measuring the state (:func:`measuring_output`), or of the accelerometer reading its
     equation times the correlation time's start (the speed that acceleration builds in that
     time). Measured, not a fraction of the noise: from a gust far smaller than the data's
@@ -263,21 +263,23 @@ class FilterErrorProblem:
         self.gust_columns = [kept.index(s) for s in gusts]
         self.gust_known_reading = structure.known_terms().c[
             :, [structure.states.index(s) for s in gusts]]
-        coloured = disturbances + tuple(f"{s}g" for s in gusts)
         self.n_structure = structure.n_parameters
         self.output_names = structure.outputs
         self.parameter_names = (tuple(structure.parameter_names)
                                 + tuple(f"F_{s}" for s in process_noise)
-                                + tuple(f"D_{c}" for c in coloured)
-                                + tuple(f"T_{c}" for c in coloured)
+                                + tuple(f"D_{s}" for s in disturbances)
+                                + tuple(f"G_{s}" for s in gusts)
+                                + tuple(f"T_{s}" for s in disturbances)
+                                + tuple(f"Tg_{s}" for s in gusts)
                                 + tuple(f"R_{o}" for o in structure.outputs))
         signals = structure.signals
         self.output_units = signals.outputs.units
         self.parameter_units = {
             **{f"F_{s}": signals.states[s].unit for s in process_noise},
             **{f"D_{s}": rate_unit(signals.states[s].unit) for s in disturbances},
-            **{f"D_{s}g": signals.states[s].unit for s in gusts},
-            **{f"T_{c}": "s" for c in coloured},
+            **{f"G_{s}": signals.states[s].unit for s in gusts},
+            **{f"T_{s}": "s" for s in disturbances},
+            **{f"Tg_{s}": "s" for s in gusts},
             **{f"R_{o.name}": f"({o.unit})²" for o in signals.outputs}}
         # The innovations' RMSE counts each output in its reference unit (a pure number).
         scale = rmse_reference_factors(self.output_units)
@@ -433,9 +435,9 @@ class FilterErrorEstimator:
         gusts: states (velocities) that get a translational gust (default none): a
             first-order Gauss-Markov air velocity g acting as the state's negative in every
             derivative term (−A's column of the state times g, so through the derivatives
-            themselves), with stationary standard deviation ``D_<state>g`` (state units) and
-            correlation time ``T_<state>g`` (s), both estimated; D starts at
-            :func:`gust_start`, T at 1 s.
+            themselves), with stationary standard deviation ``G_<state>`` (state units) and
+            correlation time ``Tg_<state>`` (s), both estimated; G starts at
+            :func:`gust_start`, Tg at 1 s.
         enforce_signs: use the sign priors as bounds.
         start: ``"auto"`` (equation error when every derivative's initial value is zero, else
             the initial values), ``"initial"`` or ``"equation-error"`` for the derivatives and delays.

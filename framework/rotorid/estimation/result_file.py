@@ -56,9 +56,9 @@ class IdentifiedModel:
         estimate: the full estimate, or None for a file that lists only values.
         source: the file read; model: the study model chosen, None for an identify result.
         noise: name → value of the estimator's own noise parameters (filter error's process
-            noise ``F_<state>``, disturbances ``D_<state>`` and ``T_<state>``, measurement
-            noise ``R_<output>``; units in the estimate's ``parameter_units``); empty for an
-            output-error result.
+            noise ``F_<state>``, disturbances ``D_<state>`` and ``T_<state>``, gusts
+            ``G_<state>`` and ``Tg_<state>``, measurement noise ``R_<output>``; units in the
+            estimate's ``parameter_units``); empty for an output-error result.
     """
 
     structure: ModelStructure
@@ -102,7 +102,8 @@ def parameter_role(structure: ModelStructure, name: str) -> str:
       (:data:`RECORD_PARAMETER_PREFIXES`);
     - ``"noise"``: an estimator's own noise parameter, ``<P>_<signal>`` with ``P`` no equation
       letter and ``signal`` one of the structure's states or outputs (filter error's
-      ``F_<state>``, ``D_<state>``, ``T_<state>``, ``R_<output>``);
+      ``F_<state>``, ``D_<state>``, ``T_<state>``, ``G_<state>``, ``Tg_<state>``,
+      ``R_<output>``);
     - ``"unknown"``: anything else, such as a derivative of another structure.
     """
     if name.startswith(RECORD_PARAMETER_PREFIXES):
