@@ -275,7 +275,7 @@ def test_pitt_peters_option_moves_the_rotor_modes():
     model = Bo105Model(Bo105Config(inflow="pitt-peters"))
     hover_trim = trim(model, 0.0)
     full = linearize(model, hover_trim, full=True)
-    assert full.states[-4:] == ("lambda0", "lambda1s", "lambda1c", "lambda0T")
+    assert full.states[-4:] == ("vi", "lambda1s", "lambda1c", "lambda0T")
     upper = full.eigenvalues[full.eigenvalues.imag > 1.0]
     pitch = upper[np.argmin(np.abs(upper - (-3.9 + 4.5j)))]
     assert pitch == pytest.approx(-3.9 + 4.5j, abs=0.6)

@@ -8,14 +8,18 @@ docs/hybrid.md; at 70 kt it is stable, so open-loop multisteps keep it near trim
 """
 
 import math
-import warnings
 
 import numpy as np
 import pytest
-import rotorid
-from hybrid_reference import hybrid_reference, open_loop_maneuvers, six_dof_of
+from hybrid_reference import (
+    hybrid_reference,
+    open_loop_maneuvers,
+    recovery,
+    six_dof_of,
+    true_values,
+)
 from rotorid import FlightCondition, ModelStructure
-from rotorid.errors import IdentifiabilityWarning, StructureError
+from rotorid.errors import StructureError
 from rotorid.model.hybrid import (
     DIRECT_DERIVATIVES,
     DISC_MOMENTS,
@@ -30,8 +34,6 @@ from rotorid.study.truth import derivatives_of
 from rotorid_helisim.linearize import PADFIELD_STATES
 
 FLAP = ("beta1c", "beta1s")
-#: actuator-like delays of the true model on the controls into flapping, s
-TRUE_DELAY = 0.03
 
 
 @pytest.mark.parametrize("airspeed_kt, units", [(0.0, "flight-test"), (70.0, "si")])
@@ -105,16 +107,8 @@ def test_every_hybrid_parameter_recovered_within_3_cramer_rao_bounds(reference_7
     six_dof, six_values = six_dof_of(condition, a, b)
     structure = hybrid_from_six_dof(six_dof, six_values, flap_time_constant=0.12)
     truth = derivatives_of(structure, a, b)
-    true_values = structure.as_vector(
-        {**{n: truth[n] for n in structure.parameter_names if n in truth},
-         **{f"tau_{n}": TRUE_DELAY for n in FLAP_CONTROL_DELAYS}})
-    maneuvers = open_loop_maneuvers(structure, true_values, seed=2)
-    estimator = rotorid.create("estimators", "output-error")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", IdentifiabilityWarning)
-        estimate = estimator.estimate(structure, maneuvers)
-    assert estimate.converged
-    error = (estimate.values - true_values) / estimate.cramer_rao
+    values = true_values(structure, a, b)
+    estimate, error = recovery(structure, open_loop_maneuvers(structure, values, seed=2), values)
     worst = {n: round(float(e), 2) for n, e in zip(structure.parameter_names, error)
              if abs(e) > 3.0}
     assert not worst, f"beyond 3 Cramér-Rao bounds: {worst}"
@@ -136,23 +130,13 @@ def test_measured_flap_angles_tighten_the_flap_time_constant_and_hub_moments(ref
     rate feedback already fixes the unmeasured tilts, and the gyros see the flap lag well."""
     condition, a, b = reference_70kt
     six_dof, six_values = six_dof_of(condition, a, b)
-    fits = {}
-    for template in ("hybrid-flap", "hybrid"):
-        structure = hybrid_from_six_dof(six_dof, six_values, flap_time_constant=0.12,
-                                        template=template)
-        truth = derivatives_of(structure, a, b)
-        true_values = structure.as_vector(
-            {**{n: truth[n] for n in structure.parameter_names if n in truth},
-             **{f"tau_{n}": TRUE_DELAY for n in FLAP_CONTROL_DELAYS}})
-        if template == "hybrid-flap":
-            maneuvers = open_loop_maneuvers(structure, true_values, seed=3)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", IdentifiabilityWarning)
-            fits[template] = rotorid.create("estimators", "output-error").estimate(
-                structure, maneuvers)
-        assert fits[template].converged
-    flap, plain = fits["hybrid-flap"], fits["hybrid"]
-    error = (flap.values - true_values) / flap.cramer_rao
+    structures = {template: hybrid_from_six_dof(six_dof, six_values, flap_time_constant=0.12,
+                                                template=template)
+                  for template in ("hybrid-flap", "hybrid")}
+    values = true_values(structures["hybrid-flap"], a, b)
+    maneuvers = open_loop_maneuvers(structures["hybrid-flap"], values, seed=3)
+    flap, error = recovery(structures["hybrid-flap"], maneuvers, values)
+    plain, _ = recovery(structures["hybrid"], maneuvers, values)
     assert np.abs(error).max() < 3.0
     for name in ("Bc_beta1c", "Bs_beta1s", "M_beta1c", "L_beta1s"):
         ratio = plain.cramer_rao[plain.index(name)] / flap.cramer_rao[flap.index(name)]

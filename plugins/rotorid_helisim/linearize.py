@@ -2,14 +2,17 @@
 
 * ``full=True``: rigid body (Padfield order u w q θ v p φ r) + flap (β0 β1c β1s and rates) +
   inflow states (main and tail rotor); heading and actuators are left out, the controls are the
-  blade angles themselves.
+  blade angles themselves. The main rotor's uniform inflow is the induced velocity
+  ``vi`` = λ0·ΩR (down the shaft, in the unit system's velocity unit), the state of the
+  ``hybrid-inflow`` template (docs/hybrid.md); harmonic and tail-rotor inflow stay ratios.
 * ``full=False``: the 6-DoF model with the rotor and inflow states residualised (quasi-static),
   A = A_bb − A_br·A_rr⁻¹·A_rb and B = B_b − A_br·A_rr⁻¹·B_r (reference §2.6). This is Padfield's
   form: ṗ and ṙ rows inertia-coupled (primed), A including the gravity and kinematic terms.
 
 Units: ``"si"`` gives m/s, rad, rad/s and controls per rad of blade angle (θ0, θ1s, θ1c, θ0T);
 ``"flight-test"`` gives ft/s, deg, deg/s and controls per % of stick travel (long, lat, coll, ped)
-through the stick mixing (rotor angles in deg and deg/s, inflow ratios unchanged).
+through the stick mixing (rotor angles in deg and deg/s, ``vi`` in ft/s, inflow ratios
+unchanged).
 """
 
 from __future__ import annotations
@@ -115,12 +118,19 @@ def jacobians(model: Bo105Model, trim: Trim):
     return names, jac[:, :n], jac[:, n:]
 
 
-def _state_scale(names, target):
-    """Per-state SI → target factors; rigid body through rotorid.units, rotor angles as angles."""
+#: The full model's name of the main rotor's uniform inflow, as an induced velocity.
+INDUCED_VELOCITY = "vi"
+
+
+def _state_scale(names, target, tip_speed: float):
+    """Per-state factors from the model's states (SI, λ0 as a ratio) to ``target``: rigid
+    body through rotorid.units, rotor angles as angles, ``vi`` = λ0·ΩR as a velocity."""
     rigid = [n for n in names if n in PADFIELD_STATES]
     scale = dict(zip(rigid, channel_scale(rigid, target)))
     for n in names:
-        if n not in scale:
+        if n == INDUCED_VELOCITY:
+            scale[n] = tip_speed * target.length_per_metre
+        elif n not in scale:
             scale[n] = target.angle_per_radian if n.startswith("beta") else 1.0
     return np.array([scale[n] for n in names])
 
@@ -146,12 +156,13 @@ def linearize(model: Bo105Model, trim: Trim, full: bool = False, units: str = "s
     if system is FLIGHT_TEST:
         b = b @ model.config.mixing.matrix  # per % stick
         controls = STICKS
-        if full:
-            s = _state_scale(names, system)
-            a = a * s[:, None] / s[None, :]
-            b = b * s[:, None]
-        else:
-            a, b = convert_state_space(a, b, names, controls, system, SI)
+    if full:
+        names = tuple(INDUCED_VELOCITY if n == "lambda0" else n for n in names)
+        s = _state_scale(names, system, model.config.tip_speed)
+        a = a * s[:, None] / s[None, :]
+        b = b * s[:, None]
+    elif system is FLIGHT_TEST:
+        a, b = convert_state_space(a, b, names, controls, system, SI)
     eigenvalues = _sorted_eigenvalues(a)
     for array in (a, b, eigenvalues):
         array.setflags(write=False)
