@@ -53,11 +53,12 @@ def noisy_outputs(model, truth, inputs, dt, process, variance, rng, disturbances
     exponential) from trim, with white process noise (state → σ per sample) added to the
     states each sample and white measurement noise of ``variance`` (p,); ``disturbances``
     (state → (σ, τ s)) adds to that state's equation a first-order Gauss-Markov acceleration
-    of stationary standard deviation σ, held over each sample and started at zero, which the
-    accelerometer reading that equation measures too; ``gusts`` (state → (σ, τ s)) adds a
-    first-order Gauss-Markov air velocity g of that state, held over each sample and started
-    at zero, which enters as the state's negative in the derivative terms: −(A − A0)·e_j·g in
-    the state equations (discretised with the controls) and −(C − C0)·e_j·g in the outputs."""
+    of stationary standard deviation σ, held over each sample (an input of the matrix
+    exponential) and started at zero, which the accelerometer reading that equation measures
+    too; ``gusts`` (state → (σ, τ s)) adds a first-order Gauss-Markov air velocity g of that
+    state, held over each sample and started at zero, which enters as the state's negative in
+    the derivative terms: −(A − A0)·e_j·g in the state equations (discretised with the
+    controls) and −(C − C0)·e_j·g in the outputs."""
     a, b, c, d = model.matrices(model.as_vector(truth))
     n, m = b.shape
     gust = dict(gusts or {})
@@ -66,15 +67,17 @@ def noisy_outputs(model, truth, inputs, dt, process, variance, rng, disturbances
     gust_reading = -(c - model.known_output_matrix())[:, gust_columns]
     gust_decay = np.array([np.exp(-dt / tau) for _, tau in gust.values()])
     gust_drive = np.array([size for size, _ in gust.values()]) * np.sqrt(1 - gust_decay**2)
-    held = m + len(gust)
-    block = np.zeros((n + held, n + held))
-    block[:n, :n], block[:n, n:n + m], block[:n, n + m:] = a, b, gust_input
-    exp = scipy.linalg.expm(block * dt)
-    phi, gamma, gust_gamma = exp[:n, :n], exp[:n, n:n + m], exp[:n, n + m:]
-    rows = [model.states.index(s) for s in process]
-    sigma = np.array(list(process.values()))
     coloured = dict(disturbances or {})
     coloured_rows = [model.states.index(s) for s in coloured]
+    gusts_end = n + m + len(gust)
+    block = np.zeros((gusts_end + len(coloured),) * 2)
+    block[:n, :n], block[:n, n:n + m], block[:n, n + m:gusts_end] = a, b, gust_input
+    block[coloured_rows, gusts_end + np.arange(len(coloured))] = 1.0
+    exp = scipy.linalg.expm(block * dt)
+    phi, gamma = exp[:n, :n], exp[:n, n:n + m]
+    gust_gamma, held = exp[:n, n + m:gusts_end], exp[:n, gusts_end:]
+    rows = [model.states.index(s) for s in process]
+    sigma = np.array(list(process.values()))
     decay = np.array([np.exp(-dt / tau) for _, tau in coloured.values()])
     drive = np.array([size for size, _ in coloured.values()]) * np.sqrt(1 - decay**2)
     accelerometer = {"u": "ax", "w": "az", "v": "ay"}
@@ -88,9 +91,8 @@ def noisy_outputs(model, truth, inputs, dt, process, variance, rng, disturbances
         acceleration, air = np.zeros(len(coloured)), np.zeros(len(gust))
         for k, u in enumerate(record):
             outputs[k] = c @ x + d @ u + sensed @ acceleration + gust_reading @ air
-            x = phi @ x + gamma @ u + gust_gamma @ air
+            x = phi @ x + gamma @ u + gust_gamma @ air + held @ acceleration
             x[rows] += sigma * rng.standard_normal(len(rows))
-            x[coloured_rows] += dt * acceleration
             acceleration = decay * acceleration + drive * rng.standard_normal(len(coloured))
             air = gust_decay * air + gust_drive * rng.standard_normal(len(gust))
         records.append(outputs + rng.standard_normal(outputs.shape) * np.sqrt(variance))

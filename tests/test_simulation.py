@@ -15,7 +15,7 @@ import scipy.linalg
 from delay_reference import fine_states, sampled_outputs
 from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
 from rotorid.errors import DataError, SimulationDivergedError, StructureError
-from rotorid.simulation.discretisation import _integrals
+from rotorid.simulation.discretisation import _integrals, discrete_maps
 from rotorid.simulation.simulator import Simulator, sensitivities, simulate
 from rotorid.simulation.transfer import frequency_response, pair_response
 
@@ -92,6 +92,25 @@ def test_interval_integrals_match_the_exponential_of_a_block_matrix(length):
                             (kin, exact[:8, 16:][:, columns])):
         np.testing.assert_allclose(ours[0, 0].real, reference, rtol=1e-10,
                                    atol=1e-12 * np.abs(reference).max())
+
+
+def test_held_equation_forcing_matches_the_exponential_of_a_block_matrix():
+    """Pe, the map of an acceleration held over the sample on each equation row, is the
+    input block of exp([[A, E], [0, 0]]·dt); its parameter derivatives match central
+    differences."""
+    structure = ModelStructure.six_dof(CONDITION)
+    values = stable_values(structure)
+    maps = discrete_maps(structure, values, 0.02, with_derivatives=True)
+    a = structure.matrices(values)[0]
+    block = np.zeros((14, 14))
+    block[:8, :8] = a
+    block[EQUATION_ROWS, 8 + np.arange(6)] = 1.0
+    exact = scipy.linalg.expm(block * 0.02)[:8, 8:]
+    np.testing.assert_allclose(maps.Pe, exact, rtol=1e-10, atol=1e-14)
+    k, h = structure.parameter_names.index("M_q"), 1e-6
+    shifted = [discrete_maps(structure, values + sign * h * np.eye(values.size)[k], 0.02).Pe
+               for sign in (1, -1)]
+    np.testing.assert_allclose(maps.dPe[k], (shifted[0] - shifted[1]) / (2 * h), atol=1e-9)
 
 
 def relative_rms_errors(delays, dt, hold, seed):

@@ -220,6 +220,17 @@ def matched_measurement_noise(problem: "FilterErrorProblem", values: np.ndarray,
     return values
 
 
+def _equation_columns(structure: ModelStructure, states: tuple[str, ...]) -> list[int]:
+    """The equation column (``structure.equation_rows`` order) of each disturbance state."""
+    equations = [structure.states[i] for i in structure.equation_rows]
+    others = [s for s in states if s not in equations]
+    if others:
+        raise EstimationError(f"disturbances name {', '.join(others)}, which have no equation "
+                              f"of derivatives (a disturbance is an acceleration of one); "
+                              f"choose among {', '.join(equations)}")
+    return [equations.index(s) for s in states]
+
+
 def _start_choice(instance, attribute, value):
     if value not in ("auto", "initial", "equation-error"):
         raise EstimationError(f"start must be 'auto', 'initial' or 'equation-error', "
@@ -256,7 +267,7 @@ class FilterErrorProblem:
         kept = [structure.states[i] for i in np.flatnonzero(seen_states(structure))]
         self.noise_rows = [kept.index(s) for s in process_noise]
         self.disturbances = disturbances
-        self.disturbance_rows = [kept.index(s) for s in disturbances]
+        self.disturbance_columns = _equation_columns(structure, disturbances)
         self.disturbance_reading = structure.known_terms().measured[
             :, [structure.states.index(s) for s in disturbances]]
         self.gusts = gusts
@@ -331,8 +342,9 @@ class FilterErrorProblem:
         """How the coloured disturbances enter ``system``: state inputs (D, S, m) and output
         readings (D, p, m), the accelerations first, then the gusts.
 
-        An acceleration d adds dt·d to its equation's state over a sample, and the outputs
-        reading that equation (the accelerometers) read d. A translational gust g acts as
+        An acceleration d held over a sample adds Pe·e_j·d (Pe = ∫₀^dt e^(As) ds on the
+        equation rows, the system's ``equation_forcing``), and the outputs reading that
+        equation (the accelerometers) read d. A translational gust g acts as
         the state's negative in every derivative term: held over a sample it adds
         −(Φ − I)·e_j·g (Φ − I = Γ·A, Γ = ∫₀^dt e^(As) ds; exact because no known term and no
         delayed derivative reads the state, :func:`gust_states`), and the outputs read
@@ -340,9 +352,7 @@ class FilterErrorProblem:
         measures the aircraft's motion, not the air's).
         """
         n_dir, size = system.transition.shape[:2]
-        n_d = len(self.disturbances)
-        accelerations = np.zeros((n_dir, size, n_d))
-        accelerations[:, self.disturbance_rows, np.arange(n_d)] = self.records.dt
+        accelerations = system.equation_forcing[:, :, self.disturbance_columns]
         columns = self.gust_columns
         gusts = -(system.transition[:, :, columns] - np.eye(size)[:, columns])
         reading = -(system.output[:, :, columns] - self.gust_known_reading)

@@ -7,7 +7,8 @@ delayed model between samples (delays as lags plus fractional-interval integrals
 
 Stacking x_n with the delayed state samples the maps read gives the delay-free companion system
 z_n+1 = Φ z_n + Σ_j Pu[j] u_n−j, y_n = H z_n + Σ_j Du[j] u_n−j, on which the Kalman filter runs
-unchanged: the delays are states of the filter. Process noise enters the physical states only.
+unchanged: the delays are states of the filter. Process noise enters the physical states only;
+a disturbance acceleration held over the sample enters them through the maps' Pe.
 States the outputs cannot see (:func:`seen_states`) are left out: they change no output, and
 an unobserved mode that is not stable would leave the filter without a steady state.
 
@@ -47,6 +48,8 @@ class CompanionSystem:
         taps: ((lag, control column), …) the inputs u_n−lag the forcing reads.
         state_forcing: (D, T, S) weights: the state forcing at n is lagged(u)[n] @ weights.
         output_forcing: (D, T, p) the same for the outputs' direct terms.
+        equation_forcing: (D, S, e) the companion states' gain from an acceleration held over
+            the sample on each equation row (the maps' Pe).
     """
 
     states: np.ndarray
@@ -55,6 +58,7 @@ class CompanionSystem:
     taps: tuple
     state_forcing: np.ndarray
     output_forcing: np.ndarray
+    equation_forcing: np.ndarray
 
     @property
     def size(self) -> int:
@@ -117,12 +121,15 @@ def companion_system(structure: ModelStructure, values, dt: float, hold: str,
             state_forcing[:, t, :n_x] = pu[lag][:, :, c]
         if lag in du:
             output_forcing[:, t, :] = du[lag][:, :, c]
+    pe = _directions({0: maps.Pe}, {0: maps.dPe}, extra, varied)[0]
+    equation_forcing = np.zeros((n_dir, size, pe.shape[-1]), dtype)
+    equation_forcing[:, :n_x] = pe
     seen = seen_states(structure)
     keep = np.concatenate([np.flatnonzero(seen),
                            [slot for (c, _), slot in slots.items() if seen[c]]]).astype(int)
     return CompanionSystem(np.flatnonzero(seen), transition[:, keep][:, :, keep],
                            output[:, :, keep], tuple(taps), state_forcing[:, :, keep],
-                           output_forcing)
+                           output_forcing, equation_forcing[:, keep])
 
 
 def with_disturbances(system: CompanionSystem, inputs: np.ndarray, reading: np.ndarray,
@@ -150,5 +157,8 @@ def with_disturbances(system: CompanionSystem, inputs: np.ndarray, reading: np.n
         reading, system.output.shape[:2] + (m,))], axis=2)
     state_forcing = np.concatenate(
         [system.state_forcing, np.zeros(system.state_forcing.shape[:2] + (m,))], axis=2)
+    equation_forcing = np.concatenate(
+        [system.equation_forcing, np.zeros((n_dir, m, system.equation_forcing.shape[-1]))],
+        axis=1)
     return CompanionSystem(system.states, transition, output, system.taps, state_forcing,
-                           system.output_forcing)
+                           system.output_forcing, equation_forcing)

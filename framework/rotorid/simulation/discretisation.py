@@ -24,6 +24,9 @@ The result is a linear recursion with lagged maps::
 
     x_n+1 = Σ_j Ps[j] x_n−j + Σ_j Pu[j] u_n−j       y_n = Σ_j Cs[j] x_n−j + Σ_j Du[j] u_n−j
 
+and the map Pe of an unmeasured acceleration f_n held over the sample on each equation row
+(a disturbance), x_n+1 gaining Pe f_n: Γ(T)E, folded like the rest of the step.
+
 The maps are computed for a batch of complex parameter vectors, so that their derivatives with
 respect to every parameter follow by the complex-step method (Im f(θ + i·h·e_k)/h, exact to
 machine precision, no subtractive cancellation); the series and the doubling steps are
@@ -51,7 +54,9 @@ class DiscreteMaps:
     Every map is a dict lag → array. ``Ps``/``Cs`` map the n states and ``Pu``/``Du`` the m
     controls; values have shape (n, n), (n, m), (p, n) or (p, m). The ``d*`` variants carry a
     leading parameter axis (P, ·, ·) and are empty when derivatives were not requested.
-    ``state_history`` lists, per lag ≥ 1 of ``Ps``, the state columns it reads.
+    ``state_history`` lists, per lag ≥ 1 of ``Ps``, the state columns it reads. ``Pe``
+    (n, e) maps an acceleration held over the sample on each of the structure's equation rows
+    (``equation_rows`` order) into x_n+1; ``dPe`` (P, n, e) its derivatives.
     """
 
     dt: float
@@ -64,6 +69,8 @@ class DiscreteMaps:
     dCs: dict
     dDu: dict
     state_history: dict
+    Pe: np.ndarray
+    dPe: np.ndarray
 
 
 #: Taylor terms of the scaled series; with ‖X‖₁ ≤ 1/2 the remainder is below 1e−21.
@@ -266,9 +273,11 @@ def discrete_maps(structure: ModelStructure, values, dt: float, hold: str = "zoh
     fold = np.linalg.inv(np.eye(n_x) - implicit)
     ps = {lag: fold @ m for lag, m in ps_raw.items()}
     pu = {lag: fold @ m for lag, m in pu_raw.items()}
+    pe = fold @ gam[:, 0]
     history = {lag: np.array(sorted(columns)) for lag, columns in history_columns.items()}
     real = lambda maps: {lag: m[0].real.copy() for lag, m in maps.items()}  # noqa: E731
     deriv = (lambda maps: {lag: m[1:].imag / COMPLEX_STEP for lag, m in maps.items()}
              ) if with_derivatives else (lambda maps: {})
     return DiscreteMaps(T, real(ps), real(pu), real(cs), real(du), deriv(ps), deriv(pu),
-                        deriv(cs), deriv(du), history)
+                        deriv(cs), deriv(du), history, pe[0].real.copy(),
+                        pe[1:].imag / COMPLEX_STEP)
