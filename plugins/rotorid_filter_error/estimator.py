@@ -131,23 +131,33 @@ def gust_states(structure: ModelStructure, names: tuple[str, ...]) -> tuple[str,
     return states
 
 
+def _measuring_output(structure: ModelStructure, state: str, parameter: str,
+                      option: str) -> tuple[int, bool]:
+    """:func:`measuring_output`, refusing a state no output measures: ``parameter`` (such as
+    ``F_w``) then has no default start, and ``option`` names the setting to leave it out of."""
+    output, reads_rate = measuring_output(structure, state)
+    if output is None:
+        raise EstimationError(f"no output measures state {state} or its rate, so {parameter} "
+                              f"has no default start; give its start value or leave {state} "
+                              f"out of {option}")
+    return output, reads_rate
+
+
 def process_noise_start(structure: ModelStructure, states: tuple[str, ...],
-                        variance: np.ndarray, dt: float) -> dict[str, float]:
+                        variance: np.ndarray, dt: float, parameter: str = "F",
+                        option: str = "process_noise") -> dict[str, float]:
     """Default start of ``F_<state>`` (structure units per sample): a tenth of the noise size
     of an output that measures the state, either the state itself (σ) or an output that reads
     its equation's derivative terms, such as a velocity's specific force (σ·dt, the change
     over one sample).
 
-    ``variance`` (p,) is the start of R over the structure's outputs.
+    ``variance`` (p,) is the start of R over the structure's outputs; ``parameter`` and
+    ``option`` name the parameter and the setting in errors (the disturbances' starts are
+    built from these).
     """
     starts = {}
     for state in states:
-        output, reads_rate = measuring_output(structure, state)
-        if output is None:
-            raise EstimationError(
-                f"no output measures state {state} or its rate, so F_{state} has no default "
-                f"start; give process_noise_start = {{F_{state} = ...}} (structure units per "
-                f"sample) or leave {state} out of process_noise")
+        output, reads_rate = _measuring_output(structure, state, f"{parameter}_{state}", option)
         size = np.sqrt(variance[output]) * (dt if reads_rate else 1.0)
         starts[state] = _PROCESS_START * float(size)
     return starts
@@ -163,7 +173,7 @@ def gust_start(structure: ModelStructure, states: tuple[str, ...],
     data, from a tenth of the noise size, L_v and L_p near zero, 50–560 CR off)."""
     starts = {}
     for state in states:
-        output, reads_rate = measuring_output(structure, state)
+        output, reads_rate = _measuring_output(structure, state, f"G_{state}", "gusts")
         signal = records.outputs[..., output][records.mask]
         starts[state] = float(np.std(signal)) * (_CORRELATION_START if reads_rate else 1.0)
     return starts
@@ -527,12 +537,18 @@ class FilterErrorEstimator:
         dt = problem.records.dt
         steps = {**process_noise_start(structure, missing, variance, dt),
                  **{name[2:]: float(value) for name, value in given.items()}}
-        disturbances = process_noise_start(structure, problem.disturbances, variance, dt)
-        gusts = gust_start(structure, problem.gusts, problem.records)
+        # default starts only where none is given (a state no output measures has none)
+        chosen = set(names) if start is not None and not isinstance(start, Mapping) else set(
+            start or ())
+        disturbances = process_noise_start(
+            structure, tuple(s for s in problem.disturbances if f"D_{s}" not in chosen),
+            variance, dt, "D", "disturbances")
+        gusts = gust_start(structure, tuple(s for s in problem.gusts if f"G_{s}" not in chosen),
+                           problem.records)
         coloured = len(problem.disturbances) + len(problem.gusts)
         values = np.concatenate([initial, [steps[s] for s in states],
-                                 [disturbances[s] / dt for s in problem.disturbances],
-                                 [gusts[s] for s in problem.gusts],
+                                 [disturbances.get(s, np.nan) / dt for s in problem.disturbances],
+                                 [gusts.get(s, np.nan) for s in problem.gusts],
                                  np.full(coloured, _CORRELATION_START), variance])
         if start is None:
             return values, note, ()
