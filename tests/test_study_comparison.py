@@ -7,9 +7,13 @@ from pathlib import Path
 
 import pytest
 from rotorid import create, simulate
+from rotorid.data import ManeuverSet
 from rotorid.errors import DataError, DataFileError, SimulationDivergedError
+from rotorid.model.derivatives import Derivative
+from rotorid.model.structure import ModelStructure
 from rotorid.report.html import comparison_cost_rows, comparison_html
 from rotorid.study.case import FlightCase
+from rotorid.study.comparison import TRANSLATIONAL_PAIRS, fitted_pairs
 from rotorid.study.pipeline import run_case
 from rotorid.study.result import MODELS
 from rotorid.verification.metrics import rmse
@@ -38,11 +42,12 @@ def test_comparison_recomputes_from_the_estimates(compared):
     result, directory = compared
     record = json.loads((directory / "result.json").read_text())["frequency_comparison"]
     assert set(record) == set(MODELS)
-    estimator = create("estimators", "frequency-response", pairs=PAIRS)
     sweeps, multisteps = result.verification_data, result.identification
     for label in MODELS:
         comparison = result.frequency_comparison[label]
         structure = result.structures[label]
+        pairs = fitted_pairs(structure, result.estimates[label].as_mapping(), sweeps, PAIRS)
+        estimator = create("estimators", "frequency-response", pairs=pairs)
         fitted = comparison.frequency_estimate
         assert fitted.parameter_names == result.estimates[label].parameter_names
         assert fitted.converged
@@ -78,6 +83,22 @@ def test_comparison_recomputes_from_the_estimates(compared):
             assert shifted["rmse"] == pytest.approx(
                 rmse([m.outputs for m in multisteps], list(outputs)))
             assert shifted["rmse"] <= plain["rmse"] * (1.0 + 1e-12)
+
+
+def test_translational_pairs_join_where_the_sweeps_excite_them_and_the_model_responds(
+        compared):
+    result, _ = compared
+    sweeps = result.verification_data
+    tiny = result.structures["no delays"]          # pitch and roll only: ax, ay never move
+    assert fitted_pairs(tiny, None, sweeps, PAIRS) == tuple(PAIRS)
+    coupled = ModelStructure(tiny.condition, [Derivative(n) for n in (
+        "M_q", "M_long", "L_p", "L_lat", "X_u", "X_long", "Y_v", "Y_lat")])
+    values = dict.fromkeys(coupled.parameter_names, 0.5)
+    assert fitted_pairs(coupled, values, sweeps, PAIRS) == (*PAIRS, *TRANSLATIONAL_PAIRS)
+    assert fitted_pairs(coupled, values, sweeps, ["ay/lat", "q/long"]) == ("ay/lat", "q/long",
+                                                                          "ax/long")
+    lateral = ManeuverSet([m for m in sweeps if m.metadata["axis"] == "lat"])
+    assert fitted_pairs(coupled, values, lateral, ["p/lat"]) == ("p/lat", "ay/lat")
 
 
 def test_report_section_lists_both_fits(compared):

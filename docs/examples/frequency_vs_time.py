@@ -4,7 +4,8 @@ Reads a case directory of ``rotorid study hover --quick --no-figures --out DIR``
 likewise ``DIR/forward``): its data (multisteps and sweeps) and ``result.json`` (the selected
 structure and the time-domain estimates). Fits the selected structure, with the delays the
 study kept, to the sweeps' frequency responses from zero (equation-error start values on the
-sweeps and ``--starts`` − 1 variations of them, the lowest J kept), then prints for both
+sweeps and ``--starts`` − 1 variations of them, the lowest J kept; the pairs given and the
+on-axis translational accelerations, as the study's comparison), then prints for both
 estimates the mismatch cost J per pair on the same measured responses and the time-domain
 RMSE (the paper's eq. 18) on the multisteps, from the plain simulation and with each
 multistep's input biases and output reference shifts fitted to the fixed model.
@@ -28,6 +29,7 @@ import rotorid
 from rotorid.errors import IdentifiabilityWarning
 from rotorid.estimation.estimate import Estimate, rmse
 from rotorid.model.structure import PAPER_DELAYED
+from rotorid.study.comparison import fitted_pairs
 from rotorid.verification.pairs import PAPER_PAIRS
 from rotorid.verification.shifts import simulate_with_shifts
 
@@ -77,12 +79,14 @@ def main() -> None:
     data = rotorid.create("data-sources", "files").load(args.directory / "data")
     sweeps = data.select(kind="sweep")
     multisteps = data.select(lambda m: m.metadata.get("kind") != "sweep")
-    estimator = rotorid.create("estimators", "frequency-response",
-                               pairs=args.pairs.split(","), band=(0.0, args.band_max),
-                               starts=args.starts)
     for label in ("no delays", "with delays"):
         time_domain = Estimate.from_dict(result["estimates"][label])
         structure = selected_structure(result, time_domain, args.paper_delays)
+        estimator = rotorid.create(
+            "estimators", "frequency-response",
+            pairs=fitted_pairs(structure, time_domain.as_mapping(), sweeps,
+                               args.pairs.split(",")),
+            band=(0.0, args.band_max), starts=args.starts)
         clock = time.perf_counter()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", IdentifiabilityWarning)

@@ -94,8 +94,8 @@ class FlightCase:
     normalised Cramér-Rao bound (%) above which a delay counts as undetermined and is dropped.
     With ``compare_frequency`` each identified model is also fitted to the verification
     sweeps' frequency responses (:mod:`rotorid.study.comparison`) on ``compare_pairs``
-    (default: the verification pairs) up to ``compare_band_max`` rad/s (default: each pair's
-    coherent range). With ``compare_estimators`` each listed estimator also fits the model
+    (default: the verification pairs) and the on-axis translational accelerations up to
+    ``compare_band_max`` rad/s (default: each pair's coherent range). With ``compare_estimators`` each listed estimator also fits the model
     with delays to the identification data (:mod:`rotorid.study.estimator_comparison`). With
     ``compare_hybrid`` the hybrid rotor-body model is built on the selected model and compared
     with both (:mod:`rotorid.study.hybrid_comparison`), J up to ``compare_hybrid_band_max``
@@ -159,8 +159,8 @@ class FlightCase:
 
     @property
     def frequency_pairs(self) -> tuple[str, ...]:
-        """The pairs the frequency-domain comparison fits (``[compare] pairs``, default the
-        verification pairs)."""
+        """The pairs the frequency-domain comparison compares (``[compare] pairs``, default
+        the verification pairs); it fits them with the translational accelerations."""
         return self.compare_pairs or self.pairs
 
     # ----------------------------------------------------------------- construction
