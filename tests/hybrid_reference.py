@@ -13,7 +13,6 @@ import rotorid
 from hover_reference import multistep
 from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
 from rotorid.errors import IdentifiabilityWarning
-from rotorid.model.hybrid import FLAP_CONTROL_DELAYS
 from rotorid.model.residualisation import residualise
 from rotorid.model.templates import HYBRID
 from rotorid.simulation.simulator import simulate
@@ -73,12 +72,12 @@ def open_loop_maneuvers(structure, values, seed, duration=10.0, dt=0.02, amplitu
 
 
 def true_values(structure, a, b) -> np.ndarray:
-    """``structure``'s parameter vector read from the reference (A, B), with the delays on
-    the controls into flapping at :data:`TRUE_DELAY`."""
+    """``structure``'s parameter vector read from the reference (A, B), every delay (the
+    actuators') at :data:`TRUE_DELAY`."""
     truth = derivatives_of(structure, a, b)
     return structure.as_vector(
         {**{n: truth[n] for n in structure.parameter_names if n in truth},
-         **{f"tau_{n}": TRUE_DELAY for n in FLAP_CONTROL_DELAYS}})
+         **{d.delay_name: TRUE_DELAY for d in structure.free_delays}})
 
 
 def recovery(structure, maneuvers, truth: np.ndarray):

@@ -37,6 +37,8 @@ CONING_INFLOW_TEMPLATES = {"hybrid": "hybrid-inflow", "hybrid-flap": "hybrid-inf
 CONING_DERIVATIVES = ("B0_u", "B0_w", "B0_beta0", "B0_vi", "B0_long", "B0_lat", "B0_coll")
 INFLOW_DERIVATIVES = ("Vi_u", "Vi_w", "Vi_beta0", "Vi_vi")
 HEAVE_DERIVATIVES = ("Z_beta0", "Z_vi")
+#: Derivatives that carry a delay for the actuators between stick and blade angle.
+CONING_CONTROL_DELAYS = ("B0_coll",)
 #: Sign priors (docs/hybrid.md): the coning and inflow lags, collective up cones the rotor
 #: up, more coning (thrust) drives more inflow and pulls the aircraft up.
 SIGNS = {"B0_beta0": "negative", "B0_coll": "positive", "Vi_vi": "negative",
@@ -90,14 +92,16 @@ def coning_inflow_start(hybrid: Mapping[str, float], gain: float,
 
 def coning_inflow_from_hybrid(structure: ModelStructure, values, rotor_radius: float,
                               coning_time_constant: float = DEFAULT_CONING_TIME_CONSTANT,
-                              inflow_time_constant: float = DEFAULT_INFLOW_TIME_CONSTANT
-                              ) -> ModelStructure:
+                              inflow_time_constant: float = DEFAULT_INFLOW_TIME_CONSTANT,
+                              delay_upper: float | None = 0.1) -> ModelStructure:
     """The coning/inflow structure of a hybrid structure and its values, started at
     :func:`coning_inflow_start`.
 
     It holds the hybrid structure's derivatives as they are (fixed ones, sign priors and
     delays kept; estimates as start values) but ``Z_coll``, and the coning, inflow and heave
-    derivatives above with the :data:`SIGNS` priors, ``B0_vi`` fixed at −4/(3R).
+    derivatives above with the :data:`SIGNS` priors, ``B0_vi`` fixed at −4/(3R), and, unless
+    ``delay_upper`` is ``None``, a free delay (0 … ``delay_upper`` s, start 0) on each of
+    :data:`CONING_CONTROL_DELAYS`, as on the controls into flapping.
 
     Args:
         structure: a ``hybrid`` or ``hybrid-flap`` structure; values: its parameter vector or
@@ -121,5 +125,8 @@ def coning_inflow_from_hybrid(structure: ModelStructure, values, rotor_radius: f
             extended = extended.replacing(derivative)
     extended = extended.fixing("B0_vi", start.pop("B0_vi"))
     initial = {**hybrid, **start}
-    return extended.with_initial({n: float(v) for n, v in initial.items()
-                                  if n in extended.parameter_names})
+    extended = extended.with_initial({n: float(v) for n, v in initial.items()
+                                      if n in extended.parameter_names})
+    if delay_upper is None:
+        return extended
+    return extended.with_delays(CONING_CONTROL_DELAYS, upper=delay_upper)
