@@ -6,8 +6,9 @@ Both fit the fully populated 60-derivative structure from zero to the quick hove
 frequency responses of the 4 sweeps (every output over every swept input with coherent
 frequencies, equation-error start on the sweeps). The frequency fit is timed with the
 responses it needs (the J points and the cross-spectral mixing of every pair) and without
-them. Each is the median of ``--repeats`` runs. Target on 2 cores: the frequency fit with its
-responses ≤ 5 s.
+them, and the fit from the study comparison's ``FREQUENCY_STARTS`` starts (the equation-error
+start and varied ones, :mod:`rotorid.study.comparison`) on the same responses. Each is the
+median of ``--repeats`` runs. Target on 2 cores: the frequency fit with its responses ≤ 5 s.
 
 Run:  .venv/bin/python benchmarks/bench_frequency.py [--repeats 3]
 """
@@ -41,6 +42,7 @@ def main() -> None:
     import rotorid
     from rotorid.errors import IdentifiabilityWarning
     from rotorid.study.case import FlightCase
+    from rotorid.study.comparison import FREQUENCY_STARTS
     from rotorid.study.pipeline import base_structure, load_data
 
     case = FlightCase.load("hover").quick()
@@ -50,6 +52,7 @@ def main() -> None:
     structure = base_structure(case, condition, multisteps.units)
     time_domain = rotorid.create("estimators", "output-error")
     frequency = rotorid.create("estimators", "frequency-response")
+    several = rotorid.create("estimators", "frequency-response", starts=FREQUENCY_STARTS)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IdentifiabilityWarning)
         t_time, oe = _median_time(lambda: time_domain.estimate(structure, multisteps),
@@ -59,6 +62,8 @@ def main() -> None:
         start = fr.start
         t_fit, _ = _median_time(lambda: frequency.estimate(structure, fit_data, start=start),
                                 args.repeats)
+        t_starts, multi = _median_time(lambda: several.estimate(structure, fit_data,
+                                                                start=start), args.repeats)
     pairs = sum(1 for p in fit_data if not isinstance(p, str))
     print(f"load average {os.getloadavg()[0]:.2f}; {structure.n_parameters} parameters, "
           f"median of {args.repeats}")
@@ -69,6 +74,8 @@ def main() -> None:
           f"{fr.iterations} iterations, J {fr.cost:.0f} ({fr.stop_reason})")
     print(f"ratio frequency/time {t_total / t_time:.2f} with responses, "
           f"{t_fit / t_time:.2f} fit alone")
+    print(f"frequency fit from {FREQUENCY_STARTS} starts (the study comparison's): "
+          f"{t_starts:6.2f} s, J {multi.cost:.0f}")
     print(f"target frequency fit with responses ≤ {TARGET_S:.0f} s: "
           f"{'met' if t_total <= TARGET_S else 'NOT met'}")
 
