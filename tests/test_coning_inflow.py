@@ -24,7 +24,7 @@ from rotorid.model.coning_inflow import (
 )
 from rotorid.model.hybrid import hybrid_from_six_dof
 from rotorid.model.residualisation import residualise
-from rotorid.model.templates import HYBRID, HYBRID_INFLOW, HYBRID_INFLOW_FLAP
+from rotorid.model.templates import HYBRID, HYBRID_FLAP, HYBRID_INFLOW, HYBRID_INFLOW_FLAP
 from rotorid.study.truth import derivatives_of
 from rotorid.units import FLIGHT_TEST, SI
 from rotorid_helisim.linearize import linearize
@@ -35,10 +35,10 @@ RADIUS = 4.91  #: m, the truth model's rotor
 @pytest.mark.parametrize("units", ["flight-test", "si"])
 def test_known_terms_are_the_hybrids_with_no_coning_or_inflow_term(units):
     """The coning and inflow rows have no known term (every coefficient depends on the
-    rotor); the measured rotor outputs read their states."""
+    rotor); the measured rotor outputs (``-flap`` templates) read their states."""
     condition = FlightCondition.from_airspeed(70.0, 2.0, -1.5)
     hybrid = ModelStructure.populated(condition, "hybrid", units).known_terms()
-    for template in (HYBRID_INFLOW, HYBRID_INFLOW_FLAP):
+    for template in (HYBRID_FLAP, HYBRID_INFLOW, HYBRID_INFLOW_FLAP):
         known = ModelStructure.populated(condition, template, units).known_terms()
         assert np.array_equal(known.a[:10, :10], hybrid.a)
         assert not known.a[10:].any() and not known.a[:, 10:].any() and not known.d.any()
