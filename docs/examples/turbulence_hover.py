@@ -1,22 +1,24 @@
-"""Output error against filter error on hover data flown in turbulence.
+"""Output error against filter error with gust states on hover data flown in turbulence.
 
 The helisim truth model is trimmed in hover and flown through the 16 identification multisteps
 (3211 and 2311, both directions, every control) twice with the same seed: in still air and in
 Dryden turbulence (``moderate`` by default: σ_u = σ_v = 2.65 m/s, σ_w = 1.54 m/s, L_u = L_v =
 154 m, L_w = 30.5 m, rotational gusts from the 9.8 m rotor span, convected at 5 m/s;
-docs/truth-model.md). The fully populated 60-derivative structure with the paper's eight
-delays (start 0.05 s, at most 0.3 s) is fitted to each set with output error and with filter
-error, and the key derivatives are printed beside two references:
+docs/truth-model.md). Each set is fitted with the hybrid rotor-body structure
+(docs/hybrid.md), built on the still-air 6-DoF output-error fit (in turbulence that fit loses
+the roll axis, and a hybrid built on it has no valid start), by output error and by filter
+error with gust states on u, v, w (acting through the derivatives) and Gauss-Markov
+disturbances on the p, q, r equations (the rotational gusts), their sizes and correlation
+times started at the declared turbulence (:data:`DECLARED`). ``--from-still`` starts the
+turbulent filter-error fit at the still-air output-error solution of the hybrid instead (a
+diagnostic: whether the likelihood's optimum lies near it).
 
-* the truth model's residualised 6-DoF linearisation (the quasi-steady target, which a
-  rigid-body model fitted to rotor-affected data does not reach even in still air), and
-* the same estimator's still-air estimate (the equivalent system the data support without
-  turbulence): the difference is the bias the turbulence causes.
-
-Differences are given in the turbulent fit's Cramér-Rao bounds (CR) and in %. Run from the
+The key derivatives are the hybrid's quasi-steady ones (its flap tilts residualised, e.g.
+L_p = τ_f·L_beta1s), compared with the truth model's residualised 6-DoF linearisation, in the
+fit's Cramér-Rao bounds (CR, propagated through the residualisation) and in %. Run from the
 repository root::
 
-    python docs/examples/turbulence_hover.py [--turbulence light|moderate] [--seed N] [--quick]
+    python docs/examples/turbulence_hover.py [--seed N] [--quick] [--from-still]
 
 ``--quick`` shortens the records to 60 %.
 """
@@ -31,85 +33,109 @@ import numpy as np
 import rotorid
 from rotorid import FlightCondition, ModelStructure
 from rotorid.errors import IdentifiabilityWarning
+from rotorid.model.hybrid import hybrid_from_six_dof
+from rotorid.model.residualisation import residualise
+from rotorid.study.truth import derivatives_of, truth_derivatives
 
 KEY = ("L_p", "M_q", "L_lat", "M_long", "N_r", "N_ped", "Z_w", "Z_coll")
-ESTIMATORS = ("output-error", "filter-error")
+#: The filter-error noise model: gusts through the derivatives, rotational disturbances.
+FILTER_ERROR = {"process_noise": (), "gusts": ("u", "v", "w"), "disturbances": ("q", "p", "r"),
+                "max_iterations": 100}
+#: Starts from the declared moderate turbulence: gust sizes in ft/s and correlation times
+#: L/(5 m/s); the rotational disturbances a few deg/s² with the rotational gusts' 2.5 s.
+DECLARED = {"G_u": 8.7, "Tg_u": 31.0, "G_v": 8.7, "Tg_v": 31.0, "G_w": 5.0, "Tg_w": 6.0,
+            "D_p": 12.0, "T_p": 2.5, "D_q": 3.0, "T_q": 2.5, "D_r": 3.0, "T_r": 2.5}
 
 
-def data_sets(turbulence: str, seed: int, quick: bool):
-    """(still air, turbulent) identification sets and the hover trim condition."""
+def data_sets(seed: int, quick: bool):
+    """(still air, moderate turbulence) identification sets, the hover trim condition and the
+    data source."""
     source = rotorid.create("data-sources", "helisim")
     settings = {"condition": "hover", "kinds": ["3211", "2311"], "seed": seed,
                 "duration_scale": 0.6 if quick else 1.0}
     still = source.generate(settings)
-    turbulent = source.generate({**settings, "turbulence": turbulence})
+    turbulent = source.generate({**settings, "turbulence": "moderate"})
     first = still[0].metadata
     condition = FlightCondition.from_airspeed(0.0, first["trim_theta_deg"],
                                               first["trim_phi_deg"])
     return still, turbulent, condition, source
 
 
-def truth_values(source, structure: ModelStructure) -> dict[str, float]:
-    """The truth model's residualised linearisation as derivative values (structure units)."""
-    linear = source.linearize(0.0, units=structure.units.name)
-    a = np.asarray(linear.A) - structure.known_state_matrix()
-    b = np.asarray(linear.B)
-    values = {}
-    for d in structure.derivatives:
-        row = structure.states.index(structure.equation_of(d))
-        values[d.name] = float(b[row, structure.controls.index(d.variable)]
-                               if structure.is_control(d)
-                               else a[row, structure.states.index(d.variable)])
-    return values
-
-
-def fit(name: str, structure, maneuvers):
-    estimator = rotorid.create("estimators", name)
+def fit(name: str, structure, maneuvers, start=None, **options):
+    estimator = rotorid.create("estimators", name, **options)
     started = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IdentifiabilityWarning)
-        estimate = estimator.estimate(structure, maneuvers)
-    return estimate, time.perf_counter() - started
+        estimate = estimator.estimate(structure, maneuvers, start=start)
+    print(f"  {name} {structure.template.name}: {time.perf_counter() - started:.0f} s, "
+          f"{estimate.iterations} iterations, converged {estimate.converged}", flush=True)
+    return estimate
+
+
+def quasi_steady(six_dof: ModelStructure, hybrid: ModelStructure, estimate):
+    """The key derivatives of the hybrid estimate with its flap tilts residualised, and their
+    Cramér-Rao bounds (the estimate's covariance through the residualisation's Jacobian,
+    central differences)."""
+    def key_values(values):
+        a, b, _, _ = hybrid.matrices(values[:hybrid.n_parameters])
+        a, b = residualise(a, b, hybrid.states, six_dof.states)
+        derivatives = derivatives_of(six_dof, a, b)
+        return np.array([derivatives[k] for k in KEY])
+
+    values = estimate.values
+    jacobian = np.zeros((len(KEY), values.size))
+    for i in range(hybrid.n_parameters):
+        step = 1e-6 * max(abs(values[i]), 1e-3)
+        up, down = values.copy(), values.copy()
+        up[i] += step
+        down[i] -= step
+        jacobian[:, i] = (key_values(up) - key_values(down)) / (2 * step)
+    bounds = np.nan_to_num(estimate.cramer_rao, posinf=1e6)
+    covariance = np.nan_to_num(estimate.correlation) * np.outer(bounds, bounds)
+    return key_values(values), np.sqrt(np.diag(jacobian @ covariance @ jacobian.T))
 
 
 def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--turbulence", default="moderate", choices=("light", "moderate"))
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--from-still", action="store_true")
     args = parser.parse_args(argv)
 
-    still, turbulent, condition, source = data_sets(args.turbulence, args.seed, args.quick)
-    structure = ModelStructure.six_dof(condition).with_delays(initial=0.05, upper=0.3)
-    truth = truth_values(source, structure)
-    fits = {(name, air): fit(name, structure, data) for name in ESTIMATORS
-            for air, data in (("still", still), ("turbulent", turbulent))}
-    for (name, air), (estimate, seconds) in fits.items():
-        print(f"{name:>12} {air:>9}: {seconds:5.1f} s, converged {estimate.converged}, "
-              f"{estimate.iterations} iterations")
-    print(f"\n{'':8}{'truth':>9}" + "".join(f"{name:>46}" for name in ESTIMATORS))
-    print(f"{'':17}" + f"{'still':>10}{args.turbulence + ' ± CR, shift':>36}" * len(ESTIMATORS))
+    still, turbulent, condition, source = data_sets(args.seed, args.quick)
+    six_dof = ModelStructure.six_dof(condition)
+    truth = truth_derivatives(source, condition, six_dof)
+    hybrid = hybrid_from_six_dof(six_dof, fit("output-error", six_dof, still).values)
+    columns, noise = {}, {}
+    still_solution = None
+    for air, data in (("still", still), ("moderate", turbulent)):
+        output_error = fit("output-error", hybrid, data)
+        columns[f"OE {air}"] = quasi_steady(six_dof, hybrid, output_error)
+        start = DECLARED
+        if air == "still":
+            still_solution = dict(zip(hybrid.parameter_names, output_error.values))
+        elif args.from_still:
+            start = {**still_solution, **DECLARED}
+        filter_error = fit("filter-error", hybrid, data, start=start, **FILTER_ERROR)
+        columns[f"FE {air}"] = quasi_steady(six_dof, hybrid, filter_error)
+        noise[air] = {n: filter_error.value(n) for n in filter_error.parameter_names
+                      if n.split("_")[0] in ("D", "G", "T", "Tg", "R")}
+        noise[air].update({f"OE R_{o}": r for o, r in
+                           zip(hybrid.outputs, np.diag(output_error.noise_covariance))})
+    print(f"\n{'':8}{'truth':>8}" + "".join(f"{name:>30}" for name in columns))
     table = {}
-    for key in KEY:
-        row = f"{key:8}{truth[key]:9.3f}"
-        for name in ESTIMATORS:
-            calm = fits[(name, "still")][0]
-            rough = fits[(name, "turbulent")][0]
-            value, bound = rough.value(key), rough.cramer_rao[rough.index(key)]
-            shift = (value - calm.value(key)) / bound
-            versus_truth = (value - truth[key]) / bound
-            table[(name, key)] = {"value": value, "cr": bound, "still": calm.value(key),
-                                  "shift_cr": shift, "truth_cr": versus_truth}
-            row += (f"{calm.value(key):10.3f}{value:16.3f} ±{bound:7.3f} "
-                    f"{shift:+7.1f} CR")
+    for i, key in enumerate(KEY):
+        row = f"{key:8}{truth[key]:8.3f}"
+        for name, (values, bounds) in columns.items():
+            error = values[i] - truth[key]
+            table[(name, key)] = {"value": values[i], "cr": bounds[i],
+                                  "percent": 100 * error / abs(truth[key]),
+                                  "cr_off": error / bounds[i]}
+            row += (f"{values[i]:9.3f} ±{bounds[i]:6.3f}{100 * error / abs(truth[key]):+5.0f} %"
+                    f"{error / bounds[i]:+6.1f}")
         print(row)
-    print("\nvalue ± CR of the turbulent fit, then its shift from the same estimator's "
-          "still-air value in CR (0 where the bound is infinite); relative shifts:")
-    for name in ESTIMATORS:
-        relative = np.array([abs(table[(name, k)]["value"] / table[(name, k)]["still"] - 1)
-                             for k in KEY])
-        print(f"{name}: |shift| median {100 * np.median(relative):.0f} %, "
-              f"within 10 % for {int(np.sum(relative <= 0.1))} of {len(KEY)}")
+    for air, values in noise.items():
+        print(f"\n{air}: " + ", ".join(f"{n} {v:.4g}" for n, v in values.items()))
     return table
 
 

@@ -14,8 +14,9 @@ measurement-noise variance, units²). States, controls and outputs are the struc
 Both are estimated with the derivatives and delays. Optional coloured disturbances, states of
 the filter with their own sizes and correlation times, add accelerations to chosen equations
 or translational gusts acting through the derivatives
-(:meth:`FilterErrorProblem._coloured_inputs`). The steady-state Kalman filter (:mod:`.riccati`, :mod:`.kalman`) turns the data into innovations ν_n
-with covariance B = H P Hᵀ + R; the negative log-likelihood is
+(:meth:`FilterErrorProblem._coloured_inputs`). The steady-state Kalman filter
+(:mod:`.riccati`, :mod:`.kalman`) turns the data into innovations ν_n with covariance
+B = H P Hᵀ + R; the negative log-likelihood is
 
     L = ½ Σ_n ν_nᵀ B⁻¹ ν_n + ½ N ln det B.
 
