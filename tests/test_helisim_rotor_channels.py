@@ -8,6 +8,7 @@ model with the actuator lags added by hand)."""
 import attrs
 import numpy as np
 import pytest
+from rotorid.errors import DataError
 from rotorid_helisim.datasets import DataSetConfig
 from rotorid_helisim.linearize import linearize
 from rotorid_helisim.sensors import ROTOR_CHANNELS, ROTOR_SIGMA, SensorNoise
@@ -33,6 +34,8 @@ def flown(truth_model, trim_70kt):
 
 def test_rotor_channels_are_off_by_default_and_leave_the_body_channels_alone(flown):
     plain, rotor = flown
+    with pytest.raises(DataError, match="rotor_channels must be true or false"):
+        _config(rotor_channels="yes")
     assert "rotor_channels" not in _config().as_dict()
     assert _config().digest() != _config(rotor_channels=True).digest()
     for without, with_rotor in zip(plain, rotor):
@@ -98,3 +101,20 @@ def test_generate_writes_rotor_channels_when_asked(tmp_path, monkeypatch, capsys
     assert "rotor_channels" not in asked[0] and asked[1]["rotor_channels"] is True
     assert DataSetConfig.from_mapping({k: v for k, v in asked[1].items()
                                        if k != "turbulence"}).rotor_channels
+
+
+def test_noise_realisations_carry_the_rotor_channels(truth_model, trim_70kt, tmp_path):
+    """A Monte Carlo's data set for a seed equals (to 1e-12) the one flown with that seed, rotor channels
+    included: the noise-free flight is stored once and each seed adds its noise."""
+    source = HelisimSource(truth_model, trimmer=lambda plant, kt: trim_70kt)
+    settings = {"condition": "forward", "duration_scale": 0.3, "axes": ["coll"],
+                "directions": [1], "identification": ["3211"], "verification": ["2311"],
+                "rotor_channels": True}
+    realisations = source.noise_realisations(settings, tmp_path / "clean")
+    trim_part = realisations.clean[0].columns(ROTOR_CHANNELS)[:50]  # before the first step
+    assert np.abs(trim_part).max() < 1e-9
+    flown = source.case_data({**settings, "seed": 4}, tmp_path / "seed-4").identification
+    for drawn, reference in zip(realisations(4), flown):
+        assert np.allclose(drawn.outputs, reference.outputs, rtol=0.0, atol=1e-12)
+        assert np.allclose(drawn.columns(ROTOR_CHANNELS), reference.columns(ROTOR_CHANNELS),
+                           rtol=0.0, atol=1e-12)

@@ -86,6 +86,11 @@ def _per_axis(defaults):
     return convert
 
 
+def _boolean(instance, attribute, value):
+    if not isinstance(value, bool):
+        raise DataError(f"data set: {attribute.name} must be true or false, got {value!r}")
+
+
 def _in_range(low, high, what):
     def check(instance, attribute, value):
         if not (math.isfinite(value) and low < value <= high):
@@ -135,8 +140,7 @@ class DataSetConfig:
     loops: LoopDesign = attrs.field(factory=LoopDesign, converter=lambda v: v if isinstance(
         v, LoopDesign) else LoopDesign(**v))
     turbulence: Turbulence | None = attrs.field(default=None, converter=turbulence_setting)
-    rotor_channels: bool = attrs.field(default=False, validator=attrs.validators.instance_of(
-        bool))
+    rotor_channels: bool = attrs.field(default=False, validator=_boolean)
 
     @classmethod
     def for_condition(cls, name: str, **options) -> "DataSetConfig":
