@@ -319,6 +319,25 @@ def test_in_still_air_filter_error_reduces_to_output_error():
     assert np.all(f < 0.2 * np.array([0.03, 0.03, 0.05, 0.02, 0.1, 0.05]))
 
 
+def test_with_gusts_in_still_air_filter_error_reduces_to_output_error():
+    """The gust and disturbance states find nothing to follow in data without model error or
+    process noise: started from output error's derivatives, the derivatives stay within 1 CR
+    of output error's and the yaw disturbance and the v gust go to their floors."""
+    data = noisy_data({})
+    model = structure()
+    output_error = rotorid.create("estimators", "output-error", noise="diagonal").estimate(
+        model, data)
+    start = dict(zip(model.parameter_names, output_error.values))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IdentifiabilityWarning)      # sizes → floor: flat
+        filtered = estimator(process_noise=(), disturbances=("r",), gusts=("w", "v")).estimate(
+            model, data, start=start)
+    k = model.n_parameters
+    difference = np.abs(filtered.values[:k] - output_error.values) / output_error.cramer_rao
+    assert np.all(difference < 1.0), dict(zip(model.parameter_names, difference.round(2)))
+    assert filtered.value("D_r") < 0.01 and filtered.value("G_v") < 0.01
+
+
 def test_start_values_and_options_are_checked():
     data = noisy_data(PROCESS)
     with pytest.raises(EstimationError, match="process_noise"):

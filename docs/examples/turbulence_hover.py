@@ -3,8 +3,8 @@
 The helisim truth model is trimmed in hover and flown through the 16 identification multisteps
 (3211 and 2311, both directions, every control) twice with the same seed: in still air and in
 Dryden turbulence (``moderate`` by default: σ_u = σ_v = 2.65 m/s, σ_w = 1.54 m/s, L_u = L_v =
-154 m, L_w = 30.5 m, rotational gusts from the 9.8 m rotor span, convected at 5 m/s;
-docs/truth-model.md). Each set is fitted with the hybrid rotor-body structure
+154 m, L_w = 30.5 m, rotational gusts from the 9.8 m rotor span, convected at 5 m/s; ``light``
+halves the σ; docs/truth-model.md). Each set is fitted with the hybrid rotor-body structure
 (docs/hybrid.md), built on the still-air 6-DoF output-error fit (in turbulence that fit loses
 the roll axis, and a hybrid built on it has no valid start), by output error and by filter
 error with gust states on u, v, w (acting through the derivatives) and Gauss-Markov
@@ -18,7 +18,8 @@ L_p = τ_f·L_beta1s), compared with the truth model's residualised 6-DoF linear
 fit's Cramér-Rao bounds (CR, propagated through the residualisation) and in %. Run from the
 repository root::
 
-    python docs/examples/turbulence_hover.py [--seed N] [--quick] [--from-still]
+    python docs/examples/turbulence_hover.py [--turbulence light|moderate] [--seed N] [--quick]
+                                             [--from-still]
 
 ``--quick`` shortens the records to 60 %.
 """
@@ -45,16 +46,24 @@ FILTER_ERROR = {"process_noise": (), "gusts": ("u", "v", "w"), "disturbances": (
 #: L/(5 m/s); the rotational disturbances a few deg/s² with the rotational gusts' 2.5 s.
 DECLARED = {"G_u": 8.7, "Tg_u": 31.0, "G_v": 8.7, "Tg_v": 31.0, "G_w": 5.0, "Tg_w": 6.0,
             "D_p": 12.0, "T_p": 2.5, "D_q": 3.0, "T_q": 2.5, "D_r": 3.0, "T_r": 2.5}
+#: Size of each setting's gusts relative to moderate turbulence (docs/truth-model.md).
+INTENSITY = {"light": 0.5, "moderate": 1.0}
 
 
-def data_sets(seed: int, quick: bool):
-    """(still air, moderate turbulence) identification sets, the hover trim condition and the
-    data source."""
+def declared(turbulence: str) -> dict[str, float]:
+    """:data:`DECLARED` for ``turbulence``: the sizes scaled, the correlation times kept."""
+    return {name: value * (INTENSITY[turbulence] if name[0] in "GD" else 1.0)
+            for name, value in DECLARED.items()}
+
+
+def data_sets(turbulence: str, seed: int, quick: bool):
+    """(still air, turbulent) identification sets, the hover trim condition and the data
+    source."""
     source = rotorid.create("data-sources", "helisim")
     settings = {"condition": "hover", "kinds": ["3211", "2311"], "seed": seed,
                 "duration_scale": 0.6 if quick else 1.0}
     still = source.generate(settings)
-    turbulent = source.generate({**settings, "turbulence": "moderate"})
+    turbulent = source.generate({**settings, "turbulence": turbulence})
     first = still[0].metadata
     condition = FlightCondition.from_airspeed(0.0, first["trim_theta_deg"],
                                               first["trim_phi_deg"])
@@ -97,25 +106,26 @@ def quasi_steady(six_dof: ModelStructure, hybrid: ModelStructure, estimate):
 
 def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--turbulence", default="moderate", choices=tuple(INTENSITY))
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--from-still", action="store_true")
     args = parser.parse_args(argv)
 
-    still, turbulent, condition, source = data_sets(args.seed, args.quick)
+    still, turbulent, condition, source = data_sets(args.turbulence, args.seed, args.quick)
     six_dof = ModelStructure.six_dof(condition)
     truth = truth_derivatives(source, condition, six_dof)
     hybrid = hybrid_from_six_dof(six_dof, fit("output-error", six_dof, still).values)
     columns, noise = {}, {}
     still_solution = None
-    for air, data in (("still", still), ("moderate", turbulent)):
+    for air, data in (("still", still), (args.turbulence, turbulent)):
         output_error = fit("output-error", hybrid, data)
         columns[f"OE {air}"] = quasi_steady(six_dof, hybrid, output_error)
-        start = DECLARED
+        start = declared(args.turbulence)
         if air == "still":
             still_solution = dict(zip(hybrid.parameter_names, output_error.values))
         elif args.from_still:
-            start = {**still_solution, **DECLARED}
+            start = {**still_solution, **start}
         filter_error = fit("filter-error", hybrid, data, start=start, **FILTER_ERROR)
         columns[f"FE {air}"] = quasi_steady(six_dof, hybrid, filter_error)
         noise[air] = {n: filter_error.value(n) for n in filter_error.parameter_names
