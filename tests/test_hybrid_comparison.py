@@ -10,7 +10,7 @@ import rotorid
 from hybrid_reference import NOISE, hybrid_reference, open_loop_maneuvers, six_dof_of
 from rotorid import Maneuver, ManeuverSet
 from rotorid.errors import DataFileError, IdentifiabilityWarning
-from rotorid.model.hybrid import hybrid_from_six_dof
+from rotorid.model.hybrid import REQUIRED, hybrid_from_six_dof
 from rotorid.report.figures import hybrid_figures
 from rotorid.report.html import hybrid_html, hybrid_model_rows, hybrid_term_rows
 from rotorid.simulation.simulator import simulate
@@ -39,7 +39,8 @@ def _sweeps(structure, values, seed) -> ManeuverSet:
 
 
 @pytest.fixture(scope="module")
-def comparison(truth_model, trim_70kt):
+def inputs(truth_model, trim_70kt):
+    """The arguments of :func:`compare_hybrid` on data of the 70 kt hybrid reference."""
     condition, a, b = hybrid_reference(truth_model, trim_70kt)
     six_dof, six_values = six_dof_of(condition, a, b)
     truth = hybrid_from_six_dof(six_dof, six_values)
@@ -55,10 +56,15 @@ def comparison(truth_model, trim_70kt):
         warnings.simplefilter("ignore", IdentifiabilityWarning)
         plain = estimator.estimate(six_dof, ident)
         with_delays = estimator.estimate(delayed, ident, start=plain.as_mapping())
-    return compare_hybrid({"no delays": six_dof, "with delays": delayed},
-                          {"no delays": plain, "with delays": with_delays}, ident,
-                          _sweeps(truth, values, seed=5), PAIRS, estimator,
-                          lambda hybrid: derivatives_of(hybrid, a, b))
+    return dict(structures={"no delays": six_dof, "with delays": delayed},
+                estimates={"no delays": plain, "with delays": with_delays}, ident=ident,
+                sweeps=_sweeps(truth, values, seed=5), pairs=PAIRS, estimator=estimator,
+                reference=lambda hybrid: derivatives_of(hybrid, a, b))
+
+
+@pytest.fixture(scope="module")
+def comparison(inputs):
+    return compare_hybrid(**inputs)
 
 
 def test_the_hybrid_model_of_hybrid_data_beats_both_six_dof_models(comparison):
@@ -103,7 +109,25 @@ def test_case_option():
                                                              "hybrid_band_max": 14.0}})
     assert hybrid.compare_hybrid and hybrid.as_dict()["compare_hybrid"] is True
     assert hybrid.as_dict()["compare_hybrid_band_max"] == 14.0
-    with pytest.raises(DataFileError, match="hybrid comparison only"):
-        FlightCase.from_mapping({**mapping, "compare": {"hybrid_band_max": 14.0}})
+    assert "compare_hybrid_reduction" not in hybrid.as_dict()
+    reduced = FlightCase.from_mapping({**mapping, "compare": {"hybrid": True,
+                                                              "hybrid_reduction": True}})
+    assert reduced.as_dict()["compare_hybrid_reduction"] is True
+    for extra in ({"hybrid_band_max": 14.0}, {"hybrid_reduction": True}):
+        with pytest.raises(DataFileError, match="hybrid comparison only"):
+            FlightCase.from_mapping({**mapping, "compare": extra})
     with pytest.raises(DataFileError, match="top frequency"):
         FlightCase.from_mapping({**mapping, "compare": {"hybrid": True, "hybrid_band_max": 0.5}})
+
+
+def test_the_hybrid_reduced_before_its_fit(inputs, comparison):
+    """A reduction before the fit (insensitivity above 100 %: X_long, 0.011 in the truth,
+    goes) takes its terms out of the hybrid and the report says which; the flap damping and
+    hub moments stay."""
+    criteria = [rotorid.create("reduction-criteria", "insensitivity", threshold=100.0)]
+    reduced = compare_hybrid(**inputs, criteria=criteria)
+    assert comparison.removed is None and comparison.summary()["removed"] is None
+    assert reduced.removed and reduced.summary()["removed"] == list(reduced.removed)
+    assert set(reduced.structure.names) == set(comparison.structure.names) - set(reduced.removed)
+    assert set(REQUIRED) <= set(reduced.structure.names)
+    assert reduced.removed[-1] in hybrid_html(types.SimpleNamespace(hybrid_comparison=reduced))

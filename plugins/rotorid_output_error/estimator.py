@@ -180,7 +180,9 @@ class OutputErrorEstimator:
         records; returns the last run's result.
 
         A stage whose start (the previous stage's result) diverges on its longer records
-        starts again from the values the continuation began with.
+        starts again from the values the continuation began with; a continuation that ends
+        above the cost of those values on the full records is replaced by the full records'
+        fit from them (:meth:`_not_above_start`).
         """
         first = values
         horizons = self._stages(maneuvers)
@@ -210,7 +212,23 @@ class OutputErrorEstimator:
             if horizon is not None:
                 notes.append(f"horizon {label}: {result.iterations} iterations, "
                              f"RMSE {result.rmse:.4g}")
+        if reason:
+            result = self._not_above_start(fitted, maneuvers, columns, weights, first, result,
+                                           stages[-1][1], notes)
         return result
+
+    def _not_above_start(self, fitted, maneuvers, columns, weights, first, result, settings,
+                         notes):
+        """``result`` of a horizon continuation begun at ``first``, or, when it ends above
+        the cost of ``first`` on the full records (the short records led the fit where the
+        full ones fit worse than its start), the full records' fit straight from ``first``."""
+        problem = _problem(fitted, maneuvers, columns, weights, Settings(noise=self.noise))
+        start_cost = problem.evaluate(first)[0]
+        if not np.isfinite(start_cost) or result.cost <= start_cost:
+            return result
+        notes.append("the horizons ended above the start values' cost on the full records; "
+                     "refitted the full records from the start values")
+        return self._run(fitted, maneuvers, columns, weights, first, settings, "full")
 
     def _horizons_help(self, base, fitted, maneuvers, columns, weights,
                        values) -> str | None:

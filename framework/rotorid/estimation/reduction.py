@@ -23,7 +23,7 @@ Selection rules:
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 
 import attrs
 import numpy as np
@@ -132,7 +132,8 @@ def _propose(criteria, estimate: Estimate, continue_to_zero: bool) -> Removal | 
 
 def reduce(structure: ModelStructure, maneuvers, estimator, criteria: Sequence, *,
            continue_to_zero: bool = False, warm_start: bool = False, rule: str = "lowest-rmse",
-           rmse_tolerance: float = 0.01, finished: Sequence[ReductionStep] = (),
+           rmse_tolerance: float = 0.01, keep: Collection[str] = (),
+           finished: Sequence[ReductionStep] = (),
            on_step: Callable[[ReductionStep], None] | None = None,
            case: str = "", manager=None) -> ReductionPath:
     """Run the reduction loop.
@@ -142,9 +143,13 @@ def reduce(structure: ModelStructure, maneuvers, estimator, criteria: Sequence, 
         maneuvers: identification maneuvers.
         estimator: an estimator plugin object (``estimate(structure, maneuvers, start=...)``).
         criteria: reduction-criterion objects, asked in order.
-        continue_to_zero: keep removing after the criteria are satisfied.
+        continue_to_zero: keep removing after the criteria are satisfied (until only
+            ``keep`` is left).
         warm_start: restart from the previous values instead of the initial values (a
             documented speed-up; the paper restarts from the initial values).
+        keep: derivatives never proposed for removal (e.g. the hybrid model's flap damping
+            and hub moments, :data:`rotorid.model.hybrid.REQUIRED`); each must be one of the
+            structure's free derivatives.
         finished: steps already computed (resume); they must be a prefix of this run.
         on_step: called after every step (progress, persistence); the
             ``rotorid_reduction_step`` hook fires too, with ``case``.
@@ -166,16 +171,20 @@ def reduce(structure: ModelStructure, maneuvers, estimator, criteria: Sequence, 
     if structure.free_delays:
         raise EstimationError("reduce the structure without delays; the delays are added "
                               "after selection (the paper's two-step approach)")
+    strange = set(keep) - {d.name for d in structure.free_derivatives}
+    if strange:
+        raise EstimationError(f"reduction: {', '.join(sorted(strange))} to keep but not free "
+                              f"derivatives of the structure; keep only its free derivatives")
     with using(manager):
         steps = list(finished)
         if not steps:
             record(ReductionStep(0, None, estimator.estimate(structure, maneuvers), structure))
-        while steps[-1].structure.free_derivatives:
+        while candidates := [d.name for d in steps[-1].structure.free_derivatives
+                             if d.name not in keep]:
             last = steps[-1]
-            # the criteria see the structure's derivatives only, never an estimator's own
-            # parameters (filter error's noise F_* and R_*)
-            removal = _propose(criteria, last.estimate.restricted(last.structure.parameter_names),
-                               continue_to_zero)
+            # the criteria see the candidates only, never an estimator's own parameters
+            # (filter error's noise F_* and R_*)
+            removal = _propose(criteria, last.estimate.restricted(candidates), continue_to_zero)
             if removal is None:
                 break
             reduced = last.structure.without(removal.parameter)

@@ -375,15 +375,21 @@ def hybrid_html(result, figures: Sequence = ()) -> str:
     reference = ("The reference is the truth model's full linearisation with the flap rates, "
                  "coning and inflow residualised: the flap-coupled model, not the 6-DoF one."
                  if comparison.reference is not None else "")
+    reduced = "" if comparison.removed is None else (
+        " Before that fit it was reduced by the case's criteria and selection rule, its flap "
+        "damping and hub moments kept: "
+        + (f"removed {html.escape(', '.join(comparison.removed))}." if comparison.removed
+           else "nothing removed."))
     return "\n".join([
         '<h2 id="hybrid">Three models: no delays, delays, hybrid</h2>',
         "<p>The hybrid rotor-body model (docs/hybrid.md) is the selected model with the "
         "rotor's tip-path-plane tilts β1c, β1s as first-order states: the disc tilt carries the "
-        "roll and pitch rate damping and the cyclic's moments, with delays on the cyclic into "
-        "flapping; it was fitted from the start whose quasi-steady form is the selected model "
-        f"({comparison.estimate.iterations} iterations, {comparison.seconds:.1f} s). All three "
-        "are judged alike: their simulation of the identification maneuvers, and J per pair "
-        f"over {html.escape(comparison.band.describe())} ({MISMATCH_COST_GUIDELINE_TEXT}).</p>",
+        "rotor's rate damping, the cyclic's and the velocities' roll and pitch moments and the "
+        "rate terms of the force and yaw equations, with delays on the cyclic into flapping; "
+        "it was fitted from the start whose quasi-steady form is the selected model "
+        f"({comparison.estimate.iterations} iterations, {comparison.seconds:.1f} s).{reduced} "
+        "All three are judged alike: their simulation of the identification maneuvers, and J "
+        f"per pair over {html.escape(comparison.band.describe())} ({MISMATCH_COST_GUIDELINE_TEXT}).</p>",
         _html_table(hybrid_model_rows(result)),
         figures_html(figures),
         "<h3>Rotor terms of the hybrid model</h3>",

@@ -50,7 +50,8 @@ _TABLES = {
     "delays": {"derivatives", "initial", "upper", "threshold", "starts", "seed",
                "profile_points"},
     "quick": {"duration_scale", "continue_to_zero", "warm_start", "delay_profile_points"},
-    "compare": {"frequency", "pairs", "band_max", "estimators", "hybrid", "hybrid_band_max"},
+    "compare": {"frequency", "pairs", "band_max", "estimators", "hybrid", "hybrid_band_max",
+                "hybrid_reduction"},
     "reference": None,
 }
 _TOP_LEVEL = {"name", "description", *_TABLES}
@@ -75,6 +76,7 @@ _FIELDS = {
     ("compare", "estimators"): ("compare_estimators", tuple),
     ("compare", "hybrid"): ("compare_hybrid", bool),
     ("compare", "hybrid_band_max"): ("compare_hybrid_band_max", float),
+    ("compare", "hybrid_reduction"): ("compare_hybrid_reduction", bool),
 }
 
 #: What each converter of :data:`_FIELDS` reads, for the error messages.
@@ -99,7 +101,8 @@ class FlightCase:
     with delays to the identification data (:mod:`rotorid.study.estimator_comparison`). With
     ``compare_hybrid`` the hybrid rotor-body model is built on the selected model and compared
     with both (:mod:`rotorid.study.hybrid_comparison`), J up to ``compare_hybrid_band_max``
-    rad/s (the sweeps' top frequency; default 20).
+    rad/s (the sweeps' top frequency; default 20); with ``compare_hybrid_reduction`` the hybrid
+    is first reduced by the case's criteria and selection rule.
     Empty ``pairs`` are the structure's own default pairs
     (:func:`rotorid.verification.pairs.default_pairs`: the paper's pairs it has).
     ``delay_profile_points`` is the number of grid values in [0, ``delay_upper``] of each kept
@@ -136,6 +139,7 @@ class FlightCase:
     compare_estimators: tuple[str, ...] = ()
     compare_hybrid: bool = False
     compare_hybrid_band_max: float = HYBRID_OMEGA_MAX
+    compare_hybrid_reduction: bool = False
     quick_settings: Mapping = attrs.field(factory=dict, converter=dict)
     is_quick: bool = False
 
@@ -219,11 +223,12 @@ class FlightCase:
         return attrs.evolve(self, data={**self.data, "seed": int(seed)})
 
     def as_dict(self) -> dict:
-        """Plain settings, as recorded in ``result.json``; ``compare_estimators`` and
-        ``compare_hybrid`` only when set, so that cases without them keep the record they had
-        before they existed."""
+        """Plain settings, as recorded in ``result.json``; ``compare_estimators``,
+        ``compare_hybrid`` and ``compare_hybrid_reduction`` only when set, so that cases without
+        them keep the record they had before they existed."""
         return attrs.asdict(self, filter=lambda a, v: not (
-            a.name in ("compare_estimators", "compare_hybrid") and not v
+            a.name in ("compare_estimators", "compare_hybrid", "compare_hybrid_reduction")
+            and not v
             or a.name == "compare_hybrid_band_max" and not self.compare_hybrid))
 
 

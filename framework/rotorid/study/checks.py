@@ -85,9 +85,9 @@ def _check_compare(case, where: str) -> None:
     if not (math.isfinite(top) and top > 1.0):
         raise DataFileError(f"{where}: [compare] hybrid_band_max must be the sweeps' top "
                             f"frequency in rad/s, above 1, got {top!r}")
-    if top != HYBRID_OMEGA_MAX and not case.compare_hybrid:
-        raise DataFileError(f"{where}: [compare] hybrid_band_max applies to the hybrid "
-                            f"comparison only; add hybrid = true or drop it")
+    if (top != HYBRID_OMEGA_MAX or case.compare_hybrid_reduction) and not case.compare_hybrid:
+        raise DataFileError(f"{where}: [compare] hybrid_band_max and hybrid_reduction apply to "
+                            f"the hybrid comparison only; add hybrid = true or drop them")
     for pair in case.compare_pairs:
         _wrapped(lambda: parse_pair(pair), where, "[compare] pairs")
     band_max = case.compare_band_max

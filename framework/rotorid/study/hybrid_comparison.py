@@ -4,7 +4,8 @@ The hybrid rotor-body model (docs/hybrid.md) is built on the selected 6-DoF mode
 (:func:`rotorid.model.hybrid.hybrid_from_six_dof`: the disc tilt instead of the direct roll and
 pitch rate and cyclic terms, the flap equations, delays on the cyclic into flapping) and
 fitted with the case's estimator to the identification maneuvers, starting where the 6-DoF
-fit ended. Every model is judged on the same terms: its parameters, the RMSE and det R of its
+fit ended; optionally it is first reduced, without its delays, by the case's criteria (its flap
+damping and hub moments kept). Every model is judged on the same terms: its parameters, the RMSE and det R of its
 simulation of the identification maneuvers, and per verification pair the mismatch cost J
 over γ² ≥ 0.8 from 1 rad/s to the sweeps' top frequency, at most 20 rad/s (:func:`hybrid_band`:
 the band where the rotor's lag shows). With a truth model, the hybrid's rotor terms
@@ -16,7 +17,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import attrs
 import numpy as np
@@ -24,7 +25,8 @@ import numpy as np
 from rotorid.data import ManeuverSet
 from rotorid.errors import IdentifiabilityWarning
 from rotorid.estimation.estimate import Estimate
-from rotorid.model.hybrid import hybrid_from_six_dof
+from rotorid.estimation.reduction import reduce
+from rotorid.model.hybrid import REQUIRED, hybrid_from_six_dof, with_flap_delays
 from rotorid.model.structure import ModelStructure
 from rotorid.study.estimator_comparison import SimulationFit, simulation_fit
 from rotorid.verification.band import VerificationBand
@@ -65,7 +67,8 @@ class HybridComparison:
         band: where J is taken (:func:`hybrid_band`).
         reference: the truth's flap-coupled values of the hybrid's derivatives by name, or
             None without a truth model.
-        seconds: wall time of the hybrid fit, s.
+        seconds: wall time of the hybrid fit (and its reduction), s.
+        removed: what the reduction removed from the hybrid, in order; None without one.
     """
 
     structure: ModelStructure
@@ -76,6 +79,7 @@ class HybridComparison:
     reference: Mapping[str, float] | None
     seconds: float
     band: VerificationBand
+    removed: tuple[str, ...] | None = None
 
     @property
     def costs(self) -> dict[str, dict[str, float | None]]:
@@ -111,12 +115,15 @@ class HybridComparison:
                                           for n, (t, s) in self.flap_time_constants().items()},
                 "rotor_terms": self.rotor_terms(),
                 "estimate": self.estimate.as_dict(),
+                "removed": None if self.removed is None else list(self.removed),
                 "seconds": self.seconds}
 
 
 def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[str, Estimate],
                    ident: ManeuverSet, sweeps: ManeuverSet | None, pairs, estimator,
-                   reference=None, omega_max: float = HYBRID_OMEGA_MAX) -> HybridComparison:
+                   reference=None, omega_max: float = HYBRID_OMEGA_MAX,
+                   criteria: Sequence = (), rule: str = "lowest-rmse",
+                   rmse_tolerance: float = 0.01) -> HybridComparison:
     """Build and fit the hybrid model on ``structures["no delays"]`` and compare it with the
     case's two models.
 
@@ -126,12 +133,23 @@ def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[
         pairs: the verification pairs; estimator: the case's estimator.
         reference: ``reference(structure) -> {name: value}`` of the truth, or None.
         omega_max: the sweeps' top frequency, rad/s (J's band, :func:`hybrid_band`).
+        criteria: reduction criteria; with any, the hybrid without delays is reduced first
+            (:func:`~rotorid.estimation.reduction.reduce`, stopped when the criteria are
+            satisfied, :data:`~rotorid.model.hybrid.REQUIRED` kept) and the step ``rule``
+            selects (with ``rmse_tolerance``) is fitted with its delays from its start values.
     """
     band = hybrid_band(omega_max)
-    hybrid = hybrid_from_six_dof(structures["no delays"], estimates["no delays"].values)
+    hybrid = hybrid_from_six_dof(structures["no delays"], estimates["no delays"].values,
+                                 delay_upper=None)
     clock = time.perf_counter()
+    removed = None
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IdentifiabilityWarning)
+        if criteria:
+            path = reduce(hybrid, ident, estimator, criteria, rule=rule,
+                          rmse_tolerance=rmse_tolerance, keep=REQUIRED)
+            hybrid, removed = path.selected.structure, path.removed
+        hybrid = with_flap_delays(hybrid)
         estimate = estimator.estimate(hybrid, ident)        # the disc starts at trim
     seconds = time.perf_counter() - clock
     structures = {**structures, "hybrid": hybrid}
@@ -146,7 +164,7 @@ def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[
         hybrid, estimate, {label: structures[label].n_parameters for label in HYBRID_MODELS},
         {label: simulation_fit(structures[label], estimates[label], ident)
          for label in HYBRID_MODELS},
-        verification, None if reference is None else reference(hybrid), seconds, band)
+        verification, None if reference is None else reference(hybrid), seconds, band, removed)
 
 
 def mean_cost(costs: Mapping[str, float | None]) -> float | None:

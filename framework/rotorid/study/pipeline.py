@@ -263,11 +263,17 @@ def _compare_hybrid(case: FlightCase, structures, estimates, ident: ManeuverSet,
     reference = None if truth is None else (
         lambda hybrid: truth_derivatives(truth, condition, hybrid))
     pairs = [p.pair for p in verification["with delays"].pairs] if verification else []
+    criteria = ([create("reduction-criteria", name, **options)
+                 for name, options in case.criteria] if case.compare_hybrid_reduction else [])
     comparison = compare_hybrid(structures, estimates, ident, verif, pairs, estimator,
-                                reference, case.compare_hybrid_band_max)
+                                reference, case.compare_hybrid_band_max, criteria, case.rule,
+                                case.rmse_tolerance)
     taus = ", ".join(f"{t:.3f} s" for t, _ in comparison.flap_time_constants().values())
     costs = "; ".join(f"{label} {cost:.0f}" for label, costs in comparison.costs.items()
                       if (cost := mean_cost(costs)) is not None)
+    if comparison.removed is not None:
+        report(case.name, f"hybrid model reduced: removed "
+                          f"{', '.join(comparison.removed) or 'nothing'}")
     report(case.name, f"hybrid model: {comparison.structure.n_parameters} parameters, "
                       f"{comparison.estimate.iterations} iter, RMSE "
                       f"{comparison.estimate.rmse:.4f}, flap time constants {taus}"
