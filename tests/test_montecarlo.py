@@ -3,6 +3,7 @@ noise by the expected factor, identical through a process pool, failures kept ap
 
 import json
 
+import attrs
 import numpy as np
 import pytest
 import rotorid
@@ -107,6 +108,16 @@ def test_record_report_and_figure(problem, tmp_path):
     assert row["reference"] is None and row["truth"] == SMALL_TRUTH["L_p"]
     report = result.report()
     assert "std/CR" in report and all(name in report for name in NAMES)
+
+
+def test_converged_runs_keep_the_statistics_of_those_runs_only(problem):
+    result = run(problem, WhiteNoise(problem[2], SIGMA), range(4))
+    marked = attrs.evolve(result, converged=[True, False, True, True])
+    kept = marked.converged_runs()
+    assert kept.seeds == (0, 2, 3) and kept.converged.all()
+    np.testing.assert_array_equal(kept.std, result.estimates[[0, 2, 3]].std(axis=0, ddof=1))
+    np.testing.assert_array_equal(kept.mean_cramer_rao,
+                                  result.cramer_rao[[0, 2, 3]].mean(axis=0))
 
 
 def test_helisim_noise_realisations_equal_data_generated_with_that_seed(tmp_path):

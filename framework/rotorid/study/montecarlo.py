@@ -78,6 +78,14 @@ class MonteCarloResult:
     def runs(self) -> int:
         return len(self.seeds)
 
+    def converged_runs(self) -> "MonteCarloResult":
+        """The same Monte Carlo over the runs whose estimation converged: the bound of a run
+        stopped at its iteration limit belongs to no optimum."""
+        keep = self.converged
+        return attrs.evolve(self, seeds=[s for s, k in zip(self.seeds, keep) if k],
+                            estimates=self.estimates[keep], cramer_rao=self.cramer_rao[keep],
+                            converged=keep[keep])
+
     @property
     def mean(self) -> np.ndarray:
         """Sample mean of the estimates."""
@@ -95,9 +103,11 @@ class MonteCarloResult:
 
     @property
     def ratio(self) -> np.ndarray:
-        """Sample standard deviation over mean Cramér-Rao bound: 1 for honest bounds."""
+        """Sample standard deviation over mean Cramér-Rao bound: 1 for honest bounds; NaN
+        where a run's bound is infinite (a diverged run claims no spread to compare)."""
+        bound = self.mean_cramer_rao
         with np.errstate(divide="ignore", invalid="ignore"):
-            return self.std / self.mean_cramer_rao
+            return np.where(np.isfinite(bound), self.std / bound, np.nan)
 
     def coverage(self, centre: str = "mean") -> np.ndarray:
         """Fraction of runs whose ±2·CR interval contains the sample ``"mean"`` or the

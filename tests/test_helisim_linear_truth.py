@@ -1,0 +1,69 @@
+"""The linearised truth plant against the truth model's own linearisation and physics."""
+
+import numpy as np
+import pytest
+from rotorid.errors import DataError
+from rotorid_helisim.linear_truth import LinearisedPlant, linearised_trim
+from rotorid_helisim.linearize import PADFIELD_STATES, linearize
+from rotorid_helisim.loops import BODY
+from rotorid_helisim.model import Bo105Model
+from rotorid_helisim.trim import trim
+
+
+@pytest.fixture(scope="module")
+def hover():
+    model = Bo105Model()
+    point = trim(model, 0.0)
+    return model, point, LinearisedPlant.about(model, point)
+
+
+def test_state_and_stick_matrices_are_the_residualised_linearisation(hover):
+    """A and B (per % of stick through the stick mixing) equal linearize()'s in SI."""
+    model, point, plant = hover
+    reference = linearize(model, point, units="si")
+    order = [BODY.index(name) for name in PADFIELD_STATES]
+    np.testing.assert_allclose(plant.a[np.ix_(order, order)], reference.A, rtol=1e-6,
+                               atol=1e-6 * np.abs(reference.A).max())
+    np.testing.assert_allclose(plant.b[order], reference.B @ model.config.mixing.matrix,
+                               rtol=1e-6, atol=1e-6 * np.abs(reference.B).max())
+
+
+def test_translational_gusts_act_as_the_negative_velocity(hover):
+    """In hover (no body rates at trim) the air sees the velocity minus the gust, so each
+    translational gust column is the negative of the velocity's column, in the state
+    derivatives and in the accelerometers."""
+    _, _, plant = hover
+    velocity = [BODY.index(name) for name in ("u", "v", "w")]
+    np.testing.assert_allclose(plant.g[:, :3], -plant.a[:, velocity], rtol=1e-4, atol=1e-6)
+    np.testing.assert_allclose(plant.h[:, :3], -plant.c[:, velocity], rtol=1e-4, atol=1e-6)
+
+
+def test_flown_plant_reproduces_its_linear_model(hover):
+    """derivatives and measurements are affine in state, stick and gust about the trim."""
+    _, _, plant = hover
+    rng = np.random.default_rng(3)
+    x = plant.trim_state + rng.normal(size=(2, 9)) * 0.1
+    stick = plant.trim_stick + rng.normal(size=(2, 4))
+    gust = rng.normal(size=(2, 6))
+    expected = (x - plant.trim_state) @ plant.a.T + (stick - plant.trim_stick) @ plant.b.T
+    np.testing.assert_allclose(plant.derivatives(x, stick, gust), expected + gust @ plant.g.T)
+    assert plant.measurements(plant.trim_state[None], plant.trim_stick[None]) == (
+        pytest.approx(plant.trim_measurements[None]))
+
+
+def test_longitudinal_cut_keeps_the_longitudinal_block_only(hover):
+    _, _, plant = hover
+    cut = plant.longitudinal()
+    lon = [BODY.index(name) for name in ("u", "w", "q", "theta")]
+    lat = [BODY.index(name) for name in ("v", "p", "r", "phi", "psi")]
+    np.testing.assert_array_equal(cut.a[np.ix_(lon, lon)], plant.a[np.ix_(lon, lon)])
+    assert not np.any(cut.a[np.ix_(lon, lat)]) and not np.any(cut.a[np.ix_(lat, lon)])
+    assert not np.any(cut.b[lon][:, [1, 3]]) and not np.any(cut.g[lon][:, [1, 3, 5]])
+    assert not np.any(cut.c[:4][:, lat]) and not np.any(cut.h[:4][:, [1, 3, 5]])
+
+
+def test_trimmer_refuses_another_airspeed(hover):
+    _, _, plant = hover
+    assert linearised_trim(plant, 0.0).stick is plant.trim_stick
+    with pytest.raises(DataError, match="holds at 0 kt, not at 70 kt"):
+        linearised_trim(plant, 70.0)
