@@ -67,3 +67,18 @@ def test_trimmer_refuses_another_airspeed(hover):
     assert linearised_trim(plant, 0.0).stick is plant.trim_stick
     with pytest.raises(DataError, match="holds at 0 kt, not at 70 kt"):
         linearised_trim(plant, 70.0)
+
+
+def test_rotor_kept_has_the_truth_models_states_and_the_same_quasi_steady_limit(hover):
+    """With the rotor kept the plant runs over the truth model's states; residualising them
+    from its matrices gives the rigid-body plant back."""
+    model, point, plant = hover
+    full = LinearisedPlant.about(model, point, rotor=True)
+    assert full.state_names == model.state_names
+    body = [full.state_names.index(name) for name in BODY]
+    rest = [i for i in range(full.n_states) if i not in body]
+    gain = np.linalg.solve(full.a[np.ix_(rest, rest)], full.a[np.ix_(rest, body)])
+    quasi_steady = full.a[np.ix_(body, body)] - full.a[np.ix_(body, rest)] @ gain
+    np.testing.assert_allclose(quasi_steady, plant.a, rtol=1e-9, atol=1e-12)
+    with pytest.raises(DataError, match="rigid-body plant"):
+        full.longitudinal()

@@ -13,8 +13,9 @@ ratio (1 for honest bounds), over all runs and over the converged ones, writes
 
 ``--truth`` chooses what flies: the nonlinear truth model (default), its linearisation with
 the rotor residualised (``linear``: the same loops, gusts and sensors, lateral coupling
-included) or that linearisation's longitudinal part alone (``linear-longitudinal``, which the
-structure represents exactly; :class:`rotorid_helisim.linear_truth.LinearisedPlant`).
+included), that linearisation's longitudinal part alone (``linear-longitudinal``, which the
+structure represents exactly) or the linearisation with the rotor, inflow and actuator states
+kept (``linear-rotor``; :class:`rotorid_helisim.linear_truth.LinearisedPlant`).
 
 This is the reduced problem: the six-dof structure with delays takes minutes per filter-error
 fit on a shared 2-core machine, 30 runs of it hours. Run from the repository root::
@@ -46,7 +47,7 @@ KEY = ("M_q", "M_long", "Z_w", "Z_coll")
 ESTIMATORS = {"output-error": {},
               "filter-error": {"process_noise": (), "disturbances": ("u", "w", "q"),
                                "max_iterations": 200}}
-TRUTHS = ("nonlinear", "linear", "linear-longitudinal")
+TRUTHS = ("nonlinear", "linear", "linear-longitudinal", "linear-rotor")
 
 
 @attrs.frozen
@@ -69,7 +70,7 @@ def truth_source(truth: str):
     source = rotorid.create("data-sources", "helisim")
     if truth == "nonlinear":
         return source
-    plant = LinearisedPlant.about(source.plant, source.trim(0.0))
+    plant = LinearisedPlant.about(source.plant, source.trim(0.0), rotor=truth == "linear-rotor")
     return HelisimSource(plant=plant.longitudinal() if truth == "linear-longitudinal"
                          else plant, trimmer=linearised_trim)
 

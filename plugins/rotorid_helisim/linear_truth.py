@@ -7,11 +7,13 @@ and measurements in its states, sticks and gusts at a trim::
 
 and residualises the rotor, inflow and actuator states (quasi-steady, as
 :func:`.linearize.linearize` does), leaving the rigid body ``u v w p q r φ θ ψ`` (SI, sticks
-in %). :meth:`LinearisedPlant.longitudinal` also cuts the longitudinal motion (u w q θ, long
-and coll, u_g w_g q_g, ax az q θ) from the lateral one, both ways. The plant has the interface
-the flight harness flies (:mod:`.flight`), so the same maneuvers, loops, gusts and sensors
-give data from a truth that a linear structure represents exactly: a Monte Carlo on it
-separates the estimator's statistics from the model-structure error of the nonlinear truth.
+in %), or keeps them (``rotor=True``: the rotor's own dynamics, linear).
+:meth:`LinearisedPlant.longitudinal` also cuts the longitudinal motion (u w q θ, long and
+coll, u_g w_g q_g, ax az q θ) from the lateral one, both ways. The plant has the interface the
+flight harness flies (:mod:`.flight`), so the same maneuvers, loops, gusts and sensors give
+data from a truth that a linear structure represents exactly or up to a known part: a Monte
+Carlo on it separates the estimator's statistics from the model-structure error of the
+nonlinear truth.
 """
 
 from __future__ import annotations
@@ -53,15 +55,16 @@ def _jacobians(function, x0, stick0, steps):
 
 @attrs.frozen(eq=False)
 class LinearisedPlant:
-    """A linear plant over :data:`.loops.BODY` states (SI), sticks in %, gusts (6,).
+    """A linear plant over n states (SI), sticks in %, gusts (6,).
 
     Attributes:
-        trim_state: (9,) and trim_stick: (4,) the trim it is linearised about.
-        a, b, g: state derivative per state (9, 9), stick (9, 4) and gust (9, 6).
+        trim_state: (n,) and trim_stick: (4,) the trim it is linearised about.
+        a, b, g: state derivative per state (n, n), stick (n, 4) and gust (n, 6).
         c, d, h: the measurements ``[ax az q θ ay p φ r]`` likewise, (8, ·).
         trim_measurements: (8,) the measurements at trim.
         airspeed_kt: the trim's airspeed.
         config: what it is (the data cache tells plants apart by it).
+        state_names: the n states: :data:`.loops.BODY`, or the truth model's own.
     """
 
     trim_state: np.ndarray = attrs.field(converter=readonly_array)
@@ -75,14 +78,16 @@ class LinearisedPlant:
     trim_measurements: np.ndarray = attrs.field(converter=readonly_array)
     airspeed_kt: float = 0.0
     config: str = ""
+    state_names: tuple = BODY
 
-    state_names = BODY
-    n_states = len(BODY)
+    @property
+    def n_states(self) -> int:
+        return len(self.state_names)
 
     @classmethod
-    def about(cls, model, trim) -> "LinearisedPlant":
+    def about(cls, model, trim, rotor: bool = False) -> "LinearisedPlant":
         """``model`` (a :class:`~.model.Bo105Model`) linearised about ``trim``, its rotor,
-        inflow and actuator states residualised."""
+        inflow and actuator states residualised, or kept with ``rotor``."""
         names = tuple(model.state_names)
         x0 = np.asarray(trim.state, dtype=float)
         stick0 = np.asarray(trim.stick, dtype=float)
@@ -90,6 +95,11 @@ class LinearisedPlant:
         a, b, g = _jacobians(lambda x, s, w: model.derivatives(x, s, gust=w), x0, stick0, steps)
         c, d, h = _jacobians(lambda x, s, w: model.measurements(x, s, gust=w), x0, stick0,
                              steps)
+        trim_measurements = model.measurements(x0[None], stick0[None])[0]
+        config = f"linearised at {trim.airspeed_kt:g} kt: {model.config!r}"
+        if rotor:
+            return cls(x0, stick0, a, b, g, c, d, h, trim_measurements, trim.airspeed_kt,
+                       f"{config}, rotor kept", names)
         kept = [names.index(n) for n in BODY]
         dropped = [i for i in range(len(names)) if i not in kept]
         # quasi-steady dropped states: 0 = A_dk·x + A_dd·x_d + B_d·δ + G_d·g
@@ -103,12 +113,15 @@ class LinearisedPlant:
 
         a, b, g = reduced(a[kept], b[kept], g[kept])
         c, d, h = reduced(c, d, h)
-        trim_measurements = model.measurements(x0[None], stick0[None])[0]
         return cls(x0[kept], stick0, a, b, g, c, d, h, trim_measurements, trim.airspeed_kt,
-                   f"linearised at {trim.airspeed_kt:g} kt: {model.config!r}")
+                   config)
 
     def longitudinal(self) -> "LinearisedPlant":
-        """This plant with the longitudinal motion cut from the lateral one, both ways."""
+        """This plant with the longitudinal motion cut from the lateral one, both ways (the
+        rigid-body plant only)."""
+        if self.state_names != BODY:
+            raise DataError("the longitudinal cut needs the rigid-body plant; linearise with "
+                            "the rotor residualised (rotor=False)")
         states = np.isin(BODY, _LONGITUDINAL["states"])
         sticks = np.isin(np.arange(4), _LONGITUDINAL["sticks"])
         gusts = np.isin(np.arange(6), _LONGITUDINAL["gusts"])
@@ -124,7 +137,7 @@ class LinearisedPlant:
             config=f"{self.config}, longitudinal")
 
     def derivatives(self, x, stick, gust=None) -> np.ndarray:
-        """State derivatives (B, 9) at states (B, 9), sticks (B, 4) and gusts (B, 6)."""
+        """State derivatives (B, n) at states (B, n), sticks (B, 4) and gusts (B, 6)."""
         slope = (x - self.trim_state) @ self.a.T + (stick - self.trim_stick) @ self.b.T
         return slope if gust is None else slope + gust @ self.g.T
 
