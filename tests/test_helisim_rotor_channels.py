@@ -104,8 +104,9 @@ def test_generate_writes_rotor_channels_when_asked(tmp_path, monkeypatch, capsys
 
 
 def test_noise_realisations_carry_the_rotor_channels(truth_model, trim_70kt, tmp_path):
-    """A Monte Carlo's data set for a seed equals (to 1e-12) the one flown with that seed, rotor channels
-    included: the noise-free flight is stored once and each seed adds its noise."""
+    """A Monte Carlo's data set for a seed equals (to 1e-12) the one flown with that seed,
+    rotor channels included: the noise-free flight is stored once and each seed adds its
+    noise."""
     source = HelisimSource(truth_model, trimmer=lambda plant, kt: trim_70kt)
     settings = {"condition": "forward", "duration_scale": 0.3, "axes": ["coll"],
                 "directions": [1], "identification": ["3211"], "verification": ["2311"],
