@@ -249,7 +249,9 @@ def comparison_html(result) -> str:
         '<h2 id="comparison">Frequency-domain fit beside the time-domain fit</h2>',
         "<p>Each model's structure fitted to the verification sweeps' frequency responses by "
         "the mismatch cost J (frequency-response estimator, from equation-error start values "
-        "and varied ones, the lowest J kept), then judged like the time-domain fit: J per pair "
+        "and varied ones, the lowest J kept), on the compared pairs and, where the sweeps "
+        "and the model have them, the on-axis translational accelerations ax/long and ay/lat, "
+        "then judged like the time-domain fit: J per pair "
         "on the same measured responses, RMSE and TIC on the identification multisteps, from "
         "the plain simulation and with each multistep's input biases and output reference "
         "shifts fitted to the fixed model (the verification of frequency-domain practice). "
