@@ -131,10 +131,10 @@ def test_every_parameter_recovered_within_3_cramer_rao_bounds(reference):
     into flapping and on B0_coll); the fit starts from the coning/inflow start of the hybrid
     start (τ_f 0.12 s) of the quasi-steady 6-DoF model.
 
-    Over noise seeds 1–6 five fits converged (seed 3 stopped at its iteration limit, within
-    2.6 bounds), the errors in bounds had an RMS of 0.85–1.29 and a largest of 2.1–4.1 among
-    the 84 parameters (seed 6: N_q at 4.06); the test uses seed 1. With 2 % multisteps (the
-    coning then moves about as much as its noise) four of six fits stopped unconverged; with
+    Over noise seeds 1–6 all six fits converged, the errors in bounds had an RMS of
+    0.80–1.18 and a largest of 2.3–3.2 among the 84 parameters (seed 6: N_w at 3.24); the test
+    uses seed 1. With 2 % multisteps (the coning then moves about as much as its noise) three
+    of six fits stopped unconverged; with
     β0 unmeasured Vi_beta0 and Z_vi have no finite bound even with B0_coll fixed as well
     (docs/hybrid.md)."""
     condition, a, b = reference[70]
