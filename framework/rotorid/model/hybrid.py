@@ -50,8 +50,8 @@ TILT_RATES = (("beta1c", "q"), ("beta1s", "p"))
 FLAPPING = ("long", "lat", "u", "v", "w")
 #: The body's direct derivatives the hybrid model leaves out: the disc equations' rate
 #: derivatives (the disc carries the rotor's rate damping; with a direct M_q beside it,
-#: q/δ_long determines only M_beta1c·Bc_long, 1/τ − M_q and M_q/τ + M_beta1c, so τ trades with
-#: M_q) and the roll and pitch derivatives of :data:`FLAPPING` (they trade with the flap
+#: q/δ_long determines only M_beta1c·Bc_long, 1/τ − M_q and M_q/τ + M_beta1c, so τ trades
+#: with M_q) and the roll and pitch derivatives of :data:`FLAPPING` (they trade with the flap
 #: equations' terms and the actuator delays).
 DIRECT_DERIVATIVES = (tuple(f"{e}_{rate}" for e in DISC_EQUATIONS for _, rate in TILT_RATES)
                       + tuple(f"{e}_{z}" for e in ("L", "M") for z in FLAPPING))

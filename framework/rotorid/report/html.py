@@ -391,7 +391,8 @@ def hybrid_html(result, figures: Sequence = ()) -> str:
         "it was fitted from the start whose quasi-steady form is the selected model "
         f"({comparison.estimate.iterations} iterations, {comparison.seconds:.1f} s).{reduced} "
         "All three are judged alike: their simulation of the identification maneuvers, and J "
-        f"per pair over {html.escape(comparison.band.describe())} ({MISMATCH_COST_GUIDELINE_TEXT}).</p>",
+        f"per pair over {html.escape(comparison.band.describe())} "
+        f"({MISMATCH_COST_GUIDELINE_TEXT}).</p>",
         _html_table(hybrid_model_rows(result)),
         figures_html(figures),
         "<h3>Rotor terms of the hybrid model</h3>",

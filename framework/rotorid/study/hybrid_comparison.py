@@ -1,16 +1,17 @@
 """Three models side by side (``[compare] hybrid``): no delays, with delays, and hybrid.
 
 The hybrid rotor-body model (docs/hybrid.md) is built on the selected 6-DoF model
-(:func:`rotorid.model.hybrid.hybrid_from_six_dof`: the disc tilt instead of the direct roll and
-pitch rate and cyclic terms, the flap equations, delays on the cyclic into flapping) and
-fitted with the case's estimator to the identification maneuvers, starting where the 6-DoF
-fit ended; optionally it is first reduced, without its delays, by the case's criteria (its flap
-damping and hub moments kept). Every model is judged on the same terms: its parameters, the RMSE and det R of its
-simulation of the identification maneuvers, and per verification pair the mismatch cost J
-over γ² ≥ 0.8 from 1 rad/s to the sweeps' top frequency, at most 20 rad/s (:func:`hybrid_band`:
-the band where the rotor's lag shows). With a truth model, the hybrid's rotor terms
-are set beside the truth's flap-coupled reference (its full linearisation with the flap rates,
-coning and inflow residualised).
+(:func:`rotorid.model.hybrid.hybrid_from_six_dof`: the disc tilt instead of the direct rate
+terms of X, Y, L, M, N and the direct roll and pitch terms of the cyclic and the velocities, the
+flap equations, delays on the cyclic into flapping) and fitted with the case's estimator to the
+identification maneuvers, starting where the 6-DoF fit ended; optionally it is first reduced,
+without its delays, by the case's criteria (its flap damping and hub moments kept). Every model
+is judged on the same terms: its parameters, the RMSE and det R of its simulation of the
+identification maneuvers, and per verification pair the mismatch cost J over γ² ≥ 0.8 from
+1 rad/s to the sweeps' top frequency, at most 20 rad/s (:func:`hybrid_band`: the band where the
+rotor's lag shows). With a truth model, the hybrid's rotor terms are set beside the truth's
+flap-coupled reference (its full linearisation with the flap rates, coning and inflow
+residualised).
 """
 
 from __future__ import annotations
