@@ -29,14 +29,9 @@ def frequency_response(structure: ModelStructure, values, omega) -> np.ndarray:
 
 def response_sensitivities(structure: ModelStructure, values, omega
                            ) -> tuple[np.ndarray, np.ndarray]:
-    """The frequency response and its exact derivatives with respect to the parameters.
-
-    With R = (jωI − A)⁻¹, X = R·B and Y = C·R, a term of gain g and delay τ that drives
-    equation row e from source s (and output row o when it also feeds a specific force)
-    enters as t = g·e^(−jωτ), and ∂H/∂t = (Y[:, e] + w·1_o) ⊗ X[s, :] for a state source,
-    (Y[:, e] + w·1_o) in control column s for a control (w: the term's weight in output o).
-    Then ∂H/∂g = e^(−jωτ)·∂H/∂t and
-    ∂H/∂τ = −jω·g·e^(−jωτ)·∂H/∂t.
+    """The frequency response and its exact derivatives with respect to the parameters:
+    every output over every control, each entry a :func:`compared_response` of one output
+    to one control.
 
     Args: as :func:`frequency_response`.
     Returns:
@@ -44,34 +39,12 @@ def response_sensitivities(structure: ModelStructure, values, omega
         (F, P, p, m), ∂H/∂θ_p in ``structure.parameter_names`` order (per s for a delay).
     """
     omega = _checked_omega(omega)
-    table = structure.terms(values)
-    a, b, c, d = _delayed_matrices(structure, table, omega)
-    n_x, n_y, n_u = structure.n_states, structure.n_outputs, structure.n_controls
-    resolvent = np.linalg.inv(1j * omega[:, None, None] * np.eye(n_x) - a)
-    x = resolvent @ b                                        # (F, n, m)
-    y = c @ resolvent                                        # (F, p, n)
-    index = {name: i for i, name in enumerate(structure.parameter_names)}
-    sensitivities = np.zeros((omega.size, len(index), n_y, n_u), complex)
-    for k, derivative in enumerate(structure.derivatives):
-        gain_index = index.get(derivative.name)
-        delay_index = index.get(derivative.delay_name) if derivative.delay else None
-        if gain_index is None and delay_index is None:
-            continue
-        left = y[:, :, table.equation[k]].copy()            # (F, p)
-        if table.output[k] >= 0:
-            left[:, table.output[k]] += table.weight[k]
-        source = table.source[k]
-        if source < n_x:
-            unit = left[:, :, None] * x[:, source, None, :]
-        else:
-            unit = np.zeros((omega.size, n_y, n_u), complex)
-            unit[:, :, source - n_x] = left
-        unit *= np.exp(-1j * omega * table.delay[k])[:, None, None]
-        if gain_index is not None:
-            sensitivities[:, gain_index] += unit
-        if delay_index is not None:
-            sensitivities[:, delay_index] += (-1j * omega * table.gain[k])[:, None, None] * unit
-    return c @ x + d, sensitivities
+    n_f, n_y, n_u = omega.size, structure.n_outputs, structure.n_controls
+    rows = np.tile(np.repeat(np.arange(n_y), n_u), n_f)             # (F·p·m,) f, y, u
+    mixing = np.tile(np.eye(n_u), (n_f * n_y, 1))                   # (F·p·m, m)
+    h, dh = compared_response(structure, values, np.repeat(omega, n_y * n_u), rows, mixing)
+    return (h.reshape(n_f, n_y, n_u),
+            dh.reshape(n_f, n_y, n_u, -1).transpose(0, 3, 1, 2))
 
 
 def compared_response(structure: ModelStructure, values, omega, rows, mixing,
@@ -80,10 +53,12 @@ def compared_response(structure: ModelStructure, values, omega, rows, mixing,
     frequency f the response of output ``rows[f]`` to the inputs mixed by ``mixing[f]``,
     h_f = Σ_i mixing[f, i]·H[f, rows[f], i] (e.g. a fit's apparent response on a sweep).
 
-    The same terms as :func:`response_sensitivities`, reduced to the one mixed entry before
-    they are formed: with x = R·B·mixing and y = C[rows]·R per frequency, a term of gain g
-    and delay τ gives ∂h/∂t = (y[e] + w·[o = rows]) · (x[s] for a state source, mixing[s]
-    for a control), ∂h/∂g = e^(−jωτ)·∂h/∂t and ∂h/∂τ = −jω·g·e^(−jωτ)·∂h/∂t.
+    With R = (jωI − A)⁻¹, x = R·B·mixing and y = C[rows]·R per frequency, a term of gain g
+    and delay τ that drives equation row e from source s (and output row o, with weight w,
+    when it also feeds a specific force) enters as t = g·e^(−jωτ), and
+    ∂h/∂t = (y[e] + w·[o = rows]) · (x[s] for a state source, mixing[s] for a control);
+    then ∂h/∂g = e^(−jωτ)·∂h/∂t and ∂h/∂τ = −jω·g·e^(−jωτ)·∂h/∂t. The terms are reduced to
+    the one mixed entry before they are formed: O(F·P), not O(F·P·p·m).
 
     Args:
         structure, values: as :func:`frequency_response`; omega: frequencies in rad/s (F,).
