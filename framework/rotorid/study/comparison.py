@@ -75,24 +75,16 @@ class FrequencyComparison:
                 "seconds": self.seconds}
 
 
-def _metrics(structure: ModelStructure, values, multisteps: ManeuverSet
-             ) -> TimeDomainMetrics | None:
-    """Multistep metrics of ``structure`` at ``values``; ``None`` when it diverges."""
+def _metrics(structure: ModelStructure, values, multisteps: ManeuverSet,
+             shifted: bool = False) -> TimeDomainMetrics | None:
+    """Multistep metrics of ``structure`` at ``values``, from the plain simulation or, when
+    ``shifted``, after the bias and shift fit; ``None`` when the model diverges."""
     try:
-        return time_domain_metrics(multisteps, simulate(structure, values, multisteps),
-                                   outputs=structure.outputs)
+        simulated = (simulate_with_shifts(structure, values, multisteps).outputs if shifted
+                     else simulate(structure, values, multisteps))
     except SimulationDivergedError:
         return None
-
-
-def _shifted_metrics(structure: ModelStructure, values, multisteps: ManeuverSet
-                     ) -> TimeDomainMetrics | None:
-    """Multistep metrics after the bias and shift fit; ``None`` when the model diverges."""
-    try:
-        return time_domain_metrics(
-            multisteps, simulate_with_shifts(structure, values, multisteps).outputs)
-    except SimulationDivergedError:
-        return None
+    return time_domain_metrics(multisteps, simulated, outputs=structure.outputs)
 
 
 def fitted_pairs(structure: ModelStructure, values, sweeps: ManeuverSet, pairs
@@ -136,5 +128,5 @@ def compare_frequency_fit(structure: ModelStructure, time_estimate: Estimate,
         {m: estimator.pair_costs(structure, estimates[m], fit_data) for m in METHODS},
         {"time": time_metrics,
          "frequency": _metrics(structure, fitted.values, multisteps)},
-        {m: _shifted_metrics(structure, estimates[m], multisteps) for m in METHODS},
+        {m: _metrics(structure, estimates[m], multisteps, shifted=True) for m in METHODS},
         seconds)
