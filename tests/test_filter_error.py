@@ -338,6 +338,24 @@ def test_with_gusts_in_still_air_filter_error_reduces_to_output_error():
     assert filtered.value("D_r") < 0.01 and filtered.value("G_v") < 0.01
 
 
+def test_a_disturbance_no_output_measures_needs_a_start_value_and_takes_it():
+    """A flap tilt has no output, so its disturbance has no default start: refused without
+    one, naming the parameter and the setting, and fitted from a given one."""
+    flap = {"Bc_beta1c": -14.0, "Bs_beta1s": -15.0, "M_beta1c": -48.0, "L_beta1s": -180.0,
+            "Bc_long": 1.5, "Bs_lat": -1.0}
+    model = ModelStructure(HOVER, [Derivative(n, initial=v) for n, v in flap.items()],
+                           template="hybrid")
+    data = noisy_data({})
+    with pytest.raises(EstimationError, match="D_beta1c has no default start; give its start "
+                                              "value or leave beta1c out of disturbances"):
+        estimator(process_noise=(), disturbances=("beta1c",)).estimate(model, data)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
+        result = estimator(process_noise=(), disturbances=("beta1c",), max_iterations=1
+                           ).estimate(model, data, start={"D_beta1c": 1.0})
+    assert result.start[result.index("D_beta1c")] == 1.0
+
+
 def test_start_values_and_options_are_checked():
     data = noisy_data(PROCESS)
     with pytest.raises(EstimationError, match="process_noise"):
