@@ -15,20 +15,39 @@ import pytest
 import rotorid
 from rotorid.errors import IdentifiabilityWarning, SimulationDivergedError
 from rotorid.estimation.models import LinearModel
+from rotorid_output_error.levenberg_marquardt import Problem
 from test_docs_full_vs_diagonal_noise import _example
 
 
-def test_a_stable_well_started_fit_skips_the_horizons_and_costs_no_iterations():
+def _counting_evaluations(monkeypatch) -> list:
+    """Patch the output-error cost evaluation to record the values of every call."""
+    calls = []
+    evaluate = Problem.evaluate
+
+    def counted(problem, values):
+        calls.append(np.array(values))
+        return evaluate(problem, values)
+
+    monkeypatch.setattr(Problem, "evaluate", counted)
+    return calls
+
+
+def test_a_stable_well_started_fit_skips_the_horizons_and_costs_no_iterations(monkeypatch):
     example = _example()
     structure = example.aeroplane()
     truth = structure.as_vector(example.TRUTH)
     assert LinearModel(structure).growth_rate(truth) < 0.0
     data = example.flight_records(structure, seed=4)
+    calls = _counting_evaluations(monkeypatch)
     default = rotorid.create("estimators", "output-error").estimate(structure, data)
+    default_calls, calls[:] = list(calls), []
     plain = rotorid.create("estimators", "output-error", horizons=()).estimate(structure, data)
     assert default.notes == ("start values from equation error",)
     assert default.converged and plain.converged
     assert default.iterations <= plain.iterations
+    # deciding to skip the horizons simulates the start once, and the fit reuses it
+    assert len(default_calls) == len(calls)
+    assert sum(np.array_equal(v, default_calls[0]) for v in default_calls) == 1
     np.testing.assert_array_equal(default.values, plain.values)
     within = np.abs(default.values - truth) <= 4 * default.cramer_rao
     assert within.all(), dict(zip(structure.parameter_names, within))

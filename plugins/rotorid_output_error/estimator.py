@@ -186,8 +186,8 @@ class OutputErrorEstimator:
         """
         first = values
         horizons = self._stages(maneuvers)
-        reason = (self._horizons_help(base, fitted, maneuvers, columns, weights, values)
-                  if horizons else None)
+        reason, evaluated = (self._horizons_help(base, fitted, maneuvers, columns, weights,
+                                                 values) if horizons else (None, None))
         if reason:
             notes.append(f"horizons {', '.join(f'{h:g} s' for h in horizons)} first: {reason}")
         stages = [(h, Settings(max_iterations=15, cost_tolerance=1e-4, noise=self.noise))
@@ -200,7 +200,8 @@ class OutputErrorEstimator:
             label = "full" if horizon is None else f"{horizon:g} s"
             try:
                 result = self._run(fitted, portion, columns, weights, values, settings, label,
-                                   final_information=horizon is None)
+                                   final_information=horizon is None,
+                                   start_evaluation=evaluated)
             except SimulationDivergedError:
                 if values is first:
                     raise
@@ -230,26 +231,31 @@ class OutputErrorEstimator:
                      "refitted the full records from the start values")
         return self._run(fitted, maneuvers, columns, weights, first, settings, "full")
 
-    def _horizons_help(self, base, fitted, maneuvers, columns, weights,
-                       values) -> str | None:
+    def _horizons_help(self, base, fitted, maneuvers, columns, weights, values):
         """Why the fit of ``fitted`` (``base`` with any record parameters) from ``values``
         goes through the horizons first, or None when it goes straight to the full records:
         the horizons help a zero start, a start model that is unstable (``base``'s optional
         ``growth_rate`` above :data:`UNSTABLE_GROWTH_RATE`) and a start whose simulation of
-        the full records diverges; on a stable, well-started fit they only cost iterations."""
+        the full records diverges; on a stable, well-started fit they only cost iterations.
+
+        Also returns the start's evaluation on the full records (``Problem.evaluate``) when
+        it was simulated and the fit may start from it (``values`` within the bounds), else
+        None."""
         own = values[:len(base.parameter_names)]         # the base model's, then the records'
         derivatives = np.array([delayed_derivative(n) is None for n in base.parameter_names],
                                dtype=bool)
         if not np.any(own[derivatives]):
-            return "zero start"
+            return "zero start", None
         if hasattr(base, "growth_rate"):
             rate = base.growth_rate(own)
             if rate > UNSTABLE_GROWTH_RATE:
-                return f"the start model is unstable (growth rate {rate:.3g} 1/s)"
+                return f"the start model is unstable (growth rate {rate:.3g} 1/s)", None
         problem = _problem(fitted, maneuvers, columns, weights, Settings(noise=self.noise))
-        if not np.isfinite(problem.evaluate(values)[0]):
-            return "the start diverges on the full records"
-        return None
+        evaluation = problem.evaluate(values)
+        if not np.isfinite(evaluation[0]):
+            return "the start diverges on the full records", None
+        within = np.array_equal(np.clip(values, *fitted.bounds()), values)
+        return None, evaluation if within else None
 
     def _start_values(self, model, maneuvers, start):
         names = tuple(model.parameter_names)
@@ -296,7 +302,7 @@ class OutputErrorEstimator:
         return columns, np.array([float(weights.get(n, 1.0)) for n in chosen])
 
     def _run(self, model, maneuvers, columns, weights, start, settings, stage,
-             final_information: bool = True):
+             final_information: bool = True, start_evaluation=None):
         problem = _problem(model, maneuvers, columns, weights, settings)
 
         def progress(record):
@@ -304,7 +310,8 @@ class OutputErrorEstimator:
                    iteration=record.iteration, cost=record.cost, rmse=record.rmse,
                    lm_lambda=record.lm_lambda)
 
-        return run(problem, start, model.bounds(), progress, final_information)
+        return run(problem, start, model.bounds(), progress, final_information,
+                   start_evaluation)
 
     def _estimate(self, fitted, base, result, start, notes, n_samples, columns):
         """The estimate of ``result``: the run's own cost (weighted, floored R) and RMSE."""

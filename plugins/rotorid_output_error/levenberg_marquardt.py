@@ -176,7 +176,7 @@ def predicted_change(f, g, values, bounds, n_samples: int, shorten: bool = True)
 
 
 def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | None = None,
-        final_information: bool = True) -> RunResult:
+        final_information: bool = True, start_evaluation=None) -> RunResult:
     """Levenberg-Marquardt from ``start``; see the module docstring.
 
     ``problem`` is a :class:`Problem` or any object with its ``settings``, ``n_samples``,
@@ -184,12 +184,15 @@ def run(problem: Problem, start: np.ndarray, bounds, on_progress: Callable | Non
 
     ``final_information=False`` skips the information matrix at the final values (the
     result's ``information`` is then the one at the last Gauss-Newton point): for a stage
-    whose values only start the next one.
+    whose values only start the next one. ``start_evaluation`` is ``problem.evaluate(start)``
+    when the caller has it already (``start`` within ``bounds``), so that the start is not
+    simulated twice.
     """
     settings = problem.settings
     lower, upper = bounds
     values = np.clip(np.asarray(start, dtype=float), lower, upper)
-    cost, r, residuals, current_rmse = problem.evaluate(values)
+    cost, r, residuals, current_rmse = (problem.evaluate(values) if start_evaluation is None
+                                        else start_evaluation)
     if not np.isfinite(cost):
         raise SimulationDivergedError(
             f"the start values give no finite cost: {problem.failure(values)}; if the data "
