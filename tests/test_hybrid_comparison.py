@@ -17,6 +17,7 @@ from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase
 from rotorid.study.hybrid_comparison import HYBRID_MODELS, compare_hybrid
 from rotorid.study.truth import derivatives_of
+from rotorid.verification.simulation_fit import simulation_fit
 
 PAIRS = ("q/long", "p/lat")
 
@@ -56,8 +57,11 @@ def inputs(truth_model, trim_70kt):
         warnings.simplefilter("ignore", IdentifiabilityWarning)
         plain = estimator.estimate(six_dof, ident)
         with_delays = estimator.estimate(delayed, ident, start=plain.as_mapping())
-    return dict(structures={"no delays": six_dof, "with delays": delayed},
-                estimates={"no delays": plain, "with delays": with_delays}, ident=ident,
+    structures = {"no delays": six_dof, "with delays": delayed}
+    estimates = {"no delays": plain, "with delays": with_delays}
+    simulations = {label: simulation_fit(structures[label], estimates[label].values, ident)
+                   for label in structures}
+    return dict(structures=structures, estimates=estimates, simulations=simulations,
                 sweeps=_sweeps(truth, values, seed=5), pairs=PAIRS, estimator=estimator,
                 reference=lambda hybrid: derivatives_of(hybrid, a, b))
 

@@ -21,16 +21,17 @@ import attrs
 import numpy as np
 
 from rotorid.data import ManeuverSet
-from rotorid.errors import IdentifiabilityWarning, SimulationDivergedError
+from rotorid.errors import IdentifiabilityWarning
 from rotorid.estimation.equation_error import equation_error_start
 from rotorid.estimation.estimate import Estimate
 from rotorid.model.structure import ModelStructure
 from rotorid.plugin.manager import create
 from rotorid.simulation.simulator import simulate
 from rotorid.simulation.transfer import pair_response
-from rotorid.verification.metrics import TimeDomainMetrics, time_domain_metrics
+from rotorid.verification.metrics import TimeDomainMetrics
 from rotorid.verification.pairs import parse_pair, primary_axis
 from rotorid.verification.shifts import simulate_with_shifts
+from rotorid.verification.simulation_fit import fit_unless_diverging
 
 #: The estimator the comparison fits with.
 FREQUENCY_ESTIMATOR = "frequency-response"
@@ -79,12 +80,15 @@ def _metrics(structure: ModelStructure, values, multisteps: ManeuverSet,
              shifted: bool = False) -> TimeDomainMetrics | None:
     """Multistep metrics of ``structure`` at ``values``, from the plain simulation or, when
     ``shifted``, after the bias and shift fit; ``None`` when the model diverges."""
-    try:
-        simulated = (simulate_with_shifts(structure, values, multisteps).outputs if shifted
-                     else simulate(structure, values, multisteps))
-    except SimulationDivergedError:
-        return None
-    return time_domain_metrics(multisteps, simulated, outputs=structure.outputs)
+    fit = fit_unless_diverging(structure, values, multisteps,
+                               _with_shifts if shifted else simulate)
+    return None if fit is None else fit.metrics
+
+
+def _with_shifts(structure: ModelStructure, values, multisteps: ManeuverSet):
+    """The outputs after each multistep's input bias and output shift fit
+    (:func:`~rotorid.verification.shifts.simulate_with_shifts`)."""
+    return simulate_with_shifts(structure, values, multisteps).outputs
 
 
 def fitted_pairs(structure: ModelStructure, values, sweeps: ManeuverSet, pairs

@@ -18,29 +18,12 @@ import warnings
 from collections.abc import Mapping
 
 import attrs
-import numpy as np
 
-from rotorid.data import ManeuverSet
-from rotorid.errors import IdentifiabilityWarning, SimulationDivergedError
+from rotorid.errors import IdentifiabilityWarning
 from rotorid.estimation.estimate import Estimate
 from rotorid.model.structure import ModelStructure
 from rotorid.plugin.manager import create
-from rotorid.simulation.simulator import simulate
-from rotorid.verification.metrics import TimeDomainMetrics, time_domain_metrics
-
-
-@attrs.frozen(eq=False)
-class SimulationFit:
-    """How a fitted model's simulation matches the identification maneuvers: the metrics
-    (RMSE in the outputs' units) and ``det_r``, det of the residual covariance Σ eᵀe / N
-    (product of the outputs' units squared)."""
-
-    metrics: TimeDomainMetrics
-    det_r: float
-
-    def summary(self) -> dict:
-        return {"rmse": self.metrics.rmse, "det_r": self.det_r,
-                "metrics": self.metrics.summary()}
+from rotorid.verification.simulation_fit import SimulationFit, fit_unless_diverging
 
 
 @attrs.frozen(eq=False)
@@ -69,28 +52,15 @@ class EstimatorComparison:
                 for name, estimate in self.estimates.items()}
 
 
-def simulation_fit(structure: ModelStructure, estimate: Estimate,
-                   maneuvers: ManeuverSet) -> SimulationFit | None:
-    """The simulation of ``structure`` at ``estimate``'s values of its parameters against
-    ``maneuvers``; ``None`` when it diverges."""
-    values = estimate.restricted(structure.parameter_names).values
-    try:
-        outputs = simulate(structure, values, maneuvers)
-    except SimulationDivergedError:
-        return None
-    residuals = np.concatenate([m.columns(structure.outputs) - y
-                                for m, y in zip(maneuvers, outputs)])
-    covariance = residuals.T @ residuals / len(residuals)
-    return SimulationFit(time_domain_metrics(maneuvers, outputs),
-                         float(np.linalg.det(covariance)))
-
-
 def compare_estimators(names, case_estimator: str, structure: ModelStructure,
-                       estimate: Estimate, maneuvers: ManeuverSet) -> EstimatorComparison:
-    """Fit ``structure`` with each estimator of ``names`` other than ``case_estimator``,
-    whose fit ``estimate`` is reused, on ``maneuvers`` (module docstring)."""
+                       estimate: Estimate, simulation: SimulationFit) -> EstimatorComparison:
+    """Fit ``structure`` with each estimator of ``names`` other than ``case_estimator`` on
+    the maneuvers of ``simulation`` (module docstring); the case estimator's fit
+    ``estimate`` and its ``simulation`` are reused."""
+    maneuvers = simulation.maneuvers
     start = estimate.restricted(structure.parameter_names).as_mapping()
     estimates, seconds = {case_estimator: estimate}, {case_estimator: 0.0}
+    simulations = {case_estimator: simulation}
     for name in names:
         if name == case_estimator:
             continue
@@ -100,6 +70,6 @@ def compare_estimators(names, case_estimator: str, structure: ModelStructure,
             estimates[name] = create("estimators", name).estimate(structure, maneuvers,
                                                                   start=start)
         seconds[name] = time.perf_counter() - clock
-    return EstimatorComparison(
-        estimates, {n: simulation_fit(structure, e, maneuvers) for n, e in estimates.items()},
-        seconds)
+        simulations[name] = fit_unless_diverging(
+            structure, estimates[name].restricted(structure.parameter_names).values, maneuvers)
+    return EstimatorComparison(estimates, simulations, seconds)

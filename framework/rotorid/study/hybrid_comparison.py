@@ -29,9 +29,9 @@ from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.reduction import reduce
 from rotorid.model.hybrid import REQUIRED, hybrid_from_six_dof, with_flap_delays
 from rotorid.model.structure import ModelStructure
-from rotorid.study.estimator_comparison import SimulationFit, simulation_fit
 from rotorid.verification.band import VerificationBand
 from rotorid.verification.compare import VerificationResult
+from rotorid.verification.simulation_fit import SimulationFit, fit_unless_diverging
 from rotorid.verification.verify import verify_model
 
 #: The models compared, in table order.
@@ -121,8 +121,8 @@ class HybridComparison:
 
 
 def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[str, Estimate],
-                   ident: ManeuverSet, sweeps: ManeuverSet | None, pairs, estimator,
-                   reference=None, omega_max: float = HYBRID_OMEGA_MAX,
+                   simulations: Mapping[str, SimulationFit], sweeps: ManeuverSet | None,
+                   pairs, estimator, reference=None, omega_max: float = HYBRID_OMEGA_MAX,
                    criteria: Sequence = (), rule: str = "lowest-rmse",
                    rmse_tolerance: float = 0.01) -> HybridComparison:
     """Build and fit the hybrid model on ``structures["no delays"]`` and compare it with the
@@ -130,7 +130,8 @@ def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[
 
     Args:
         structures, estimates: the case's models by label (``no delays``, ``with delays``).
-        ident: identification maneuvers; sweeps: verification maneuvers or None (no J).
+        simulations: their simulations of the identification maneuvers, by label (reused).
+        sweeps: verification maneuvers or None (no J).
         pairs: the verification pairs; estimator: the case's estimator.
         reference: ``reference(structure) -> {name: value}`` of the truth, or None.
         omega_max: the sweeps' top frequency, rad/s (J's band, :func:`hybrid_band`).
@@ -140,6 +141,7 @@ def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[
             selects (with ``rmse_tolerance``) is fitted with its delays from its start values.
     """
     band = hybrid_band(omega_max)
+    ident = simulations["no delays"].maneuvers
     hybrid = hybrid_from_six_dof(structures["no delays"], estimates["no delays"].values,
                                  delay_upper=None)
     clock = time.perf_counter()
@@ -163,8 +165,8 @@ def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[
                         for label in HYBRID_MODELS}
     return HybridComparison(
         hybrid, estimate, {label: structures[label].n_parameters for label in HYBRID_MODELS},
-        {label: simulation_fit(structures[label], estimates[label], ident)
-         for label in HYBRID_MODELS},
+        {**simulations, "hybrid": fit_unless_diverging(
+            hybrid, estimate.restricted(hybrid.parameter_names).values, ident)},
         verification, None if reference is None else reference(hybrid), seconds, band, removed)
 
 

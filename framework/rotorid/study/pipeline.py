@@ -43,7 +43,6 @@ from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.plugin.contracts import CaseData
 from rotorid.plugin.manager import create, notify, using
 from rotorid.progress import Countdown
-from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase
 from rotorid.study.checks import check_case, check_cases
 from rotorid.study.comparison import compare_frequency_fit
@@ -53,9 +52,9 @@ from rotorid.study.hybrid_comparison import HybridComparison, compare_hybrid, me
 from rotorid.study.persistence import load_steps, prepare_directory, save_result, save_step
 from rotorid.study.result import MODELS, CaseResult
 from rotorid.study.truth import truth_derivatives, truth_equivalent_delays
-from rotorid.verification.metrics import time_domain_metrics
 from rotorid.verification.pairs import default_pairs
 from rotorid.verification.producible import producible_pairs
+from rotorid.verification.simulation_fit import SimulationFit, simulation_fit
 from rotorid.verification.verify import verify_model
 
 Progress = Callable[[str, str], None]
@@ -184,17 +183,16 @@ def _profile_line(profile) -> str:
 
 def _verify(case: FlightCase, structures, estimates, ident: ManeuverSet,
             verif: ManeuverSet | None, report: Progress) -> tuple[dict, dict]:
-    """Time-domain metrics on the identification data and sweep verification (when there
-    are verification data) of both models, by model label. Pairs the data or the model cannot
-    produce are skipped, with the reason in a progress line and in the verification's notes."""
+    """Each model's simulation of the identification data (:class:`SimulationFit`: its
+    outputs and time-domain metrics) and sweep verification (when there are verification
+    data), by model label. Pairs the data or the model cannot produce are skipped, with the
+    reason in a progress line and in the verification's notes."""
     values = {label: estimates[label].restricted(structures[label].parameter_names).values
               for label in MODELS}
-    metrics = {label: time_domain_metrics(ident, simulate(structures[label], values[label],
-                                                          ident),
-                                          outputs=structures[label].outputs)
-               for label in MODELS}
+    simulations = {label: simulation_fit(structures[label], values[label], ident)
+                   for label in MODELS}
     if verif is None:
-        return metrics, {}
+        return simulations, {}
     identified = structures["with delays"]
     selection = producible_pairs(identified, values["with delays"], verif,
                                  case.pairs or default_pairs(identified.outputs,
@@ -207,13 +205,14 @@ def _verify(case: FlightCase, structures, estimates, ident: ManeuverSet,
         checked = verify_model(structures[label], values[label], verif,
                                selection.pairs, case.envelopes, band=case.band)
         verification[label] = attrs.evolve(checked, notes=[*checked.notes, *skipped])
-    return metrics, verification
+    return simulations, verification
 
 
-def _compare(case: FlightCase, structures, estimates, metrics, ident: ManeuverSet,
+def _compare(case: FlightCase, structures, estimates, simulations,
              verif: ManeuverSet | None, report: Progress) -> dict:
-    """The frequency-domain fit of each model beside its time-domain fit, by model label
-    (``{}`` unless the case asks for it with ``[compare] frequency``)."""
+    """The frequency-domain fit of each model beside its time-domain fit (its
+    ``simulations`` of the identification data, by model label), by model label (``{}``
+    unless the case asks for it with ``[compare] frequency``)."""
     if not case.compare_frequency:
         return {}
     if verif is None:
@@ -225,8 +224,9 @@ def _compare(case: FlightCase, structures, estimates, metrics, ident: ManeuverSe
     for label in MODELS:
         structure = structures[label]
         pairs = case.frequency_pairs or default_pairs(structure.outputs, structure.controls)
-        comparison = compare_frequency_fit(structure, estimates[label], metrics[label], verif,
-                                           ident, pairs, band_max)
+        simulation = simulations[label]
+        comparison = compare_frequency_fit(structure, estimates[label], simulation.metrics,
+                                           verif, simulation.maneuvers, pairs, band_max)
         comparisons[label] = comparison
         costs = {m: sum(c.values()) for m, c in comparison.pair_costs.items()}
         iterations = comparison.frequency_estimate.iterations
@@ -236,13 +236,14 @@ def _compare(case: FlightCase, structures, estimates, metrics, ident: ManeuverSe
 
 
 def _compare_estimators(case: FlightCase, structure: ModelStructure, estimate,
-                        ident: ManeuverSet, report: Progress) -> EstimatorComparison | None:
-    """The model with delays fitted by every estimator of ``[compare] estimators`` (``None``
-    unless the case asks for it)."""
+                        simulation: SimulationFit, report: Progress
+                        ) -> EstimatorComparison | None:
+    """The model with delays (its ``simulation`` of the identification data reused) fitted by
+    every estimator of ``[compare] estimators`` (``None`` unless the case asks for it)."""
     if not case.compare_estimators:
         return None
     comparison = compare_estimators(case.compare_estimators, case.estimator, structure,
-                                    estimate, ident)
+                                    estimate, simulation)
     for name, fitted in comparison.estimates.items():
         simulation = comparison.simulation[name]
         rmse = "diverges" if simulation is None else f"{simulation.metrics.rmse:.4f}"
@@ -253,7 +254,7 @@ def _compare_estimators(case: FlightCase, structure: ModelStructure, estimate,
     return comparison
 
 
-def _compare_hybrid(case: FlightCase, structures, estimates, ident: ManeuverSet,
+def _compare_hybrid(case: FlightCase, structures, estimates, simulations,
                     verif: ManeuverSet | None, verification, estimator, truth,
                     condition: FlightCondition, report: Progress) -> HybridComparison | None:
     """The hybrid rotor-body model beside the case's two on the pairs they were verified on
@@ -265,7 +266,7 @@ def _compare_hybrid(case: FlightCase, structures, estimates, ident: ManeuverSet,
     pairs = [p.pair for p in verification["with delays"].pairs] if verification else []
     criteria = ([create("reduction-criteria", name, **options)
                  for name, options in case.criteria] if case.compare_hybrid_reduction else [])
-    comparison = compare_hybrid(structures, estimates, ident, verif, pairs, estimator,
+    comparison = compare_hybrid(structures, estimates, simulations, verif, pairs, estimator,
                                 reference, case.compare_hybrid_band_max, criteria, case.rule,
                                 case.rmse_tolerance)
     taus = ", ".join(f"{t:.3f} s" for t, _ in comparison.flap_time_constants().values())
@@ -333,21 +334,22 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
         report(case.name, _profile_line(profile))
     structures = {"no delays": selected.structure, "with delays": delayed}
     estimates = {"no delays": selected.estimate, "with delays": delayed_estimate}
-    metrics, verification = _verify(case, structures, estimates, ident, verif, report)
+    simulations, verification = _verify(case, structures, estimates, ident, verif, report)
     clock["verification"] = time.perf_counter()
-    comparison = _compare(case, structures, estimates, metrics, ident, verif, report)
+    comparison = _compare(case, structures, estimates, simulations, verif, report)
     if comparison:
         clock["frequency comparison"] = time.perf_counter()
-    estimators = _compare_estimators(case, delayed, delayed_estimate, ident, report)
+    estimators = _compare_estimators(case, delayed, delayed_estimate,
+                                     simulations["with delays"], report)
     if estimators is not None:
         clock["estimator comparison"] = time.perf_counter()
     truth = data.truth
-    hybrid = _compare_hybrid(case, structures, estimates, ident, verif, verification,
+    hybrid = _compare_hybrid(case, structures, estimates, simulations, verif, verification,
                              estimator, truth, condition, report)
     if hybrid is not None:
         clock["hybrid comparison"] = time.perf_counter()
     result = CaseResult(
-        case, condition, ident, verif, path, structures, estimates, metrics, verification,
+        case, condition, ident, verif, path, structures, estimates, simulations, verification,
         None if truth is None else truth_derivatives(truth, condition, structure),
         _durations(clock), dropped, resumed,
         None if truth is None else truth_equivalent_delays(truth, condition, delayed),

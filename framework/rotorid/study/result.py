@@ -13,7 +13,6 @@ from rotorid.estimation.profiles import DelayProfile
 from rotorid.estimation.reduction import ReductionPath
 from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.notebook import case_result_html, case_result_summary
-from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase
 from rotorid.study.comparison import FrequencyComparison
 from rotorid.study.estimator_comparison import EstimatorComparison
@@ -23,6 +22,7 @@ from rotorid.study.reference import ReferenceComparison, compare_with_reference
 from rotorid.verification.compare import VerificationResult
 from rotorid.verification.equivalent_delays import EquivalentDelays
 from rotorid.verification.metrics import TimeDomainMetrics
+from rotorid.verification.simulation_fit import SimulationFit
 
 #: The two identified models of a case: the selected structure, and it with delays.
 MODELS = ("no delays", "with delays")
@@ -41,7 +41,8 @@ class CaseResult:
     path: ReductionPath
     structures: Mapping[str, ModelStructure]      # by model label (MODELS)
     estimates: Mapping[str, Estimate]
-    time_metrics: Mapping[str, TimeDomainMetrics]
+    # by model label: its simulation of the identification data, simulated once for all uses
+    simulations: Mapping[str, SimulationFit]
     verification: Mapping[str, VerificationResult]
     truth_derivatives: Mapping[str, float] | None
     seconds: Mapping[str, float]
@@ -68,12 +69,15 @@ class CaseResult:
     def _repr_html_(self) -> str:
         return case_result_html(self)
 
-    def simulated(self, model: str, maneuvers: ManeuverSet | None = None) -> list[np.ndarray]:
-        """Outputs of one identified model on ``maneuvers`` (default: identification data)."""
-        data = self.identification if maneuvers is None else maneuvers
-        structure = self.structures[model]
-        values = self.estimates[model].restricted(structure.parameter_names).values
-        return simulate(structure, values, data)
+    @property
+    def time_metrics(self) -> dict[str, TimeDomainMetrics]:
+        """Each model's time-domain metrics on the identification data, by model label."""
+        return {label: fit.metrics for label, fit in self.simulations.items()}
+
+    def simulated(self, model: str) -> tuple[np.ndarray, ...]:
+        """Outputs of one identified model on the identification data, one (N_i, n_o) array
+        per maneuver (the simulation the metrics were taken from)."""
+        return self.simulations[model].outputs
 
     def key_derivatives(self) -> dict:
         """Identified key derivatives of the delayed model, and the truth's linearisation."""

@@ -1,0 +1,53 @@
+"""SimulationFit: one simulation of a model, its metrics and det R against the records, and
+fit_unless_diverging, which gives None for a model whose simulation diverges."""
+
+import tomllib
+
+import numpy as np
+import pytest
+import rotorid
+from rotorid.errors import SimulationDivergedError
+from rotorid.model.modelfile import parse_model
+from rotorid.simulation.simulator import simulate
+from rotorid.verification.simulation_fit import fit_unless_diverging, simulation_fit
+
+STRUCTURE = parse_model(tomllib.loads("""
+units = "flight-test"
+[condition]
+airspeed_kt = 0.0
+[structure]
+populate = "none"
+[derivatives.M_q]
+[derivatives.M_long]
+"""), "test")
+
+
+def _records(seed=1):
+    time = np.arange(501) * 0.02
+    inputs = np.zeros((time.size, 4))
+    inputs[(time > 1.0) & (time < 2.0), 0] = 1.0
+    maneuver = rotorid.Maneuver("doublet", time, inputs, np.zeros((time.size, 8)))
+    clean = rotorid.ManeuverSet([maneuver])
+    outputs = simulate(STRUCTURE, [-2.0, 0.8], clean)[0]
+    noise = np.random.default_rng(seed).normal(scale=0.1, size=outputs.shape)
+    return rotorid.ManeuverSet([maneuver.with_outputs(outputs + noise)])
+
+
+def test_the_fit_holds_the_simulation_and_its_measures():
+    records = _records()
+    fit = simulation_fit(STRUCTURE, [-1.5, 0.7], records)
+    simulated = simulate(STRUCTURE, [-1.5, 0.7], records)
+    np.testing.assert_array_equal(fit.outputs[0], simulated[0])
+    residuals = records[0].outputs - simulated[0]
+    assert fit.metrics.rmse == pytest.approx(np.sqrt(np.mean(residuals**2)), rel=1e-12)
+    assert fit.det_r == pytest.approx(np.linalg.det(np.cov(residuals.T, bias=True)
+                                                    + np.outer(*[residuals.mean(0)] * 2)),
+                                      rel=1e-9)
+    assert fit.summary()["det_r"] == fit.det_r
+
+
+def test_a_diverging_model_gives_none_or_raises():
+    records = _records()
+    assert fit_unless_diverging(STRUCTURE, [80.0, 0.8], records) is None
+    with pytest.raises(SimulationDivergedError):
+        simulation_fit(STRUCTURE, [80.0, 0.8], records)
