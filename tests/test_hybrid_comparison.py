@@ -18,6 +18,7 @@ from rotorid.study.case import FlightCase
 from rotorid.study.hybrid_comparison import HYBRID_MODELS, compare_hybrid
 from rotorid.study.truth import derivatives_of
 from rotorid.verification.simulation_fit import simulation_fit
+from rotorid.verification.verify import verify_model
 
 PAIRS = ("q/long", "p/lat")
 
@@ -61,14 +62,29 @@ def inputs(truth_model, trim_70kt):
     estimates = {"no delays": plain, "with delays": with_delays}
     simulations = {label: simulation_fit(structures[label], estimates[label].values, ident)
                    for label in structures}
+    sweeps = _sweeps(truth, values, seed=5)
+    verification = {label: verify_model(structures[label], estimates[label].values, sweeps,
+                                        PAIRS) for label in structures}
     return dict(structures=structures, estimates=estimates, simulations=simulations,
-                sweeps=_sweeps(truth, values, seed=5), pairs=PAIRS, estimator=estimator,
+                verification=verification, sweeps=sweeps, estimator=estimator,
                 reference=lambda hybrid: derivatives_of(hybrid, a, b))
 
 
 @pytest.fixture(scope="module")
 def comparison(inputs):
     return compare_hybrid(**inputs)
+
+
+def test_the_case_models_responses_are_checked_again_in_the_comparisons_band(inputs,
+                                                                              comparison):
+    """J of the case's two models over the hybrid band, from their verification's responses,
+    is J of a verification made in that band."""
+    for label, structure in inputs["structures"].items():
+        fresh = verify_model(structure, inputs["estimates"][label].values, inputs["sweeps"],
+                             PAIRS, ["mismatch-cost"], band=comparison.band)
+        assert comparison.costs[label] == {p.pair: p.checks["mismatch-cost"].cost
+                                           for p in fresh.pairs}
+        assert all(p.band == comparison.band for p in comparison.verification[label].pairs)
 
 
 def test_the_hybrid_model_of_hybrid_data_beats_both_six_dof_models(comparison):

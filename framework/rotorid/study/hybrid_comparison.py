@@ -30,7 +30,7 @@ from rotorid.estimation.reduction import reduce
 from rotorid.model.hybrid import REQUIRED, hybrid_from_six_dof, with_flap_delays
 from rotorid.model.structure import ModelStructure
 from rotorid.verification.band import VerificationBand
-from rotorid.verification.compare import VerificationResult
+from rotorid.verification.compare import VerificationResult, envelopes_by_name
 from rotorid.verification.simulation_fit import SimulationFit, fit_unless_diverging
 from rotorid.verification.verify import verify_model
 
@@ -121,8 +121,9 @@ class HybridComparison:
 
 
 def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[str, Estimate],
-                   simulations: Mapping[str, SimulationFit], sweeps: ManeuverSet | None,
-                   pairs, estimator, reference=None, omega_max: float = HYBRID_OMEGA_MAX,
+                   simulations: Mapping[str, SimulationFit],
+                   verification: Mapping[str, VerificationResult], sweeps: ManeuverSet | None,
+                   estimator, reference=None, omega_max: float = HYBRID_OMEGA_MAX,
                    criteria: Sequence = (), rule: str = "lowest-rmse",
                    rmse_tolerance: float = 0.01) -> HybridComparison:
     """Build and fit the hybrid model on ``structures["no delays"]`` and compare it with the
@@ -131,8 +132,10 @@ def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[
     Args:
         structures, estimates: the case's models by label (``no delays``, ``with delays``).
         simulations: their simulations of the identification maneuvers, by label (reused).
-        sweeps: verification maneuvers or None (no J).
-        pairs: the verification pairs; estimator: the case's estimator.
+        verification: their verification on the ``sweeps``, by label (empty: no J); its
+            responses are checked again in the comparison's band, and the hybrid is
+            verified on the same pairs.
+        sweeps: the verification maneuvers; estimator: the case's estimator.
         reference: ``reference(structure) -> {name: value}`` of the truth, or None.
         omega_max: the sweeps' top frequency, rad/s (J's band, :func:`hybrid_band`).
         criteria: reduction criteria; with any, the hybrid without delays is reduced first
@@ -155,18 +158,19 @@ def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[
         hybrid = with_flap_delays(hybrid)
         estimate = estimator.estimate(hybrid, ident)        # the disc starts at trim
     seconds = time.perf_counter() - clock
-    structures = {**structures, "hybrid": hybrid}
-    estimates = {**estimates, "hybrid": estimate}
-    verification = {}
-    if sweeps is not None and pairs:
-        verification = {label: verify_model(structures[label], estimates[label].values,
-                                            sweeps, pairs, ["mismatch-cost"],
-                                            band=band)
-                        for label in HYBRID_MODELS}
+    values = estimate.restricted(hybrid.parameter_names).values
+    if verification:
+        envelopes = envelopes_by_name(["mismatch-cost"], band=band)
+        pairs = [p.pair for p in verification["with delays"].pairs]
+        verification = {**{label: result.checked_in(band, envelopes)
+                           for label, result in verification.items()},
+                        "hybrid": verify_model(hybrid, values, sweeps, pairs, envelopes,
+                                               band=band)}
+    parameters = {**{label: s.n_parameters for label, s in structures.items()},
+                  "hybrid": hybrid.n_parameters}
     return HybridComparison(
-        hybrid, estimate, {label: structures[label].n_parameters for label in HYBRID_MODELS},
-        {**simulations, "hybrid": fit_unless_diverging(
-            hybrid, estimate.restricted(hybrid.parameter_names).values, ident)},
+        hybrid, estimate, parameters,
+        {**simulations, "hybrid": fit_unless_diverging(hybrid, values, ident)},
         verification, None if reference is None else reference(hybrid), seconds, band, removed)
 
 

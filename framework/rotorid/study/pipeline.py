@@ -263,12 +263,11 @@ def _compare_hybrid(case: FlightCase, structures, estimates, simulations,
         return None
     reference = None if truth is None else (
         lambda hybrid: truth_derivatives(truth, condition, hybrid))
-    pairs = [p.pair for p in verification["with delays"].pairs] if verification else []
     criteria = ([create("reduction-criteria", name, **options)
                  for name, options in case.criteria] if case.compare_hybrid_reduction else [])
-    comparison = compare_hybrid(structures, estimates, simulations, verif, pairs, estimator,
-                                reference, case.compare_hybrid_band_max, criteria, case.rule,
-                                case.rmse_tolerance)
+    comparison = compare_hybrid(structures, estimates, simulations, verification, verif,
+                                estimator, reference, case.compare_hybrid_band_max, criteria,
+                                case.rule, case.rmse_tolerance)
     taus = ", ".join(f"{t:.3f} s" for t, _ in comparison.flap_time_constants().values())
     costs = "; ".join(f"{label} {cost:.0f}" for label, costs in comparison.costs.items()
                       if (cost := mean_cost(costs)) is not None)

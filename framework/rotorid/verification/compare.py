@@ -159,6 +159,17 @@ class PairVerification:
         used = used[np.isfinite(used)]
         return float(np.median(used)) if used.size else None
 
+    def checked_in(self, band: VerificationBand,
+                   envelopes: Mapping[str, ValidationEnvelope]) -> "PairVerification":
+        """The same responses checked against ``envelopes`` on the points of ``band``
+        instead (nothing is estimated again)."""
+        analytic_checks = ({} if self.analytic is None else
+                           _envelope_checks(self.analytic, _reliable(self.conditioned),
+                                            band, envelopes))
+        return attrs.evolve(self, checks=_envelope_checks(self.model.response, self.truth,
+                                                          band, envelopes),
+                            analytic_checks=analytic_checks, band=band)
+
     def summary(self) -> dict:
         return {
             "pair": self.pair, "maneuvers": list(self.maneuvers),
@@ -193,6 +204,14 @@ class VerificationResult:
     def get(self, pair: str) -> PairVerification | None:
         """The verification of ``pair``, or ``None`` when it was not verified."""
         return next((item for item in self.pairs if item.pair == pair), None)
+
+    def checked_in(self, band: VerificationBand,
+                   envelopes: Mapping[str, ValidationEnvelope]) -> "VerificationResult":
+        """Every pair's responses checked against ``envelopes`` (counting γ² ≥
+        ``band.coherence``) on the points of ``band`` instead
+        (:meth:`PairVerification.checked_in`)."""
+        check_envelope_thresholds(envelopes, band)
+        return attrs.evolve(self, pairs=[p.checked_in(band, envelopes) for p in self.pairs])
 
     @property
     def band(self) -> VerificationBand:
@@ -382,7 +401,7 @@ class _SweepComparison:
         subset = sweeps_exciting(self.sweeps, control, name)
         outputs = [self.model_outputs[m.name] for m in subset]
         model, truth = self._responses(subset, outputs, output, control)
-        checks = self._checks(model.response, truth)
+        checks = _envelope_checks(model.response, truth, self.band, self.envelopes)
         conditioned, analytic, analytic_checks = self._analytic_comparison(
             subset, output, control, truth)
         column = self.output_names.index(output)
@@ -405,16 +424,6 @@ class _SweepComparison:
                                         output_names=self.output_names)
         return model, truth
 
-    def _checks(self, response: np.ndarray, reference: FrequencyResponse
-                ) -> dict[str, EnvelopeCheck]:
-        """Every envelope's check of ``ε = response / reference`` on the band's points by the
-        reference's coherence (NaN outside the band's range)."""
-        coherence = self.band.restrict(self.omega, reference.coherence)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            error = response / reference.response
-            return {n: e.check(error, coherence, self.omega)
-                    for n, e in self.envelopes.items()}
-
     def _analytic_comparison(self, subset, output: str, control: str,
                              truth: FrequencyResponse):
         """The truth's conditioned response, the model's analytic response of the pair and
@@ -426,7 +435,8 @@ class _SweepComparison:
             subset, control, output, self.omega, windows=self.windows, conditioned_on=others)
         analytic = self.analytic[:, self.output_names.index(output),
                                  self.input_names.index(control)]
-        return conditioned, analytic, self._checks(analytic, _reliable(conditioned))
+        return conditioned, analytic, _envelope_checks(analytic, _reliable(conditioned),
+                                                       self.band, self.envelopes)
 
     def _conditioning_inputs(self, subset, control: str) -> tuple[str, ...]:
         if isinstance(self.conditioning, str) and self.conditioning == "auto":
@@ -434,6 +444,18 @@ class _SweepComparison:
         if isinstance(self.conditioning, str) and self.conditioning == "none":
             return ()
         return tuple(c for c in self.conditioning if c != control)
+
+
+def _envelope_checks(response: np.ndarray, reference: FrequencyResponse,
+                     band: VerificationBand, envelopes: Mapping[str, ValidationEnvelope]
+                     ) -> dict[str, EnvelopeCheck]:
+    """Every envelope's check of ``ε = response / reference`` (both on ``reference.omega``)
+    on ``band``'s points by the reference's coherence (NaN outside the band's range)."""
+    omega = reference.omega
+    coherence = band.restrict(omega, reference.coherence)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        error = response / reference.response
+        return {n: e.check(error, coherence, omega) for n, e in envelopes.items()}
 
 
 def _reliable(conditioned: FrequencyResponse) -> FrequencyResponse:
