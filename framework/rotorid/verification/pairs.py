@@ -50,14 +50,22 @@ def primary_axis(maneuver) -> str:
     return names[int(np.argmax(np.sqrt(np.mean(centred ** 2, axis=0))))]
 
 
+def unexcited(control: str, axes) -> str | None:
+    """Why no sweep can verify a pair on ``control`` when the sweeps excite ``axes`` (their
+    :func:`primary_axis`), or None when one of them excites it."""
+    if control in axes:
+        return None
+    return f"no sweep excites {control!r} (the sweeps excite {', '.join(sorted(set(axes)))})"
+
+
 def sweeps_exciting(sweeps, control: str, pair: str,
                     error: type[RotoridError] = VerificationError):
     """The sweeps of the :class:`~rotorid.data.ManeuverSet` ``sweeps`` whose
     :func:`primary_axis` is ``control``, as a ManeuverSet; when none is, raises ``error``
-    naming ``pair`` and the axes the sweeps do excite."""
+    naming ``pair`` and the axes the sweeps do excite (:func:`unexcited`)."""
     axes = [primary_axis(m) for m in sweeps]
+    reason = unexcited(control, axes)
+    if reason is not None:
+        raise error(f"pair {pair}: {reason}")
     names = {m.name for m, axis in zip(sweeps, axes) if axis == control}
-    if not names:
-        raise error(f"pair {pair}: no sweep excites {control!r}; the sweeps excite "
-                    f"{', '.join(sorted(set(axes)))}")
     return sweeps.select(lambda m: m.name in names)

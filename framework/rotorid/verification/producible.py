@@ -18,7 +18,7 @@ import numpy as np
 
 from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS
 from rotorid.model.statespace import responding_outputs
-from rotorid.verification.pairs import parse_pair, primary_axis
+from rotorid.verification.pairs import parse_pair, primary_axis, sweeps_exciting, unexcited
 
 
 @attrs.frozen
@@ -38,28 +38,34 @@ def producible_pairs(structure, values, sweeps, pairs: Sequence[str]) -> PairSel
     for pair in pairs:
         output, control = parse_pair(pair, (*OUTPUT_CHANNELS, *structure.outputs),
                                      (*INPUT_CHANNELS, *structure.controls))
-        chosen = [m for m, axis in zip(sweeps, axes) if axis == control]
         missing = ([f"output {output!r}"] if output not in structure.outputs else []) + (
             [f"input {control!r}"] if control not in structure.controls else [])
         if missing:
             skipped[pair] = (f"the model has no {' and no '.join(missing)} (outputs "
                              f"{', '.join(structure.outputs)}; inputs "
                              f"{', '.join(structure.controls)})")
-        elif not chosen:
-            skipped[pair] = (f"no sweep excites {control!r} (the sweeps excite "
-                             f"{', '.join(sorted(set(axes)))})")
+        elif (reason := unexcited(control, axes)):
+            skipped[pair] = reason
         elif output not in responding[control]:
             skipped[pair] = (f"the model's {output} does not respond to {control} (no "
                              f"derivative couples them): its response is identically zero")
         elif output not in sweeps.output_names:
             skipped[pair] = (f"the sweeps record no {output} (their outputs: "
                              f"{', '.join(sweeps.output_names)})")
-        elif all(np.ptp(m.channel(output)) == 0 for m in chosen):
-            skipped[pair] = (f"the measured {output} never moves on the {control} sweeps "
-                             f"({', '.join(m.name for m in chosen)}); is the column padded?")
+        elif (reason := _still(output, control, sweeps_exciting(sweeps, control, pair))):
+            skipped[pair] = reason
         else:
             kept.append(pair)
     return PairSelection(kept, skipped)
+
+
+def _still(output: str, control: str, chosen) -> str | None:
+    """Why the measured ``output`` cannot be verified on the ``chosen`` sweeps of
+    ``control`` (it never moves on them), or None when it moves."""
+    if not all(np.ptp(m.channel(output)) == 0 for m in chosen):
+        return None
+    return (f"the measured {output} never moves on the {control} sweeps "
+            f"({', '.join(chosen.names)}); is the column padded?")
 
 
 __all__ = ["PairSelection", "producible_pairs"]
