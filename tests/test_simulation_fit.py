@@ -51,3 +51,34 @@ def test_a_diverging_model_gives_none_or_raises():
     assert fit_unless_diverging(STRUCTURE, [80.0, 0.8], records) is None
     with pytest.raises(SimulationDivergedError):
         simulation_fit(STRUCTURE, [80.0, 0.8], records)
+
+
+def test_an_si_model_has_the_metrics_of_the_same_model_in_flight_test_units():
+    """One pitch model and its records, once in flight-test units and once converted by hand
+    to SI: RMSE and J_rms are the same numbers (residuals counted in ft/s², deg/s, deg), per
+    output RMSE stays in each output's own unit."""
+    feet, degrees = 0.3048, np.pi / 180.0
+    records = _records(seed=3)
+    units = STRUCTURE.signals.outputs.units
+    factors = np.array([feet if u == "ft/s²" else degrees for u in units])
+    si_records = rotorid.ManeuverSet([rotorid.Maneuver(m.name, m.time, m.inputs,
+                                                       m.outputs * factors, units="si")
+                                      for m in records])
+    si_structure = parse_model(tomllib.loads("""
+units = "si"
+[condition]
+airspeed_kt = 0.0
+[structure]
+populate = "none"
+[derivatives.M_q]
+[derivatives.M_long]
+"""), "test")
+    flight_test = simulation_fit(STRUCTURE, [-1.5, 0.7], records)
+    si = simulation_fit(si_structure, [-1.5, 0.7 * degrees], si_records)
+    assert si_structure.signals.outputs.units != units
+    assert si.metrics.rmse == pytest.approx(flight_test.metrics.rmse, rel=1e-9)
+    assert si.metrics.j_rms == pytest.approx(flight_test.metrics.j_rms, rel=1e-9)
+    np.testing.assert_allclose(si.metrics.overall.rmse_per_output,
+                               flight_test.metrics.overall.rmse_per_output * factors,
+                               rtol=1e-9)
+    assert si.metrics.overall.summary()["pooled_units"]["q"] == "deg/s"

@@ -307,7 +307,8 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
                    on_pair: Callable[[PairVerification], None] | None = None,
                    band: VerificationBand = DEFAULT_BAND,
                    output_names: Sequence[str] | None = None,
-                   input_names: Sequence[str] | None = None) -> VerificationResult:
+                   input_names: Sequence[str] | None = None,
+                   output_units: Sequence[str] = ()) -> VerificationResult:
     """Compare a model's simulated sweeps with the recorded ones, pair by pair.
 
     Args:
@@ -334,6 +335,9 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
             points in its frequency range whose coherence reaches its threshold.
         output_names, input_names: the model's outputs and inputs (e.g. a structure's
             ``outputs`` and ``controls``); default the sweeps' own.
+        output_units: the outputs' units (a structure's ``signals.outputs.units``): the
+            time-domain RMSE and J_rms then count residuals in reference units
+            (:func:`~rotorid.verification.metrics.time_domain_metrics`).
 
     Both comparisons use single-input responses of truth and model: the model is driven by
     every recorded input, so the other inputs affect both sides alike.
@@ -363,7 +367,8 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
         if on_pair is not None:
             on_pair(results[-1])
     return VerificationResult(results,
-                              time_domain_metrics(sweeps, model_outputs, outputs=output_names),
+                              time_domain_metrics(sweeps, model_outputs, outputs=output_names,
+                                                  units=output_units),
                               _drift_notes(results))
 
 

@@ -12,6 +12,10 @@ With ``z`` the measured and ``y`` the simulated outputs, ``N`` samples and ``n_o
 
 Every function takes arrays of shape (N, n_o) (or sequences of them, one per maneuver) in the
 data's units; the values returned are in those units (RMSE, J_rms) or dimensionless (TIC).
+:func:`time_domain_metrics` given the outputs' units pools RMSE and J_rms over residuals
+counted in their reference units (:data:`rotorid.units.RMSE_REFERENCE_UNITS`: ft/s, ft/s²,
+deg, deg/s), as the fit's RMSE does, so they are the same numbers whether a model computes in
+flight-test or SI units.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ import numpy as np
 
 from rotorid.data import ManeuverSet
 from rotorid.errors import DataError
+from rotorid.units import RMSE_REFERENCE_UNITS, UNITS, rmse_reference_factors
 
 
 def _pair(measured, simulated) -> tuple[np.ndarray, np.ndarray]:
@@ -44,6 +49,11 @@ def _records(measured, simulated) -> list[tuple[np.ndarray, np.ndarray]]:
         raise DataError(f"{len(measured)} measured and {len(simulated)} simulated records; "
                         f"give one simulated array per maneuver")
     return [_pair(z, y) for z, y in zip(measured, simulated)]
+
+
+def _list(arrays) -> list:
+    """One (N, n_o) array, or a sequence of them, as a list of arrays."""
+    return [arrays] if isinstance(arrays, np.ndarray) and arrays.ndim == 2 else list(arrays)
 
 
 def _stack(measured, simulated) -> tuple[np.ndarray, np.ndarray]:
@@ -97,9 +107,12 @@ class ManeuverMetrics:
 
     Attributes:
         outputs: the names of the outputs compared.
-        rmse, j_rms: over all outputs, data units.
+        rmse, j_rms: over all outputs, each residual in the unit ``pooled_units`` names for
+            its output.
         rmse_per_output: RMSE of each output, shape (n_o,), data units.
         tic: Theil's U1 of each output, shape (n_o,).
+        pooled_units: the unit each output's residuals count in for ``rmse`` and ``j_rms``
+            (its reference unit), or ``()``: the data's units, mixed.
     """
 
     name: str
@@ -108,15 +121,28 @@ class ManeuverMetrics:
     rmse_per_output: np.ndarray
     tic: np.ndarray
     outputs: tuple[str, ...] = attrs.field(converter=tuple)
+    pooled_units: tuple[str, ...] = attrs.field(default=(), converter=tuple)
 
     @classmethod
-    def of(cls, name: str, outputs, measured, simulated, weights=None) -> "ManeuverMetrics":
-        return cls(name, rmse(measured, simulated), j_rms(measured, simulated, weights),
+    def of(cls, name: str, outputs, measured, simulated, weights=None,
+           units=()) -> "ManeuverMetrics":
+        """The metrics of ``simulated`` against ``measured`` (one (N, n_o) array each or one
+        per maneuver), outputs ``outputs`` in ``units`` (default: not known)."""
+        factors = rmse_reference_factors(units)
+        if factors is None:
+            pooled, scaled = (), (measured, simulated)
+        else:
+            pooled = tuple(RMSE_REFERENCE_UNITS[UNITS[u][0]] for u in units)
+            scaled = tuple([np.asarray(a, dtype=float) * factors for a in _list(arrays)]
+                           for arrays in (measured, simulated))
+        return cls(name, rmse(*scaled), j_rms(*scaled, weights),
                    rmse(measured, simulated, per_output=True), tic(measured, simulated),
-                   outputs)
+                   outputs, pooled)
 
     def summary(self) -> dict:
         return {"maneuver": self.name, "rmse": self.rmse, "j_rms": self.j_rms,
+                "pooled_units": (dict(zip(self.outputs, self.pooled_units))
+                                 if self.pooled_units else "data units"),
                 "rmse_per_output": dict(zip(self.outputs, map(float, self.rmse_per_output))),
                 "tic": dict(zip(self.outputs, map(float, self.tic)))}
 
@@ -158,17 +184,19 @@ class TimeDomainMetrics:
 
 
 def time_domain_metrics(maneuvers: ManeuverSet, simulated: Sequence[np.ndarray],
-                        weights=None, outputs: Sequence[str] | None = None
-                        ) -> TimeDomainMetrics:
+                        weights=None, outputs: Sequence[str] | None = None,
+                        units: Sequence[str] = ()) -> TimeDomainMetrics:
     """RMSE, J_rms and TIC of simulated outputs (one (N_i, n_o) array per maneuver, columns
     ``outputs``: a model's output names, default the maneuvers' own outputs) against the
     recorded channels of those names, per maneuver and pooled; ``weights`` (n_o,) is J_rms's
-    output weighting."""
+    output weighting. With the outputs' ``units`` (a model's ``signals.outputs.units``),
+    RMSE and J_rms count each residual in its reference unit when every output has one
+    (module docstring)."""
     if len(simulated) != len(maneuvers):
         raise DataError(f"{len(simulated)} simulated records for {len(maneuvers)} maneuvers")
     outputs = tuple(maneuvers.output_names if outputs is None else outputs)
     measured = [m.columns(outputs) for m in maneuvers]
-    per = tuple(ManeuverMetrics.of(m.name, outputs, z, y, weights)
+    per = tuple(ManeuverMetrics.of(m.name, outputs, z, y, weights, units)
                 for m, z, y in zip(maneuvers, measured, simulated))
-    overall = ManeuverMetrics.of("all", outputs, measured, list(simulated), weights)
+    overall = ManeuverMetrics.of("all", outputs, measured, list(simulated), weights, units)
     return TimeDomainMetrics(per, overall)

@@ -35,7 +35,8 @@ class SimulationFit:
     Attributes:
         maneuvers: the maneuvers whose recorded inputs drove the model.
         outputs: one (N_i, n_o) array of simulated outputs per maneuver, in the model's units.
-        metrics: RMSE, J_rms and TIC against the recorded outputs (the model's output names).
+        metrics: RMSE, J_rms and TIC against the recorded outputs (the model's output names;
+            RMSE and J_rms in reference units, :func:`time_domain_metrics`).
         det_r: det of the residual covariance Σ eᵀe / N (product of the outputs' units
             squared).
     """
@@ -47,13 +48,15 @@ class SimulationFit:
 
     @classmethod
     def of(cls, maneuvers: ManeuverSet, outputs: Sequence[np.ndarray],
-           output_names: Sequence[str]) -> "SimulationFit":
-        """The fit of simulated ``outputs`` (columns ``output_names``) to ``maneuvers``."""
+           output_names: Sequence[str], output_units: Sequence[str] = ()) -> "SimulationFit":
+        """The fit of simulated ``outputs`` (columns ``output_names`` in ``output_units``)
+        to ``maneuvers``."""
         residuals = np.concatenate([m.columns(output_names) - y
                                     for m, y in zip(maneuvers, outputs)])
         covariance = residuals.T @ residuals / len(residuals)
         return cls(maneuvers, outputs,
-                   time_domain_metrics(maneuvers, outputs, outputs=output_names),
+                   time_domain_metrics(maneuvers, outputs, outputs=output_names,
+                                       units=output_units),
                    float(np.linalg.det(covariance)))
 
     def summary(self) -> dict:
@@ -70,7 +73,7 @@ def simulation_fit(structure: ModelStructure, values, maneuvers: ManeuverSet,
         SimulationDivergedError: the model's response grows without bound.
     """
     return SimulationFit.of(maneuvers, simulator(structure, values, maneuvers),
-                            structure.outputs)
+                            structure.outputs, structure.signals.outputs.units)
 
 
 def fit_unless_diverging(structure: ModelStructure, values, maneuvers: ManeuverSet,

@@ -77,7 +77,8 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] | None = None,
         sweeps, outputs, pairs, envelopes,
         analytic=lambda omega: frequency_response(structure, values, omega),
         model_response=comparison, band=band, output_names=structure.outputs,
-        input_names=structure.controls, **options)
+        input_names=structure.controls, output_units=structure.signals.outputs.units,
+        **options)
     return attrs.evolve(result, notes=[*notes, *result.notes])
 
 
