@@ -2,22 +2,13 @@
 noise parameters; a parameter of none of these (a derivative of another structure) is refused."""
 
 import json
-import tomllib
 
 import pytest
 from rotorid.errors import DataFileError
 from rotorid.estimation.result_file import load_result
+from test_simulation_fit import hover_model
 
-MODEL = tomllib.loads("""
-units = "flight-test"
-[condition]
-airspeed_kt = 0.0
-[structure]
-populate = "none"
-[derivatives.M_q]
-[derivatives.M_long]
-[derivatives.Z_w]
-""")
+MODEL = hover_model(derivatives=("M_q", "M_long", "Z_w"))
 
 
 def _write(tmp_path, parameters):

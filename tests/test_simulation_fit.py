@@ -1,8 +1,6 @@
 """SimulationFit: one simulation of a model, its metrics and det R against the records, and
 fit_unless_diverging, which gives None for a model whose simulation diverges."""
 
-import tomllib
-
 import numpy as np
 import pytest
 import rotorid
@@ -11,15 +9,14 @@ from rotorid.model.modelfile import parse_model
 from rotorid.simulation.simulator import simulate
 from rotorid.verification.simulation_fit import fit_unless_diverging, simulation_fit
 
-STRUCTURE = parse_model(tomllib.loads("""
-units = "flight-test"
-[condition]
-airspeed_kt = 0.0
-[structure]
-populate = "none"
-[derivatives.M_q]
-[derivatives.M_long]
-"""), "test")
+def hover_model(units: str = "flight-test", derivatives=("M_q", "M_long")) -> dict:
+    """A model-file mapping: the hover six-dof template in ``units`` with only
+    ``derivatives`` free."""
+    return {"units": units, "condition": {"airspeed_kt": 0.0},
+            "structure": {"populate": "none"}, "derivatives": {n: {} for n in derivatives}}
+
+
+STRUCTURE = parse_model(hover_model(), "test")
 
 
 def _records(seed=1):
@@ -64,15 +61,7 @@ def test_an_si_model_has_the_metrics_of_the_same_model_in_flight_test_units():
     si_records = rotorid.ManeuverSet([rotorid.Maneuver(m.name, m.time, m.inputs,
                                                        m.outputs * factors, units="si")
                                       for m in records])
-    si_structure = parse_model(tomllib.loads("""
-units = "si"
-[condition]
-airspeed_kt = 0.0
-[structure]
-populate = "none"
-[derivatives.M_q]
-[derivatives.M_long]
-"""), "test")
+    si_structure = parse_model(hover_model("si"), "test")
     flight_test = simulation_fit(STRUCTURE, [-1.5, 0.7], records)
     si = simulation_fit(si_structure, [-1.5, 0.7 * degrees], si_records)
     assert si_structure.signals.outputs.units != units
