@@ -1,10 +1,16 @@
 """The paper's claims measured on constructed results: verdicts, evidence, the truth model's
-value beside each sign, and no derivative claims on a user's own data."""
+value beside each sign; on a user's own data the guidelines instead."""
 
 import types
 
 import numpy as np
-from rotorid.study.claims import claims_tally, paper_claims, sign_claim
+from rotorid.study.claims import (
+    case_claims,
+    claims_tally,
+    claims_title,
+    paper_claims,
+    sign_claim,
+)
 from rotorid.verification.band import DEFAULT_BAND
 
 
@@ -40,16 +46,41 @@ def test_sign_claims_carry_the_truth_models_value_and_their_verdicts():
     assert sign_claim(result, "M_w", 0).verdict == "does not hold"
 
 
-def test_paper_claims_on_a_users_own_data_are_the_guidelines_only():
+def _verified(**passed):
+    """The model with delays verified on the pairs ``passed`` names (MUAD passed or not)."""
+    items = [types.SimpleNamespace(pair=pair.replace("_", "/"), checks={
+        "muad": types.SimpleNamespace(passed=ok, n_inside=10 if ok else 7, n_used=10,
+                                      worst_margin_db=0.5 if ok else -1.0,
+                                      worst_margin_deg=3.0, status="checked")})
+        for pair, ok in passed.items()]
+    by_pair = {item.pair: item for item in items}
+    return {"with delays": types.SimpleNamespace(pairs=items, get=by_pair.get)}
+
+
+def test_a_case_on_a_users_own_data_is_checked_on_the_guidelines():
+    """No truth model: no paper claims (no derivative signs, none of the paper's pairs), but
+    the RMSE guideline of both models and MUAD on every pair the case verified."""
     model = _estimate({"M_w": -0.2, "L_v": -0.4}, {"M_w": 0.01, "L_v": 0.01}, rmse=2.5)
     models = {"no delays": model, "with delays": model}
-    own = paper_claims(_result(source="files", **models))
-    assert not [c for c in own if c.claim.startswith(("M_w", "L_v", "N_v", "Z_w"))]
-    decided, failed = claims_tally(own)
-    # RMSE 2.5 breaks the guideline for both models; unverified pairs are not checked.
-    assert [c.claim.split(" (")[0] for c in failed] == ["time-domain RMSE ≤ 1.0 to 2.0"] * 2
-    assert len(decided) == 2
-    assert all(c.reason.startswith("pair not verified") for c in own
-               if c.verdict == "not checked")
-    truth_data = paper_claims(_result(**models))
-    assert [c.claim for c in truth_data if c.claim.startswith("M_w")] == ["M_w < 0"]
+    own = _result(source="files", **models)
+    own.verification = _verified(alpha_elevator=True, q_elevator=False)
+    assert claims_title(own) == "The guidelines"
+    claims = case_claims(own)
+    assert [c.claim.split(" (")[0].split(" with")[0] for c in claims] == [
+        "time-domain RMSE ≤ 1.0 to 2.0"] * 2 + ["alpha/elevator", "q/elevator"]
+    decided, failed = claims_tally(claims)
+    assert len(decided) == 4
+    assert [c.claim.split(" ")[0] for c in failed] == ["time-domain", "time-domain",
+                                                        "q/elevator"]
+    truth_data = _result(truth={"M_w": -0.1}, **models)
+    assert claims_title(truth_data) == "The paper's claims"
+    assert case_claims(truth_data) == paper_claims(truth_data)
+    assert [c.claim for c in case_claims(truth_data) if c.claim.startswith("M_w")] == [
+        "M_w < 0"]
+
+
+def test_an_rmse_that_would_mix_units_is_not_checked():
+    model = _estimate({"M_w": -0.2}, {"M_w": 0.01}, rmse=float("nan"))
+    claims = case_claims(_result(source="files", **{"no delays": model, "with delays": model}))
+    assert [c.verdict for c in claims] == ["not checked"] * 2
+    assert "reference unit" in claims[0].reason

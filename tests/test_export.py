@@ -5,6 +5,7 @@ record per file (CSV, and one MAT file), doublets for identification and long/co
 verification. The lateral channels carry sensor noise only, as they would in flight.
 """
 
+import csv
 import json
 import runpy
 import sys
@@ -387,7 +388,8 @@ def test_a_study_of_the_longitudinal_files_skips_the_pairs_it_cannot_verify(flig
                     '[derivatives]\n' + "".join(f"{n} = {{}}\n" for n in TRUTH if "tau" not in n)
                     + '[delays]\nderivatives = ["M_long"]\n', encoding="utf-8")
     assert main(["study", str(case), "--out", str(root / "study")]) == ExitStatus.OK
-    err = capsys.readouterr().err
+    printed = capsys.readouterr()
+    err = printed.err
     assert "[my-hover] q/lat not verified: no sweep excites 'lat'" in err
     assert "Traceback" not in err
     # the reports speak about this aircraft only: no paper, truth model or Bo-105
@@ -401,6 +403,16 @@ def test_a_study_of_the_longitudinal_files_skips_the_pairs_it_cannot_verify(flig
     record = _strict_json(root / "study" / "my-hover" / "result.json")
     verified = record["frequency_verification"]["with delays"]
     assert [p["pair"] for p in verified["pairs"]] == ["q/long", "az/coll"]
+    # result.json, report and terminal give the same claims: the guidelines
+    claims = [c["claim"] for c in record["claims"]]
+    assert record["claims_title"] == "The guidelines" and len(claims) == 4
+    assert claims[2:] == [f"{pair} with delays inside MUAD where γ² ≥ 0.8 over 0.1–10 rad/s"
+                          for pair in ("q/long", "az/coll")]
+    with open(root / "study" / "my-hover" / "tables" / "checks.csv", encoding="utf-8") as rows:
+        assert [row[0] for row in list(csv.reader(rows))[1:]] == claims
+    decided = sum(c["verdict"] != "not checked" for c in record["claims"])
+    assert f"  guidelines: {sum(c['verdict'] == 'holds' for c in record['claims'])}/{decided} " \
+           f"hold" in printed.out
     assert sum("not verified" in note for note in verified["notes"]) == 6
     exported = load_result(root / "study" / "my-hover" / "result.json").state_space()
     assert exported.states == ("u", "w", "q", "theta")

@@ -193,8 +193,9 @@ def test_common_branch_removes_whole_turns():
 
 
 def test_a_report_about_measured_data_only(hover, tmp_path):
-    """A files-source case (no truth model): no paper claims, no truth or Bo-105 values,
-    every identification maneuver drawn, data called measured, units in every table."""
+    """A files-source case (no truth model): no paper claims but the guidelines on its own
+    verified pairs, no truth or Bo-105 values, every identification maneuver drawn, data
+    called measured, units in every table."""
     maneuvers = [next(m for m in hover.identification if m.metadata["kind"] == kind)
                  for kind in ("3211", "2311")]
     identification = attrs.evolve(hover.identification, maneuvers=maneuvers)
@@ -211,7 +212,12 @@ def test_a_report_about_measured_data_only(hover, tmp_path):
     assert "measured" in page
     figures = sorted(p.name for p in (tmp_path / "own" / "figures").glob("time_*.png"))
     assert figures == sorted(f"time_{m.name}.png" for m in maneuvers)
-    assert not (tmp_path / "own" / "tables" / "checks.csv").exists()
+    assert '<h2 id="claims">The guidelines, measured</h2>' in page
+    checks = (tmp_path / "own" / "tables" / "checks.csv").read_text(encoding="utf-8")
+    rows = checks.splitlines()[1:]
+    assert len(rows) == 3                               # RMSE of both models, the one pair
+    assert rows[2].startswith(f"{verification['with delays'].pairs[0].pair} with delays "
+                              f"inside MUAD")
     assert 'id="reference"' not in page                  # no [reference]: no reference rows
     for table in re.findall(r"<table>.*?</table>", page, flags=re.DOTALL):
         header = re.search(r"<thead>(.*?)</thead>", table)[1]

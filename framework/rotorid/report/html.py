@@ -4,8 +4,8 @@ Per case (``<out>/<case>/``):
 
 * ``figures/``: the figures of :mod:`rotorid.report.figures`, each shown with its caption;
 * ``tables/removed.csv``, ``tables/parameters.csv`` (Appendix B), ``tables/key_derivatives.csv``,
-  ``tables/verification.csv`` and, for a case with a truth model, ``tables/checks.csv`` (the
-  paper's claims, measured); with ``[reference]`` values ``tables/reference.csv``; with ``[compare] frequency`` ``tables/comparison_costs.csv``
+  ``tables/verification.csv`` and ``tables/checks.csv`` (the paper's claims, measured, or for a
+  case without a truth model the guidelines); with ``[reference]`` values ``tables/reference.csv``; with ``[compare] frequency`` ``tables/comparison_costs.csv``
   and ``tables/comparison_parameters.csv`` (the frequency-domain fit beside the time-domain
   fit); with ``[compare] estimators`` ``tables/estimators.csv`` and
   ``tables/estimator_fits.csv`` (the estimators' fits of the model with delays side by side);
@@ -15,8 +15,9 @@ Per case (``<out>/<case>/``):
   ``pair-<out>-<in>``) per verified pair.
 
 A case about measured data only (``source = "files"``, no truth model) is reported about
-that aircraft alone: no paper claims, no truth or published Bo-105 values; only the reference
-values its case file gives (``[reference]``).
+that aircraft alone: no paper claims but the guidelines (RMSE, MUAD on its verified pairs), no
+truth or published Bo-105 values; only the reference values its case file gives
+(``[reference]``).
 
 Per study: ``<out>/report.html``, a summary of every case linking the case reports.
 Every file is written atomically.
@@ -42,7 +43,13 @@ from rotorid.report.figures import (
     flight_label,
     rmse_caption,
 )
-from rotorid.study.claims import PAPER_SOURCES, claims_tally, mean_phase_error, paper_claims
+from rotorid.study.claims import (
+    PAPER_SOURCES,
+    case_claims,
+    claims_tally,
+    claims_title,
+    mean_phase_error,
+)
 from rotorid.study.expectations import check_signs, derivative_unit
 from rotorid.study.hybrid_comparison import HYBRID_MODELS, mean_cost
 from rotorid.study.result import KEY_DERIVATIVES, MODELS
@@ -554,8 +561,8 @@ def summary_html(result, claims) -> str:
                          f"<li>{html.escape(w)}</li>" for w in result.data_warnings) + "</ul>")
     if claims:
         decided, not_holding = claims_tally(claims)
-        items.append(f"The paper's claims: {len(decided) - len(not_holding)} of {len(decided)} "
-                     "hold" + ("; not: " + html.escape("; ".join(
+        items.append(f"{claims_title(result)}: {len(decided) - len(not_holding)} of "
+                     f"{len(decided)} hold" + ("; not: " + html.escape("; ".join(
                          f"{c.claim} ({c.evidence})" for c in not_holding))
                          if not_holding else "") + ".")
     return "<ul>" + "".join(f"<li>{item}</li>" for item in items) + "</ul>"
@@ -564,7 +571,7 @@ def summary_html(result, claims) -> str:
 def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
               claims) -> str:
     """The case report page (figures referenced relative to the case directory; ``claims``
-    from :func:`rotorid.study.claims.paper_claims`, empty for a case about measured data only)."""
+    from :func:`rotorid.study.claims.case_claims`)."""
     case, path = result.case, result.path
     estimates = result.estimates
     truth = has_truth_model(result)
@@ -588,8 +595,9 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         + ".</p>",
         '<h2 id="summary">Summary</h2>', summary_html(result, claims)]
     if claims:
-        contents.append(("claims", "The paper's claims, measured"))
-        body += ['<h2 id="claims">The paper\'s claims, measured</h2>', claims_html(claims)]
+        title = f"{claims_title(result)}, measured"
+        contents.append(("claims", title))
+        body += [f'<h2 id="claims">{html.escape(title)}</h2>', claims_html(claims)]
     contents += [("reduction", "Model reduction"), ("delays", "Time delays"),
                  ("parameters", "Identified parameters"), ("key-derivatives", "Key derivatives"),
                  ("time-histories", "Time histories"), ("verification", "Frequency-domain "
@@ -649,12 +657,6 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
     return _page(f"rotorid study — case {result.name}", "\n".join(body), contents)
 
 
-def case_claims(result) -> list:
-    """The paper's claims measured on a case with a truth model; none for a case about
-    measured data only (:func:`has_truth_model`)."""
-    return paper_claims(result) if has_truth_model(result) else []
-
-
 #: Row builders of a case's tables by CSV name (``checks`` is built from the claims).
 _TABLE_ROWS = {
     "removed": removed_rows, "parameters": parameter_rows,
@@ -682,7 +684,7 @@ def case_table_names(result, claims) -> list[str]:
 
 def write_case_outputs(result, directory: str | Path) -> Path:
     """Write the figures, tables and ``report.html`` of one case; returns the report path.
-    A case about measured data only (no truth model) gets no claims table."""
+    A case about measured data only (no truth model) gets the guidelines as its claims."""
     directory = Path(directory)
     figures = case_figures(result, directory / "figures")
     tables = directory / "tables"

@@ -14,7 +14,12 @@ cannot be decided says why. The claims (paper sections "Hover" and "Forward flig
 
 The derivative claims are the paper's statements about its helicopter at hover and 70 kt: they
 are checked only on cases whose data come from the truth model (data source ``helisim``) at
-those conditions. Cases on a user's own data get the guidelines (RMSE, MUAD) only.
+those conditions.
+
+A case about one's own aircraft (no truth model: measured data) is held against no paper.
+What its user needs is whether the model meets the accepted guidelines: :func:`case_claims`
+gives it :func:`guideline_claims`, the RMSE guideline of both models and the MUAD bounds on
+every pair the model with delays was verified on (the case's own pairs, not the paper's).
 """
 
 from __future__ import annotations
@@ -82,11 +87,17 @@ def _verified(result, label: str, pair: str):
 
 
 def rmse_claims(result) -> list[Claim]:
-    """The time-domain guideline on both identified models."""
-    return [_decided(f"time-domain RMSE ≤ 1.0 to 2.0 ({label}; checked against "
-                     f"{RMSE_GUIDELINE:g})", f"RMSE {estimate.rmse:.3f}",
-                     estimate.rmse <= RMSE_GUIDELINE)
-            for label, estimate in result.estimates.items()]
+    """The time-domain guideline on both identified models (not checked where the RMSE is not
+    given: it would mix units)."""
+    claims = []
+    for label, estimate in result.estimates.items():
+        claim = f"time-domain RMSE ≤ 1.0 to 2.0 ({label}; checked against {RMSE_GUIDELINE:g})"
+        claims.append(
+            _decided(claim, f"RMSE {estimate.rmse:.3f}", estimate.rmse <= RMSE_GUIDELINE)
+            if math.isfinite(estimate.rmse) else
+            Claim(claim, "", "not checked", "no RMSE: an output has no reference unit, so it "
+                                            "would mix units"))
+    return claims
 
 
 def muad_claim(result, pair: str) -> Claim:
@@ -152,6 +163,30 @@ def paper_claims(result) -> list[Claim]:
     claims += [muad_claim(result, pair) for pair in OFF_AXIS_PAIRS]
     claims += [phase_claim(result, pair) for pair in OFF_AXIS_PAIRS]
     return claims
+
+
+def guideline_claims(result) -> list[Claim]:
+    """The guidelines on a case about one's own aircraft: the RMSE guideline of both models
+    and each pair the model with delays was verified on inside the MUAD bounds."""
+    verified = result.verification.get("with delays")
+    pairs = () if verified is None else [item.pair for item in verified.pairs]
+    return rmse_claims(result) + [muad_claim(result, pair) for pair in pairs]
+
+
+def holds_paper_claims(result) -> bool:
+    """Whether a case is held against the paper: its data come from a truth model."""
+    return result.truth_derivatives is not None
+
+
+def case_claims(result) -> list[Claim]:
+    """The claims a case is checked on: the paper's (:func:`paper_claims`) for a case whose
+    data come from a truth model, else the guidelines (:func:`guideline_claims`)."""
+    return paper_claims(result) if holds_paper_claims(result) else guideline_claims(result)
+
+
+def claims_title(result) -> str:
+    """What :func:`case_claims` of the case are: "The paper's claims" or "The guidelines"."""
+    return "The paper's claims" if holds_paper_claims(result) else "The guidelines"
 
 
 def claims_tally(claims) -> tuple[list[Claim], list[Claim]]:

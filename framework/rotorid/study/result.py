@@ -17,7 +17,7 @@ from rotorid.study.case import FlightCase
 from rotorid.study.comparison import FrequencyComparison
 from rotorid.study.estimator_comparison import EstimatorComparison
 from rotorid.study.hybrid_comparison import HybridComparison
-from rotorid.study.claims import paper_claims
+from rotorid.study.claims import case_claims, claims_title
 from rotorid.study.reference import ReferenceComparison, compare_with_reference
 from rotorid.verification.compare import VerificationResult
 from rotorid.verification.equivalent_delays import EquivalentDelays
@@ -116,7 +116,9 @@ class CaseResult:
             "frequency_verification": {label: v.summary()
                                        for label, v in self.verification.items()},
             "key_derivatives": self.key_derivatives(),
-            "claims": [claim.as_dict() for claim in paper_claims(self)],
+            # the paper's claims, or the guidelines for a case without a truth model
+            "claims_title": claims_title(self),
+            "claims": [claim.as_dict() for claim in case_claims(self)],
             "data_warnings": list(self.data_warnings),
             "reference_comparison": [row.as_dict() for row in self.reference_comparison()],
             "dropped_delays": list(self.dropped_delays),

@@ -65,13 +65,14 @@ def expand_cases(names, speeds: str | None = None, template: str = "hover"):
 
 
 def claims_summary(result) -> str:
-    """One line: how many of the paper's claims hold for a case, and which do not."""
-    from rotorid.study.claims import claims_tally, paper_claims
+    """One line: how many of the case's claims (the paper's, or the guidelines for a case
+    without a truth model) hold, and which do not."""
+    from rotorid.study.claims import case_claims, claims_tally, claims_title
 
-    claims = paper_claims(result)
+    claims = case_claims(result)
     decided, failed = claims_tally(claims)
-    line = (f"paper's claims: {len(decided) - len(failed)}/{len(decided)} hold, "
-            f"{len(claims) - len(decided)} not checked")
+    line = (f"{claims_title(result).removeprefix('The ')}: {len(decided) - len(failed)}/"
+            f"{len(decided)} hold, {len(claims) - len(decided)} not checked")
     if failed:
         line += "; not: " + "; ".join(f"{c.claim} ({c.evidence})" for c in failed)
     return line
@@ -80,7 +81,7 @@ def claims_summary(result) -> str:
 def run(args) -> int:
     from rotorid.executors import open_executor
     from rotorid.study.pipeline import Study
-    from rotorid.report.html import StudyReport, has_truth_model
+    from rotorid.report.html import StudyReport
     from rotorid.report.plots.case import save_figure
     from rotorid.report.plots.sweep import plot_speed_sweep
     from rotorid.study.sweep import FAMILY, sweep_points, write_sweep_summary
@@ -100,8 +101,7 @@ def run(args) -> int:
               f"{len(path.removed)} (step {path.selected_index} of {len(path.steps) - 1}); "
               f"RMSE without delays {result.estimates['no delays'].rmse:.4f}, "
               f"with delays {delayed.rmse:.4f}")
-        if has_truth_model(result):     # the user's own aircraft is not held against the paper
-            print(f"  {claims_summary(result)}")
+        print(f"  {claims_summary(result)}")
     if swept:
         points = sweep_points({n: results[n] for n in swept})
         written = [write_sweep_summary(points, args.out),
