@@ -210,9 +210,9 @@ def _verify(case: FlightCase, structures, estimates, ident: ManeuverSet,
 
 def _compare(case: FlightCase, structures, estimates, simulations,
              verif: ManeuverSet | None, report: Progress) -> dict:
-    """The frequency-domain fit of each model beside its time-domain fit (its
-    ``simulations`` of the identification data, by model label), by model label (``{}``
-    unless the case asks for it with ``[compare] frequency``)."""
+    """The frequency-domain fit of each model beside its time-domain fit, whose metrics on
+    the identification data its ``simulations`` entry holds, by model label (``{}`` unless
+    the case asks for it with ``[compare] frequency``)."""
     if not case.compare_frequency:
         return {}
     if verif is None:
