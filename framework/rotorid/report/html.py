@@ -463,8 +463,9 @@ _VERDICT_CLASS = {"holds": "pass", "does not hold": "fail", "not checked": "na"}
 
 
 def claim_rows(claims) -> list[list[str]]:
-    """The claims table: claim, evidence, verdict, why not checked."""
-    return [["claim (as the paper states it)", "evidence", "verdict", "why not checked"]] + [
+    """The claims table (the paper's as it states them, or the guidelines): claim, evidence
+    (each number with its unit), verdict, why not checked."""
+    return [["claim", "evidence [units as stated]", "verdict", "why not checked"]] + [
         [c.claim, c.evidence, c.verdict, c.reason] for c in claims]
 
 
