@@ -90,11 +90,12 @@ def test_a_continuation_ending_above_its_start_gives_way_to_the_full_fit_from_it
     fit = type(estimator)._run
 
     def led_astray(self, model, maneuvers, columns, weights, start, settings, stage,
-                   final_information=True):
+                   final_information=True, start_evaluation=None):
         if stage != "full" or np.array_equal(start, astray):
             start, settings = astray, attrs.evolve(settings, max_iterations=0)
+            start_evaluation = None
         return fit(self, model, maneuvers, columns, weights, start, settings, stage,
-                   final_information)
+                   final_information, start_evaluation)
 
     direct = rotorid.create("estimators", "output-error", start="initial", horizons=())
     with warnings.catch_warnings():
