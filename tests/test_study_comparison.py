@@ -1,22 +1,28 @@
 """The frequency-domain fit beside the time-domain fit in a study case ([compare] frequency):
-the tiny case with sweeps, its result.json record and report section, and the case checks."""
+the tiny case with sweeps, its result.json record and report section, and the case checks;
+(slow) the cost guidelines on the built-in quick cases."""
 
 import json
+import math
 import tomllib
 from pathlib import Path
 
+import numpy as np
 import pytest
+from docs_examples import load_example
 from rotorid import create, simulate
 from rotorid.data import ManeuverSet
 from rotorid.errors import DataError, DataFileError, SimulationDivergedError
+from rotorid.estimation.estimate import Estimate
 from rotorid.model.derivatives import Derivative
 from rotorid.model.structure import ModelStructure
 from rotorid.report.html import comparison_cost_rows, comparison_html
 from rotorid.study.case import FlightCase
-from rotorid.study.comparison import TRANSLATIONAL_PAIRS, fitted_pairs
+from rotorid.study.comparison import TRANSLATIONAL_PAIRS, compare_frequency_fit, fitted_pairs
 from rotorid.study.pipeline import run_case
 from rotorid.study.result import MODELS
-from rotorid.verification.metrics import rmse
+from rotorid.verification.metrics import rmse, time_domain_metrics
+from rotorid.verification.pairs import PAPER_PAIRS
 from rotorid.verification.shifts import simulate_with_shifts
 
 TINY = Path(__file__).parent / "cases" / "tiny.toml"
@@ -136,3 +142,34 @@ def test_comparison_needs_sweeps(tmp_path):
 def test_compare_settings_are_checked(compare, message):
     with pytest.raises(DataFileError, match=message):
         tiny_case(compare=compare)
+
+
+ON_AXIS = ("q/long", "theta/long", "p/lat", "phi/lat", "az/coll", "r/ped")
+COMPARED = (*PAPER_PAIRS, "theta/long", "phi/lat")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", ["hover", "forward"])
+def test_frequency_fit_of_the_selected_structures_meets_the_cost_guidelines(quick_study, case):
+    """On the built-in quick sweeps the frequency-domain fit of the selected structure, without
+    and with its delays, converges from zero with J_ave ≤ 100 over the on-axis pairs and each
+    ≤ 200 (Tischler's guidelines for a multi-pair fit), and its multistep RMSE is a number
+    (docs/study.md measures both cases' four fits)."""
+    directory = quick_study.out / case
+    result = json.loads((directory / "result.json").read_text())
+    data = create("data-sources", "files").load(directory / "data")
+    sweeps = data.select(kind="sweep")
+    multisteps = data.select(lambda m: m.metadata.get("kind") != "sweep")
+    example = load_example("frequency_vs_time")
+    for label in MODELS:
+        estimate = Estimate.from_dict(result["estimates"][label])
+        structure = example.selected_structure(result, estimate)
+        simulated = simulate(structure, estimate.as_mapping(), multisteps)
+        time_metrics = time_domain_metrics(multisteps, simulated, outputs=structure.outputs)
+        comparison = compare_frequency_fit(structure, estimate, time_metrics, sweeps,
+                                           multisteps, COMPARED, math.inf)
+        on_axis = [comparison.pair_costs["frequency"][p] for p in ON_AXIS]
+        assert comparison.frequency_estimate.converged
+        assert np.mean(on_axis) <= 100.0 and max(on_axis) <= 200.0, (label, on_axis)
+        assert comparison.time_metrics["frequency"] is not None
+        assert np.isfinite(comparison.time_metrics["frequency"].rmse)
