@@ -118,6 +118,9 @@ def test_converged_runs_keep_the_statistics_of_those_runs_only(problem):
     np.testing.assert_array_equal(kept.std, result.estimates[[0, 2, 3]].std(axis=0, ddof=1))
     np.testing.assert_array_equal(kept.mean_cramer_rao,
                                   result.cramer_rao[[0, 2, 3]].mean(axis=0))
+    median = np.median(kept.ratio)
+    assert f"over the 3 converged runs only: median std/CR {median:.2f}" in marked.report()
+    assert "converged runs only" not in result.report()
 
 
 def test_helisim_noise_realisations_equal_data_generated_with_that_seed(tmp_path):

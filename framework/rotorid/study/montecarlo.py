@@ -157,7 +157,8 @@ class MonteCarloResult:
                 "failures": {str(k): v for k, v in self.failures.items()}}
 
     def report(self) -> str:
-        """Text table: per parameter mean, std, mean CR, std/CR and the 2-CR coverages."""
+        """Text table: per parameter mean, std, mean CR, std/CR and the 2-CR coverages; the
+        median std/CR over the converged runs too when some did not converge."""
         lines = [f"Monte Carlo of case {self.case}: {self.runs} runs "
                  f"({int(self.converged.sum())} converged, {len(self.failures)} failed), "
                  f"units {self.units}",
@@ -174,6 +175,10 @@ class MonteCarloResult:
                      f"(honest: 1 ± {self.ratio_band:.2f}); mean coverage around the mean "
                      f"{summary['mean_coverage_mean']:.1%} (honest: {NOMINAL_COVERAGE:.1%} ± "
                      f"{self.coverage_band:.1%})")
+        if 1 < self.converged.sum() < self.runs:
+            converged = self.converged_runs().summary()
+            lines.append(f"over the {converged['runs']} converged runs only: median std/CR "
+                         f"{_cell(converged['median_ratio'], 0, '.2f').strip()}")
         return "\n".join(lines)
 
 
