@@ -16,7 +16,7 @@ from rotorid.errors import IdentifiabilityWarning
 from rotorid.model.residualisation import residualise
 from rotorid.model.templates import HYBRID
 from rotorid.simulation.simulator import simulate
-from rotorid.study.truth import derivatives_of
+from rotorid.model.residualisation import derivatives_of
 from rotorid_helisim.linearize import PADFIELD_STATES, linearize
 
 #: white-noise standard deviations per output (ft/s², deg/s, deg), ax az q θ ay p φ r

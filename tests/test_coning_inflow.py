@@ -25,7 +25,7 @@ from rotorid.model.coning_inflow import (
 from rotorid.model.hybrid import hybrid_from_six_dof
 from rotorid.model.residualisation import residualise
 from rotorid.model.templates import HYBRID, HYBRID_FLAP, HYBRID_INFLOW, HYBRID_INFLOW_FLAP
-from rotorid.study.truth import derivatives_of
+from rotorid.model.residualisation import derivatives_of
 from rotorid.units import FLIGHT_TEST, SI
 from rotorid_helisim.linearize import linearize
 

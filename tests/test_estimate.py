@@ -99,6 +99,33 @@ def test_restricted_keeps_the_full_fits_statistics_of_the_named_parameters():
         estimate.restricted(("F_q",))
 
 
+def test_propagated_bounds_of_a_linear_and_a_nonlinear_function_match_the_closed_form():
+    """f = M·θ has the covariance M·C·Mᵀ; with a correlated information matrix C is its
+    inverse. A product θ0·θ1 has the gradient (θ1, θ0) (delta method)."""
+    information = np.array([[4.0, 1.0, 0.0, 0.0], [1.0, 2.0, 0.5, 0.0],
+                            [0.0, 0.5, 16.0, 0.0], [0.0, 0.0, 0.0, 100.0]])
+    estimate = Estimate.from_fit(STRUCTURE, [0.5, -2.0, 0.25, 0.04], information, RESIDUALS,
+                                 estimator="hand")
+    covariance = np.linalg.inv(information)
+    weights = np.array([[1.0, -2.0, 0.0, 0.0], [0.0, 0.5, 3.0, 1.0]])
+    values, bounds = estimate.propagated(lambda theta: weights @ theta)
+    assert values == pytest.approx(weights @ estimate.values)
+    assert bounds == pytest.approx(np.sqrt(np.diag(weights @ covariance @ weights.T)), rel=1e-7)
+    _, (product,) = estimate.propagated(lambda theta: np.array([theta[0] * theta[1]]))
+    gradient = np.array([-2.0, 0.5, 0.0, 0.0])
+    assert product == pytest.approx(math.sqrt(gradient @ covariance @ gradient), rel=1e-6)
+
+
+def test_a_quantity_of_a_parameter_with_an_infinite_bound_has_an_infinite_bound():
+    singular = np.diag([4.0, 0.0, 16.0, 100.0])     # M_q unidentifiable
+    with pytest.warns(Warning):
+        estimate = Estimate.from_fit(STRUCTURE, [0.5, -2.0, 0.25, 0.04], singular, RESIDUALS,
+                                     estimator="hand")
+    assert not np.isfinite(estimate["M_q"].cramer_rao)
+    _, bounds = estimate.propagated(lambda theta: np.array([theta[0] + theta[1], theta[2]]))
+    assert bounds[0] == np.inf and bounds[1] == pytest.approx(0.25)
+
+
 def test_the_record_round_trips_through_json():
     estimate = fitted(notes=("a note",), at_bound=("M_q",))
     record = json.loads(json.dumps(estimate.as_dict()))

@@ -12,11 +12,17 @@ from rotorid import Maneuver, ManeuverSet
 from rotorid.errors import DataFileError, IdentifiabilityWarning
 from rotorid.model.hybrid import REQUIRED, hybrid_from_six_dof
 from rotorid.report.figures import hybrid_figures
-from rotorid.report.html import hybrid_html, hybrid_model_rows, hybrid_term_rows
+from rotorid.report.html import (
+    hybrid_derivative_rows,
+    hybrid_html,
+    hybrid_model_rows,
+    hybrid_muad_rows,
+    hybrid_term_rows,
+)
 from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase
-from rotorid.study.hybrid_comparison import HYBRID_MODELS, compare_hybrid
-from rotorid.study.truth import derivatives_of
+from rotorid.study.hybrid_comparison import FLAP_SHAPED, HYBRID_MODELS, compare_hybrid
+from rotorid.model.residualisation import derivatives_of, residualise
 from rotorid.verification.simulation_fit import simulation_fit
 from rotorid.verification.verify import verify_model
 
@@ -65,9 +71,19 @@ def inputs(truth_model, trim_70kt):
     sweeps = _sweeps(truth, values, seed=5)
     verification = {label: verify_model(structures[label], estimates[label].values, sweeps,
                                         PAIRS) for label in structures}
+
+    def reference(structure):
+        """The truth's derivatives of ``structure``: the hybrid's own, or a six-dof
+        structure's, those of the simulated hybrid with its flap tilts residualised."""
+        if structure.states == truth.states:
+            return derivatives_of(structure, a, b)
+        simulated_a, simulated_b, _, _ = truth.matrices(values)
+        return derivatives_of(structure, *residualise(simulated_a, simulated_b, truth.states,
+                                                      structure.states))
+
     return dict(structures=structures, estimates=estimates, simulations=simulations,
                 verification=verification, sweeps=sweeps, estimator=estimator,
-                reference=lambda hybrid: derivatives_of(hybrid, a, b))
+                reference=reference)
 
 
 @pytest.fixture(scope="module")
@@ -100,11 +116,35 @@ def test_the_hybrid_model_of_hybrid_data_beats_both_six_dof_models(comparison):
     assert comparison.parameters["hybrid"] == comparison.structure.n_parameters
 
 
+def test_the_hybrids_quasi_steady_derivatives_recover_the_residualised_truth(inputs,
+                                                                            comparison):
+    """The hybrid fitted to its own model's data: its flap tilts residualised, the roll and
+    pitch derivatives are the truth's residualised ones within 3 propagated bounds, and the
+    six-dof models' entries are their own estimates."""
+    truth = comparison.six_dof_reference
+    for name in FLAP_SHAPED:
+        value, bound = comparison.flap_shaped_derivatives["hybrid"][name]
+        assert 0.0 < bound < np.inf
+        assert abs(value - truth[name]) < 3.0 * bound, name
+    for label in ("no delays", "with delays"):
+        estimate = inputs["estimates"][label]
+        assert comparison.flap_shaped_derivatives[label]["M_q"] == (
+            estimate.value("M_q"), estimate["M_q"].cramer_rao)
+
+
 def test_report_tables_of_the_three_models(comparison):
     result = types.SimpleNamespace(hybrid_comparison=comparison)
     models = hybrid_model_rows(result)
     assert [row[0] for row in models[1:]] == list(HYBRID_MODELS)
     assert models[0][4:6] == ["J q/long [-]", "J p/lat [-]"]
+    muad = hybrid_muad_rows(result)
+    assert muad[0] == ["model", "MUAD q/long [inside/counted]", "MUAD p/lat [inside/counted]"]
+    inside, counted = map(int, muad[3][1].split("/"))
+    assert 0 < counted and inside == comparison.muad["hybrid"]["q/long"][0]
+    derivatives = {row[0]: row for row in hybrid_derivative_rows(result)[1:]}
+    assert list(derivatives) == list(FLAP_SHAPED)
+    assert derivatives["L_p"][1] == "1/s" and float(derivatives["L_p"][-1]) == pytest.approx(
+        1.0, abs=0.1)
     terms = {row[0]: row for row in hybrid_term_rows(result)[1:]}
     assert terms["M_beta1c"][1] == "1/s²"
     assert float(terms["τ_f = −1/Bc_beta1c"][5]) == pytest.approx(1.0, abs=0.05)

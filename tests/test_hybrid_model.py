@@ -34,7 +34,7 @@ from rotorid.model.hybrid import (
 )
 from rotorid.model.residualisation import residualise
 from rotorid.model.templates import SIX_DOF
-from rotorid.study.truth import derivatives_of
+from rotorid.model.residualisation import derivatives_of
 from rotorid_helisim.linearize import PADFIELD_STATES
 
 FLAP = ("beta1c", "beta1s")

@@ -34,9 +34,8 @@ import numpy as np
 import rotorid
 from rotorid import FlightCondition, ModelStructure
 from rotorid.errors import IdentifiabilityWarning
-from rotorid.model.hybrid import hybrid_from_six_dof
-from rotorid.model.residualisation import residualise
-from rotorid.study.truth import derivatives_of, truth_derivatives
+from rotorid.model.hybrid import hybrid_from_six_dof, quasi_steady_derivatives
+from rotorid.study.truth import truth_derivatives
 
 KEY = ("L_p", "M_q", "L_lat", "M_long", "N_r", "N_ped", "Z_w", "Z_coll")
 #: The filter-error noise model: gusts through the derivatives, rotational disturbances.
@@ -83,25 +82,9 @@ def fit(name: str, structure, maneuvers, start=None, **options):
 
 def quasi_steady(six_dof: ModelStructure, hybrid: ModelStructure, estimate):
     """The key derivatives of the hybrid estimate with its flap tilts residualised, and their
-    Cramér-Rao bounds (the estimate's covariance through the residualisation's Jacobian,
-    central differences)."""
-    def key_values(values):
-        a, b, _, _ = hybrid.matrices(values[:hybrid.n_parameters])
-        a, b = residualise(a, b, hybrid.states, six_dof.states)
-        derivatives = derivatives_of(six_dof, a, b)
-        return np.array([derivatives[k] for k in KEY])
-
-    values = estimate.values
-    jacobian = np.zeros((len(KEY), values.size))
-    for i in range(hybrid.n_parameters):
-        step = 1e-6 * max(abs(values[i]), 1e-3)
-        up, down = values.copy(), values.copy()
-        up[i] += step
-        down[i] -= step
-        jacobian[:, i] = (key_values(up) - key_values(down)) / (2 * step)
-    bounds = np.nan_to_num(estimate.cramer_rao, posinf=1e6)
-    covariance = np.nan_to_num(estimate.correlation) * np.outer(bounds, bounds)
-    return key_values(values), np.sqrt(np.diag(jacobian @ covariance @ jacobian.T))
+    Cramér-Rao bounds (the estimate's covariance through the residualisation)."""
+    return estimate.propagated(lambda values: quasi_steady_derivatives(hybrid, values, six_dof,
+                                                                       KEY))
 
 
 def main(argv=None) -> dict:

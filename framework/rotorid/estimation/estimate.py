@@ -320,6 +320,37 @@ class Estimate:
             unidentifiable=[c for c in self.unidentifiable if kept.intersection(c)],
             parameter_units={n: u for n, u in self.parameter_units.items() if n in kept})
 
+    def propagated(self, function, relative_step: float = 1e-6
+                   ) -> tuple[np.ndarray, np.ndarray]:
+        """Values and Cramér-Rao bounds of quantities computed from the parameters.
+
+        Args:
+            function: maps a parameter vector (P,) to the quantities (K,), e.g. a hybrid
+                model's quasi-steady derivatives.
+            relative_step: central-difference step per parameter, relative to its value
+                (at least ``relative_step``·10⁻³ absolute).
+        Returns:
+            ``function(values)`` (K,) and its bounds (K,): √diag(J·C·Jᵀ) with J the
+            central-difference Jacobian and C the covariance (correlation times the bounds);
+            infinite where the quantity depends on a parameter with an infinite bound.
+        """
+        values = np.asarray(self.values, dtype=float)
+        centre = np.asarray(function(values), dtype=float)
+        jacobian = np.zeros((centre.size, values.size))
+        for i, value in enumerate(values):
+            step = relative_step * max(abs(value), 1e-3)
+            up, down = values.copy(), values.copy()
+            up[i] += step
+            down[i] -= step
+            jacobian[:, i] = (np.asarray(function(up)) - np.asarray(function(down))) / (2 * step)
+        finite = np.isfinite(self.cramer_rao)
+        bounded = np.where(finite, self.cramer_rao, 0.0)
+        covariance = np.nan_to_num(self.correlation) * np.outer(bounded, bounded)
+        bounds = np.sqrt(np.maximum(np.einsum("ki,ij,kj->k", jacobian, covariance, jacobian),
+                                    0.0))
+        unbounded = np.any((jacobian != 0.0) & ~finite[None, :], axis=1)
+        return centre, np.where(unbounded, np.inf, bounds)
+
     @property
     def cramer_rao_pct(self) -> np.ndarray:
         """Normalised Cramér-Rao bounds |CR/Θ|·100 (inf where Θ = 0)."""

@@ -22,6 +22,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from rotorid.errors import StructureError
+from rotorid.model.residualisation import derivatives_of, residualise
 from rotorid.model.structure import ModelStructure
 
 #: What the hybrid model adds to a 6-DoF structure: the flap equations' own damping and
@@ -142,6 +143,25 @@ def hybrid_from_six_dof(structure: ModelStructure, values,
     start = hybrid_start(six_dof, flap_time_constant)
     hybrid = hybrid.with_initial({n: v for n, v in start.items() if n in hybrid.parameter_names})
     return hybrid if delay_upper is None else with_flap_delays(hybrid, delay_upper)
+
+
+def quasi_steady_derivatives(hybrid: ModelStructure, values, six_dof: ModelStructure,
+                             names) -> np.ndarray:
+    """The 6-DoF derivatives ``names`` of a hybrid model with its flap tilts residualised
+    (β̇1c = β̇1s = 0, e.g. L_p = τ·L_beta1s), shape (len(names),).
+
+    Args:
+        hybrid: the hybrid structure; values: its parameter vector (delays ignored: a delay
+            does not change a quasi-steady gain), or a longer vector that starts with it
+            (an estimate's, noise parameters after it).
+        six_dof: a six-dof structure over the hybrid's rigid-body states (its template names
+            the derivatives).
+        names: derivatives of the six-dof template, e.g. ``("L_p", "M_q")``.
+    """
+    a, b, _, _ = hybrid.matrices(np.asarray(values, dtype=float)[:hybrid.n_parameters])
+    a, b = residualise(a, b, hybrid.states, six_dof.states)
+    derivatives = derivatives_of(six_dof, a, b)
+    return np.array([derivatives[name] for name in names])
 
 
 def with_flap_delays(hybrid: ModelStructure,

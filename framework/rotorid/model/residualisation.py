@@ -9,7 +9,7 @@ Two uses: the truth model's 6-DoF derivatives drop every rotor and inflow state;
 reference (docs/hybrid.md) keeps the tip-path-plane tilts β1c, β1s and drops their rates,
 the coning and the inflow, which turns second-order flapping into the first-order
 tip-path-plane equations (the regressing flap mode kept, the advancing and coning modes
-removed).
+removed). :func:`derivatives_of` reads a structure's derivatives from such a model.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from rotorid.errors import StructureError
+from rotorid.model.structure import ModelStructure
 
 
 def residualise(a: np.ndarray, b: np.ndarray, states: Sequence[str],
@@ -49,3 +50,18 @@ def residualise(a: np.ndarray, b: np.ndarray, states: Sequence[str],
     a_kd = a[np.ix_(kept, dropped)]
     return (a[np.ix_(kept, kept)] - a_kd @ gain[:, :len(kept)],
             b[kept] - a_kd @ gain[:, len(kept):])
+
+
+def derivatives_of(structure: ModelStructure, a, b) -> dict[str, float]:
+    """Every derivative of ``structure``'s template (each equation letter over each variable)
+    read from a linear model over its states and controls, by name.
+
+    Args:
+        a: (n, n) and b: (n, m), known terms included, in the structure's units.
+    """
+    coefficients = np.hstack([np.asarray(a) - structure.known_state_matrix(), np.asarray(b)])
+    columns = structure.states + structure.controls
+    return {f"{letter}_{variable}": float(coefficients[structure.states.index(state),
+                                                       columns.index(variable)])
+            for letter, state in structure.template.equations
+            for variable in structure.template.variables}

@@ -51,7 +51,7 @@ from rotorid.study.claims import (
     mean_phase_error,
 )
 from rotorid.study.expectations import check_signs, derivative_unit
-from rotorid.study.hybrid_comparison import HYBRID_MODELS, mean_cost
+from rotorid.study.hybrid_comparison import FLAP_SHAPED, HYBRID_MODELS, mean_cost
 from rotorid.study.result import KEY_DERIVATIVES, MODELS
 from rotorid.units import CHANNEL_KINDS, unit_system
 from rotorid.verification.band import DEFAULT_BAND
@@ -350,6 +350,42 @@ def hybrid_model_rows(result) -> list[list[str]]:
     return rows
 
 
+def hybrid_muad_rows(result) -> list[list[str]]:
+    """With ``[compare] hybrid``: per model and verification pair, the points inside MUAD of
+    those counted (the comparison's band within MUAD's own range)."""
+    comparison = result.hybrid_comparison
+    pairs = list(dict.fromkeys(p for points in comparison.muad.values() for p in points))
+    rows = [["model", *(f"MUAD {pair} [inside/counted]" for pair in pairs)]]
+    for label in HYBRID_MODELS:
+        points = comparison.muad.get(label, {})
+        rows.append([label, *(f"{points[pair][0]}/{points[pair][1]}" if pair in points else "–"
+                              for pair in pairs)])
+    return rows
+
+
+def hybrid_derivative_rows(result) -> list[list[str]]:
+    """With ``[compare] hybrid``: the roll and pitch derivatives the flapping shapes, of the
+    three models (the hybrid's with its flap tilts residualised) with Cramér-Rao bounds, beside
+    the truth's 6-DoF linearisation when there is one."""
+    comparison = result.hybrid_comparison
+    reference = comparison.six_dof_reference
+    units = comparison.estimate.units
+    rows = [["derivative", "unit", *(["truth (6-DoF)"] if reference is not None else []),
+             *(f"{label} (CR)" for label in HYBRID_MODELS),
+             *([f"{label}/truth [-]" for label in HYBRID_MODELS] if reference is not None
+               else [])]]
+    for name in FLAP_SHAPED:
+        estimates = [comparison.flap_shaped_derivatives[label][name] for label in HYBRID_MODELS]
+        cells = [f"{_number(value)} ({_number(bound, 3)})" if bound is not None
+                 else f"{_number(value)} (–)" for value, bound in estimates]
+        truth = None if reference is None else reference[name]
+        ratios = ([] if reference is None else
+                  [_number(value / truth if truth else None, 3) for value, _ in estimates])
+        rows.append([name, derivative_unit(name, units),
+                     *([_number(truth)] if reference is not None else []), *cells, *ratios])
+    return rows
+
+
 def hybrid_term_rows(result) -> list[list[str]]:
     """With ``[compare] hybrid``: the flap time constants and the hybrid's rotor terms with
     their Cramér-Rao bounds beside the truth's flap-coupled reference (when there is one)."""
@@ -401,7 +437,18 @@ def hybrid_html(result, figures: Sequence = ()) -> str:
         f"per pair over {html.escape(comparison.band.describe())} "
         f"({MISMATCH_COST_GUIDELINE_TEXT}).</p>",
         _html_table(hybrid_model_rows(result)),
+        "<p>Points of each pair's error ε inside the MUAD envelope, of those the band and MUAD's "
+        "own range count:</p>",
+        _html_table(hybrid_muad_rows(result)),
         figures_html(figures),
+        "<h3>Roll and pitch derivatives of the three models</h3>",
+        "<p>The derivatives the rotor's flapping shapes; the hybrid's with its flap tilts "
+        "residualised (e.g. L_p = τ_f·L_beta1s), their bounds propagated from its fit"
+        + (", beside the truth model's 6-DoF linearisation (rotor and inflow residualised)"
+           if comparison.six_dof_reference is not None else "")
+        + ". A six-dof model's derivative of 0 with no bound was removed by the "
+        "reduction.</p>",
+        _html_table(hybrid_derivative_rows(result)),
         "<h3>Rotor terms of the hybrid model</h3>",
         f"<p>{reference}</p>" if reference else "",
         _html_table(hybrid_term_rows(result))])
@@ -665,7 +712,8 @@ _TABLE_ROWS = {
     "reference": reference_rows, "comparison_costs": comparison_cost_rows,
     "comparison_parameters": comparison_parameter_rows, "estimator_fits": estimator_fit_rows,
     "estimators": estimator_rows, "hybrid_models": hybrid_model_rows,
-    "hybrid_terms": hybrid_term_rows,
+    "hybrid_terms": hybrid_term_rows, "hybrid_muad": hybrid_muad_rows,
+    "hybrid_derivatives": hybrid_derivative_rows,
 }
 
 
@@ -679,7 +727,7 @@ def case_table_names(result, claims) -> list[str]:
               if result.frequency_comparison else ()),
             *(("estimator_fits", "estimators")
               if result.estimator_comparison is not None else ()),
-            *(("hybrid_models", "hybrid_terms")
+            *(("hybrid_models", "hybrid_muad", "hybrid_derivatives", "hybrid_terms")
               if result.hybrid_comparison is not None else ())]
 
 

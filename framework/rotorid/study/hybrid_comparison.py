@@ -9,7 +9,10 @@ without its delays, by the case's criteria (its flap damping and hub moments kep
 is judged on the same terms: its parameters, the RMSE and det R of its simulation of the
 identification maneuvers, and per verification pair the mismatch cost J over γ² ≥ 0.8 from
 1 rad/s to the sweeps' top frequency, at most 20 rad/s (:func:`hybrid_band`: the band where the
-rotor's lag shows). With a truth model, the hybrid's rotor terms are set beside the truth's
+rotor's lag shows), and whether its error stays inside MUAD there. The key roll and pitch
+derivatives of all three are set side by side, the hybrid's with its flap tilts residualised
+(its quasi-steady 6-DoF form). With a truth model, those are set beside the truth's 6-DoF
+linearisation (rotor and inflow residualised), and the hybrid's rotor terms beside the truth's
 flap-coupled reference (its full linearisation with the flap rates, coning and inflow
 residualised).
 """
@@ -27,7 +30,12 @@ from rotorid.data import ManeuverSet
 from rotorid.errors import IdentifiabilityWarning
 from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.reduction import reduce
-from rotorid.model.hybrid import REQUIRED, hybrid_from_six_dof, with_flap_delays
+from rotorid.model.hybrid import (
+    REQUIRED,
+    hybrid_from_six_dof,
+    quasi_steady_derivatives,
+    with_flap_delays,
+)
 from rotorid.model.structure import ModelStructure
 from rotorid.verification.band import VerificationBand
 from rotorid.verification.compare import VerificationResult, envelopes_by_name
@@ -43,6 +51,11 @@ HYBRID_OMEGA_MAX = 20.0
 ROTOR_TERMS = ("Bc_beta1c", "Bs_beta1s", "M_beta1c", "L_beta1s", "Bc_long", "Bs_lat")
 #: The flap equations' own damping terms, each giving a flap time constant τ_f = −1/value.
 FLAP_DAMPING = ("Bc_beta1c", "Bs_beta1s")
+#: The 6-DoF derivatives the rotor's flapping shapes: roll and pitch damping, cross rates,
+#: control powers and speed stability; compared across the three models.
+FLAP_SHAPED = ("L_p", "L_q", "L_v", "L_lat", "L_long", "M_q", "M_p", "M_u", "M_long", "M_lat")
+#: The envelopes every model is held against in the comparison's band.
+HYBRID_ENVELOPES = ("muad", "mismatch-cost")
 
 
 def hybrid_band(omega_max: float = HYBRID_OMEGA_MAX) -> VerificationBand:
@@ -68,6 +81,12 @@ class HybridComparison:
         band: where J is taken (:func:`hybrid_band`).
         reference: the truth's flap-coupled values of the hybrid's derivatives by name, or
             None without a truth model.
+        flap_shaped_derivatives: by model label, each of :data:`FLAP_SHAPED` as (value,
+            Cramér-Rao bound): the six-dof models' own (0 and None where the reduction removed
+            it), the hybrid's quasi-steady form with bounds propagated from its fit (infinite
+            where a parameter it depends on has an infinite bound).
+        six_dof_reference: the truth's 6-DoF linearisation (rotor and inflow residualised)
+            by name, or None without a truth model.
         seconds: wall time of the hybrid fit (and its reduction), s.
         removed: what the reduction removed from the hybrid, in order; None without one.
     """
@@ -80,12 +99,22 @@ class HybridComparison:
     reference: Mapping[str, float] | None
     seconds: float
     band: VerificationBand
+    flap_shaped_derivatives: Mapping[str, Mapping[str, tuple[float, float | None]]]
+    six_dof_reference: Mapping[str, float] | None = None
     removed: tuple[str, ...] | None = None
 
     @property
     def costs(self) -> dict[str, dict[str, float | None]]:
         """J by model label and pair over :attr:`band` (None where no point)."""
         return {label: {pair.pair: pair.checks["mismatch-cost"].cost for pair in result.pairs}
+                for label, result in self.verification.items()}
+
+    @property
+    def muad(self) -> dict[str, dict[str, tuple[int, int]]]:
+        """(points inside MUAD, points counted) by model label and pair over :attr:`band` and
+        MUAD's own range."""
+        return {label: {pair.pair: (pair.checks["muad"].n_inside, pair.checks["muad"].n_used)
+                        for pair in result.pairs}
                 for label, result in self.verification.items()}
 
     def flap_time_constants(self) -> dict[str, tuple[float, float]]:
@@ -110,8 +139,19 @@ class HybridComparison:
                 "models": {label: {"parameters": self.parameters[label],
                                    "simulation": (None if self.simulation[label] is None
                                                   else self.simulation[label].summary()),
-                                   "mismatch_cost": dict(self.costs.get(label, {}))}
+                                   "mismatch_cost": dict(self.costs.get(label, {})),
+                                   "muad_points_inside": {
+                                       pair: {"inside": inside, "counted": counted}
+                                       for pair, (inside, counted)
+                                       in self.muad.get(label, {}).items()},
+                                   "flap_shaped_derivatives": {
+                                       name: {"value": value, "cramer_rao": bound}
+                                       for name, (value, bound)
+                                       in self.flap_shaped_derivatives[label].items()}}
                            for label in HYBRID_MODELS},
+                "six_dof_reference": (None if self.six_dof_reference is None
+                                      else {n: self.six_dof_reference[n]
+                                            for n in FLAP_SHAPED}),
                 "flap_time_constants_s": {n: {"identified": t, "cramer_rao": s}
                                           for n, (t, s) in self.flap_time_constants().items()},
                 "rotor_terms": self.rotor_terms(),
@@ -160,7 +200,7 @@ def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[
     seconds = time.perf_counter() - clock
     values = estimate.restricted(hybrid.parameter_names).values
     if verification:
-        envelopes = envelopes_by_name(["mismatch-cost"], band=band)
+        envelopes = envelopes_by_name(HYBRID_ENVELOPES, band=band)
         pairs = [p.pair for p in verification["with delays"].pairs]
         verification = {**{label: result.checked_in(band, envelopes)
                            for label, result in verification.items()},
@@ -168,10 +208,27 @@ def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[
                                                band=band)}
     parameters = {**{label: s.n_parameters for label, s in structures.items()},
                   "hybrid": hybrid.n_parameters}
+    six_dof = structures["no delays"]
+    quasi_steady, bounds = estimate.propagated(
+        lambda vector: quasi_steady_derivatives(hybrid, vector, six_dof, FLAP_SHAPED))
+    flap_shaped = {**{label: _six_dof_flap_shaped(estimates[label]) for label in structures},
+                   "hybrid": {name: (float(value), float(bound)) for name, value, bound
+                              in zip(FLAP_SHAPED, quasi_steady, bounds)}}
     return HybridComparison(
         hybrid, estimate, parameters,
         {**simulations, "hybrid": fit_unless_diverging(hybrid, values, ident)},
-        verification, None if reference is None else reference(hybrid), seconds, band, removed)
+        verification, None if reference is None else reference(hybrid), seconds, band,
+        flap_shaped, None if reference is None else reference(six_dof), removed)
+
+
+def _six_dof_flap_shaped(estimate: Estimate) -> dict[str, tuple[float, float | None]]:
+    """Each of :data:`FLAP_SHAPED` of a six-dof estimate: (value, Cramér-Rao bound);
+    a fixed derivative has no bound, one its structure does not hold is (0, None)."""
+    def pair(name):
+        if name in estimate:
+            return estimate.value(name), estimate[name].cramer_rao
+        return float(estimate.fixed.get(name, 0.0)), None
+    return {name: pair(name) for name in FLAP_SHAPED}
 
 
 def mean_cost(costs: Mapping[str, float | None]) -> float | None:

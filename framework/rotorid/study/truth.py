@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rotorid.model.residualisation import residualise
+from rotorid.model.residualisation import derivatives_of, residualise
 from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.plugin.contracts import TruthModel
 from rotorid.verification.equivalent_delays import (
@@ -13,21 +13,6 @@ from rotorid.verification.equivalent_delays import (
     EquivalentDelays,
     equivalent_delays,
 )
-
-
-def derivatives_of(structure: ModelStructure, a, b) -> dict[str, float]:
-    """Every derivative of ``structure``'s template (each equation letter over each variable)
-    read from a linear model over its states and controls, by name.
-
-    Args:
-        a: (n, n) and b: (n, m), known terms included, in the structure's units.
-    """
-    coefficients = np.hstack([np.asarray(a) - structure.known_state_matrix(), np.asarray(b)])
-    columns = structure.states + structure.controls
-    return {f"{letter}_{variable}": float(coefficients[structure.states.index(state),
-                                                       columns.index(variable)])
-            for letter, state in structure.template.equations
-            for variable in structure.template.variables}
 
 
 def truth_derivatives(truth: TruthModel, condition: FlightCondition,
