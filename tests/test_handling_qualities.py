@@ -8,7 +8,9 @@ import rotorid
 from rotorid.model.derivatives import Derivative
 from rotorid.simulation.transfer import frequency_response
 from rotorid.verification.frequency import FrequencyResponse
+from rotorid.errors import VerificationError
 from rotorid.verification.handling_qualities import (
+    available_pairs,
     bandwidth_phase_delay,
     measured_handling_qualities,
     model_handling_qualities,
@@ -57,6 +59,26 @@ def test_model_bandwidth_and_phase_delay_match_the_hand_computation():
     assert pitch.bandwidth == pytest.approx(min(omega_135, omega_gain), rel=1e-4)
     assert pitch.phase_delay == pytest.approx(delay, rel=1e-3)
     assert not pitch.sign_reversed
+
+
+def test_default_pairs_are_the_models_own_and_a_missing_path_has_no_numbers():
+    """Without ``pairs`` every attitude pair the structure's signals hold is computed; the
+    pitch model has no roll or yaw path, so those pairs carry no numbers; a longitudinal
+    template (no lat, ped) has theta/long alone."""
+    structure = rotorid.ModelStructure(rotorid.FlightCondition.from_airspeed(0.0), [
+        Derivative("M_q"), Derivative("M_long")]).with_delays(["M_long"])
+    values = {"M_q": -A, "M_long": K, "tau_M_long": TAU}
+    pitch, roll, heading = model_handling_qualities(structure, values,
+                                                    np.geomspace(0.1, 100.0, 4000))
+    assert (pitch.pair, roll.pair, heading.pair) == ("theta/long", "phi/lat", "psi/ped")
+    assert pitch.phase_bandwidth == pytest.approx(_reference()[1], rel=1e-4)
+    assert roll.bandwidth is None and heading.omega_180 is None
+    longitudinal = rotorid.ModelStructure.populated(rotorid.FlightCondition.from_airspeed(0.0),
+                                                    "longitudinal")
+    assert available_pairs(longitudinal.outputs, longitudinal.controls) == ("theta/long",)
+    with pytest.raises(VerificationError, match="phi/lat: the model has no phi/lat"):
+        model_handling_qualities(longitudinal, longitudinal.initial_values(),
+                                 pairs=["phi/lat"])
 
 
 def test_measured_responses_heading_from_yaw_rate_and_reversed_sign():

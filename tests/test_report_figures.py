@@ -203,10 +203,12 @@ def test_a_report_about_measured_data_only(hover, tmp_path):
                     for label, v in hover.verification.items()}
     case = attrs.evolve(hover.case, data={"source": "files", "identification": "f/*.csv"},
                         description="Own aircraft, flight test")
+    hybrid = attrs.evolve(hover.hybrid_comparison, reference=None, six_dof_reference=None)
     result = attrs.evolve(hover, case=case, identification=identification,
                           verification=verification, truth_derivatives=None,
-                          truth_delays=None)
+                          truth_delays=None, hybrid_comparison=hybrid)
     page = write_case_outputs(result, tmp_path / "own").read_text(encoding="utf-8")
+    assert 'id="hybrid"' in page and "(flap-coupled)" not in page
     for word in ("paper's claims", "Bo-105", "Helisim", "Padfield", "truth"):
         assert word not in page, word
     assert "measured" in page

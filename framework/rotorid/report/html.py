@@ -56,6 +56,7 @@ from rotorid.study.result import KEY_DERIVATIVES, MODELS
 from rotorid.units import CHANNEL_KINDS, unit_system
 from rotorid.verification.band import DEFAULT_BAND
 from rotorid.verification.envelopes import MISMATCH_COST_GUIDELINE_TEXT
+from rotorid.verification.handling_qualities import HQ_PAIRS
 
 def key_derivative_checks(result):
     """Sign checks of the key derivatives of the model with delays."""
@@ -350,6 +351,38 @@ def hybrid_model_rows(result) -> list[list[str]]:
     return rows
 
 
+def handling_quality_rows(result) -> list[list[str]]:
+    """ADS-33 bandwidth and phase delay per attitude pair and source (each model's analytic
+    response, and the sweeps' measured one)."""
+    rows = [["pair", "source", "ω180 [rad/s]", "ω_BW,phase [rad/s]", "ω_BW,gain [rad/s]",
+             "bandwidth ω_BW [rad/s]", "phase delay τ_p [s]"]]
+    for source, items in result.handling_qualities.items():
+        for item in items:
+            rows.append([item.pair, source, _number(item.omega_180, 3),
+                         _number(item.phase_bandwidth, 3), _number(item.gain_bandwidth, 3),
+                         _number(item.bandwidth, 3), _number(item.phase_delay, 3)])
+    rows[1:] = sorted(rows[1:], key=lambda row: HQ_PAIRS.index(row[0]))
+    return rows
+
+
+def handling_qualities_html(result) -> str:
+    """The case report's section on ADS-33 bandwidth and phase delay (empty when neither the
+    models nor the sweeps have an attitude pair)."""
+    if len(handling_quality_rows(result)) == 1:
+        return ""
+    return "\n".join([
+        '<h2 id="handling-qualities">Handling qualities: ADS-33 bandwidth and phase delay</h2>',
+        "<p>Per ADS-33E-PRF §3.3–3.4 (small-amplitude attitude changes): ω180 where the "
+        "attitude's phase reaches −180°, the phase bandwidth at −135°, the gain bandwidth "
+        "where the gain is 6 dB above its value at ω180, the bandwidth the lesser, and the "
+        "phase delay τ_p = −(Φ(2ω180) + 180°)/(57.3·2ω180). The heading is the integrated yaw "
+        "rate. Models: their analytic responses over 0.1–100 rad/s; measured: the sweeps' "
+        "composite responses over their points with γ² ≥ 0.6. – where the response does not "
+        "reach the crossing in those frequencies. The standard's Level boundaries are not "
+        "applied: read these numbers against its charts.</p>",
+        _html_table(handling_quality_rows(result))])
+
+
 def hybrid_muad_rows(result) -> list[list[str]]:
     """With ``[compare] hybrid``: per model and verification pair, the points inside MUAD of
     those counted (the comparison's band within MUAD's own range)."""
@@ -392,22 +425,25 @@ def hybrid_term_rows(result) -> list[list[str]]:
     comparison = result.hybrid_comparison
     reference = comparison.reference
     units = comparison.estimate.units
-    rows = [["parameter", "unit", "identified", "CR", "reference (flap-coupled)",
-             "identified/reference [-]"]]
+    with_reference = reference is not None
+    rows = [["parameter", "unit", "identified", "CR",
+             *(["reference (flap-coupled)", "identified/reference [-]"] if with_reference
+               else [])]]
     for name, (tau, bound) in comparison.flap_time_constants().items():
-        truth = None if reference is None else -1.0 / reference[name]
-        rows.append([f"τ_f = −1/{name}", "s", _number(tau), _number(bound, 3), _number(truth),
-                     _number(None if truth is None else tau / truth, 3)])
+        truth = -1.0 / reference[name] if with_reference else None
+        rows.append([f"τ_f = −1/{name}", "s", _number(tau), _number(bound, 3),
+                     *([_number(truth), _number(tau / truth, 3)] if with_reference else [])])
     for name, term in comparison.rotor_terms().items():
         truth = term["reference"]
         rows.append([name, derivative_unit(name, units), _number(term["identified"]),
-                     _number(term["cramer_rao"], 3), _number(truth),
-                     _number(None if not truth else term["identified"] / truth, 3)])
+                     _number(term["cramer_rao"], 3),
+                     *([_number(truth), _number(term["identified"] / truth if truth else None,
+                                                3)] if with_reference else [])])
     for name in comparison.structure.parameter_names:
         if delayed_derivative(name):
             item = comparison.estimate[name]
-            rows.append([name, "s", _number(item.value), _number(item.cramer_rao, 3), "–",
-                         "–"])
+            rows.append([name, "s", _number(item.value), _number(item.cramer_rao, 3),
+                         *(["–", "–"] if with_reference else [])])
     return rows
 
 
@@ -693,6 +729,10 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
     if result.case.reference:
         contents.insert(contents.index(("key-derivatives", "Key derivatives")) + 1,
                         ("reference", "Reference values"))
+    handling = handling_qualities_html(result)
+    if handling:
+        contents.append(("handling-qualities", "Handling qualities"))
+        body.append(handling)
     if result.frequency_comparison:
         contents.append(("comparison", "Frequency-domain fit"))
         body.append(comparison_html(result))
@@ -713,7 +753,7 @@ _TABLE_ROWS = {
     "comparison_parameters": comparison_parameter_rows, "estimator_fits": estimator_fit_rows,
     "estimators": estimator_rows, "hybrid_models": hybrid_model_rows,
     "hybrid_terms": hybrid_term_rows, "hybrid_muad": hybrid_muad_rows,
-    "hybrid_derivatives": hybrid_derivative_rows,
+    "hybrid_derivatives": hybrid_derivative_rows, "handling_qualities": handling_quality_rows,
 }
 
 
@@ -721,6 +761,7 @@ def case_table_names(result, claims) -> list[str]:
     """The case's tables (``tables/<name>.csv``) in the report's order: the four every case
     has, then those of its ``claims``, ``[reference]`` values and comparisons it ran."""
     return ["removed", "parameters", "key_derivatives", "verification",
+            *(("handling_qualities",) if len(handling_quality_rows(result)) > 1 else ()),
             *(("checks",) if claims else ()),
             *(("reference",) if result.case.reference else ()),
             *(("comparison_costs", "comparison_parameters")

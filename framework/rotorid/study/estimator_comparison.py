@@ -43,12 +43,11 @@ class EstimatorComparison:
         return tuple(self.estimates)
 
     def summary(self) -> dict:
-        """The ``result.json`` record: per estimator its estimate, the simulation's fit
-        (``null`` where it diverges) and the fit's wall time."""
+        """The ``result.json`` record: per estimator its estimate and the simulation's fit
+        (``null`` where it diverges); the fits' wall times go to the record's ``timing``."""
         return {name: {"estimate": estimate.as_dict(),
                        "simulation": (None if self.simulation[name] is None
-                                      else self.simulation[name].summary()),
-                       "seconds": self.seconds[name]}
+                                      else self.simulation[name].summary())}
                 for name, estimate in self.estimates.items()}
 
 

@@ -134,7 +134,8 @@ class HybridComparison:
                 for name in ROTOR_TERMS if name in self.estimate.parameter_names}
 
     def summary(self) -> dict:
-        """The ``result.json`` record."""
+        """The ``result.json`` record (the fit's wall time goes to the record's
+        ``timing``)."""
         return {"band": attrs.asdict(self.band),
                 "models": {label: {"parameters": self.parameters[label],
                                    "simulation": (None if self.simulation[label] is None
@@ -156,8 +157,7 @@ class HybridComparison:
                                           for n, (t, s) in self.flap_time_constants().items()},
                 "rotor_terms": self.rotor_terms(),
                 "estimate": self.estimate.as_dict(),
-                "removed": None if self.removed is None else list(self.removed),
-                "seconds": self.seconds}
+                "removed": None if self.removed is None else list(self.removed)}
 
 
 def compare_hybrid(structures: Mapping[str, ModelStructure], estimates: Mapping[str, Estimate],

@@ -52,6 +52,7 @@ from rotorid.study.hybrid_comparison import HybridComparison, compare_hybrid, me
 from rotorid.study.persistence import load_steps, prepare_directory, save_result, save_step
 from rotorid.study.result import MODELS, CaseResult
 from rotorid.study.truth import truth_derivatives, truth_equivalent_delays
+from rotorid.verification.handling_qualities import handling_qualities_table
 from rotorid.verification.pairs import default_pairs
 from rotorid.verification.producible import producible_pairs
 from rotorid.verification.simulation_fit import SimulationFit, simulation_fit
@@ -347,12 +348,20 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
                              estimator, truth, condition, report)
     if hybrid is not None:
         clock["hybrid comparison"] = time.perf_counter()
+    # each model's own parameters (an estimator's noise parameters left out)
+    models = {label: (structures[label],
+                      estimates[label].restricted(structures[label].parameter_names).values)
+              for label in MODELS}
+    if hybrid is not None:
+        models["hybrid"] = (hybrid.structure, hybrid.estimate.restricted(
+            hybrid.structure.parameter_names).values)
     result = CaseResult(
         case, condition, ident, verif, path, structures, estimates, simulations, verification,
         None if truth is None else truth_derivatives(truth, condition, structure),
         _durations(clock), dropped, resumed,
         None if truth is None else truth_equivalent_delays(truth, condition, delayed),
-        comparison, profiles, estimators, data_warnings, hybrid)
+        comparison, profiles, estimators, data_warnings, hybrid,
+        handling_qualities_table(models, verif))
     save_result(directory, result)
     if report_writer is not None:
         report(case.name, "figures and report")

@@ -21,6 +21,7 @@ from rotorid.study.claims import case_claims, claims_title
 from rotorid.study.reference import ReferenceComparison, compare_with_reference
 from rotorid.verification.compare import VerificationResult
 from rotorid.verification.equivalent_delays import EquivalentDelays
+from rotorid.verification.handling_qualities import HandlingQualities
 from rotorid.verification.metrics import TimeDomainMetrics
 from rotorid.verification.simulation_fit import SimulationFit
 
@@ -58,6 +59,9 @@ class CaseResult:
     data_warnings: tuple[str, ...] = ()
     # with [compare] hybrid: the hybrid rotor-body model beside the two models
     hybrid_comparison: HybridComparison | None = None
+    # ADS-33 bandwidth and phase delay by source: each model's and the measured (sweeps)
+    handling_qualities: Mapping[str, tuple[HandlingQualities, ...]] = attrs.field(
+        factory=dict)
 
     @property
     def name(self) -> str:
@@ -93,6 +97,19 @@ class CaseResult:
         """The model with delays beside the case's ``[reference]`` values (empty without)."""
         return compare_with_reference(self.estimates["with delays"], self.case.reference)
 
+    def _comparison_seconds(self) -> dict:
+        """Wall time of each comparison's fits, s: the frequency-domain fit per model, each
+        estimator's fit, the hybrid's fit (those the case ran)."""
+        seconds = {}
+        if self.frequency_comparison:
+            seconds["frequency"] = {label: c.seconds
+                                    for label, c in self.frequency_comparison.items()}
+        if self.estimator_comparison is not None:
+            seconds["estimators"] = dict(self.estimator_comparison.seconds)
+        if self.hybrid_comparison is not None:
+            seconds["hybrid"] = self.hybrid_comparison.seconds
+        return seconds
+
     def as_dict(self) -> dict:
         """The ``result.json`` record (``estimator_comparison`` and ``hybrid_comparison`` only
         when the case ran them)."""
@@ -127,8 +144,11 @@ class CaseResult:
             "delay_profiles": [p.as_dict() for p in self.delay_profiles],
             "truth_equivalent_delays": (None if self.truth_delays is None
                                         else self.truth_delays.as_dict()),
+            "handling_qualities": {source: [item.as_dict() for item in items]
+                                   for source, items in self.handling_qualities.items()},
             **comparison,
             # What differs between an uninterrupted and a resumed run of the same case, and
             # nothing else: compare result files without this key.
-            "timing": {"seconds": dict(self.seconds), "resumed_steps": self.resumed_steps},
+            "timing": {"seconds": dict(self.seconds), "resumed_steps": self.resumed_steps,
+                       "comparison_seconds": self._comparison_seconds()},
         }

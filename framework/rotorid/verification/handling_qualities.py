@@ -21,15 +21,20 @@ against them.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import attrs
 import numpy as np
 
 from rotorid.errors import VerificationError
-from rotorid.model.structure import CONTROLS, OUTPUTS
 from rotorid.simulation.transfer import frequency_response
-from rotorid.verification.frequency import FrequencyResponse, unwrapped_phase_deg
+from rotorid.verification.compare import default_omega
+from rotorid.verification.frequency import (
+    FrequencyResponse,
+    response_from_maneuvers,
+    unwrapped_phase_deg,
+)
+from rotorid.verification.pairs import primary_axis
 
 #: ADS-33's attitude pairs; ``psi`` is the heading (integrated yaw rate).
 HQ_PAIRS = ("theta/long", "phi/lat", "psi/ped")
@@ -117,32 +122,78 @@ def bandwidth_phase_delay(omega, response, pair: str = "", source: str = "model"
                              min(candidates) if candidates else None, delay, reversed_sign)
 
 
-def _attitude(pair: str) -> tuple[str, str]:
+def _measured_channel(pair: str) -> tuple[str, str]:
+    """(output, control) whose response gives the attitude pair: the heading's is the yaw
+    rate's."""
     if pair not in HQ_PAIRS:
         raise VerificationError(f"unknown handling-qualities pair {pair!r}; pairs: "
                                 f"{', '.join(HQ_PAIRS)}")
     attitude, control = pair.split("/")
-    return attitude, control
+    return ("r" if attitude == "psi" else attitude), control
+
+
+def available_pairs(outputs: Sequence[str], controls: Sequence[str]) -> tuple[str, ...]:
+    """The pairs of :data:`HQ_PAIRS` a model or a data set with these outputs and controls
+    has (the heading through ``r``)."""
+    return tuple(pair for pair in HQ_PAIRS
+                 if (channel := _measured_channel(pair))[0] in outputs
+                 and channel[1] in controls)
+
+
+def _attitude_response(pair: str, omega: np.ndarray, response: np.ndarray) -> np.ndarray:
+    """The attitude response of ``pair`` from its channel's (integrated for the heading)."""
+    return response / (1j * omega) if pair.startswith("psi/") else response
 
 
 def model_handling_qualities(structure, values, omega=None,
-                             pairs: Sequence[str] = HQ_PAIRS) -> tuple[HandlingQualities, ...]:
+                             pairs: Sequence[str] | None = None
+                             ) -> tuple[HandlingQualities, ...]:
     """Bandwidth and phase delay of a model's attitude responses (analytic, exact delays).
 
-    ``omega`` defaults to 400 log-spaced frequencies over 0.1–100 rad/s.
+    Args:
+        structure, values: the model (any structure with the attitude outputs and cyclic or
+            pedal controls, e.g. a hybrid) and its parameter vector.
+        omega: frequencies in rad/s; default 400 log-spaced over 0.1–100 rad/s.
+        pairs: default every pair of :data:`HQ_PAIRS` the structure has
+            (:func:`available_pairs`).
     """
     omega = np.geomspace(0.1, 100.0, 400) if omega is None else np.asarray(omega, float)
+    outputs, controls = list(structure.outputs), list(structure.controls)
+    pairs = available_pairs(outputs, controls) if pairs is None else pairs
     full = frequency_response(structure, values, omega)
     results = []
     for pair in pairs:
-        attitude, control = _attitude(pair)
-        column = CONTROLS.index(control)
-        if attitude == "psi":
-            response = full[:, OUTPUTS.index("r"), column] / (1j * omega)
-        else:
-            response = full[:, OUTPUTS.index(attitude), column]
-        results.append(bandwidth_phase_delay(omega, response, pair, "model"))
+        output, control = _measured_channel(pair)
+        if output not in outputs or control not in controls:
+            raise VerificationError(f"{pair}: the model has no {output}/{control} response; "
+                                    f"its pairs: {', '.join(available_pairs(outputs, controls))}")
+        response = full[:, outputs.index(output), controls.index(control)]
+        if not np.any(response):        # the model has no path from the control
+            results.append(HandlingQualities(pair, "model", None, None, None, None, None))
+            continue
+        results.append(bandwidth_phase_delay(omega, _attitude_response(pair, omega, response),
+                                             pair, "model"))
     return tuple(results)
+
+
+def sweep_handling_qualities(sweeps, omega, threshold: float = 0.6
+                             ) -> tuple[HandlingQualities, ...]:
+    """Bandwidth and phase delay measured from sweeps: for each pair of :data:`HQ_PAIRS`
+    whose channels the sweeps hold and whose control one of them excites (its primary
+    axis), the composite response over those sweeps (:func:`measured_handling_qualities`).
+
+    Args:
+        sweeps: a :class:`~rotorid.data.ManeuverSet` of frequency sweeps.
+        omega: the frequencies of the responses, rad/s, shape (M,).
+    """
+    axes = {primary_axis(m) for m in sweeps}
+    responses = []
+    for pair in available_pairs(sweeps.output_names, sweeps.input_names):
+        output, control = _measured_channel(pair)
+        if control in axes:
+            subset = sweeps.select(lambda m, c=control: primary_axis(m) == c)
+            responses.append(response_from_maneuvers(subset, control, output, omega))
+    return measured_handling_qualities(responses, threshold)
 
 
 def measured_handling_qualities(responses: Sequence[FrequencyResponse],
@@ -157,8 +208,28 @@ def measured_handling_qualities(responses: Sequence[FrequencyResponse],
             continue
         keep = (np.isfinite(measured.response) & (measured.coherence >= threshold)
                 & (np.abs(np.nan_to_num(measured.response)) > 0))
-        omega, response = measured.omega[keep], measured.response[keep]
-        if measured.pair == "r/ped":
-            response = response / (1j * omega)
-        results.append(bandwidth_phase_delay(omega, response, pair, "measured"))
+        if np.count_nonzero(keep) < 2:
+            results.append(HandlingQualities(pair, "measured", None, None, None, None, None))
+            continue
+        omega = measured.omega[keep]
+        results.append(bandwidth_phase_delay(
+            omega, _attitude_response(pair, omega, measured.response[keep]), pair,
+            "measured"))
     return tuple(results)
+
+
+def handling_qualities_table(models: Mapping[str, tuple], sweeps=None
+                             ) -> dict[str, tuple[HandlingQualities, ...]]:
+    """ADS-33 bandwidth and phase delay by source: each model's (analytic) and, with sweeps,
+    the measured ones (:func:`sweep_handling_qualities` on the verification grid,
+    :func:`rotorid.verification.compare.default_omega`).
+
+    Args:
+        models: label → (structure, parameter vector).
+        sweeps: the frequency sweeps, or None.
+    """
+    table = {label: model_handling_qualities(structure, values)
+             for label, (structure, values) in models.items()}
+    if sweeps is not None and len(sweeps):
+        table["measured"] = sweep_handling_qualities(sweeps, default_omega(sweeps))
+    return table

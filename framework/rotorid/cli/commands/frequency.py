@@ -2,7 +2,8 @@
 
 Usage::
 
-    rotorid frequency SWEEPS... [--pairs q/long,p/lat] [--conditioned] --out responses.json
+    rotorid frequency SWEEPS... [--pairs q/long,p/lat] [--conditioned] [--handling-qualities]
+                      --out responses.json
 
 SWEEPS are maneuver files, directories or glob patterns (only ``kind = sweep`` maneuvers when
 the files say their kind). Each pair's composite response (:mod:`rotorid.verification.frequency`)
@@ -18,6 +19,11 @@ comes from the sweeps whose axis is its input, on the default log grid of the ve
 
 Frequencies in rad/s, magnitudes in dB of output unit per input unit, phases in deg
 (unwrapped), coherence γ² (partial with ``--conditioned``), random error normalised.
+
+``--handling-qualities`` adds the attitude pairs ``theta/long``, ``phi/lat`` and ``r/ped`` (the
+heading's) that the sweeps hold and excite, prints their ADS-33 bandwidth and phase delay
+(:mod:`rotorid.verification.handling_qualities`) and writes them as ``handling_qualities``
+to a JSON or MAT file.
 """
 
 from __future__ import annotations
@@ -44,6 +50,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--conditioned", action="store_true",
                         help="condition each response on the other inputs that moved in its "
                              "sweeps (partial coherence)")
+    parser.add_argument("--handling-qualities", action="store_true",
+                        help="add the attitude pairs theta/long, phi/lat and r/ped the sweeps "
+                             "hold and excite, and report their ADS-33 bandwidth and phase "
+                             "delay")
     parser.add_argument("--out", required=True, metavar="FILE", type=output_file,
                         help="responses.json, responses.csv or responses.mat")
 
@@ -56,7 +66,7 @@ def response_columns(response) -> dict:
             "random_error": response.random_error}
 
 
-def _json(responses, sweeps) -> str:
+def _json(responses, sweeps, qualities) -> str:
     import json
 
     from rotorid.io import jsonable
@@ -64,8 +74,10 @@ def _json(responses, sweeps) -> str:
     pairs = [{"pair": r.pair, "input": r.input, "output": r.output,
               "conditioned_on": list(r.conditioned_on), "windows_s": list(r.windows),
               **{k: v.tolist() for k, v in response_columns(r).items()}} for r in responses]
-    return json.dumps(jsonable({"sweeps": list(sweeps.names), "units": sweeps.units,
-                                "pairs": pairs}), indent=1)
+    record = {"sweeps": list(sweeps.names), "units": sweeps.units, "pairs": pairs}
+    if qualities is not None:
+        record["handling_qualities"] = [q.as_dict() for q in qualities]
+    return json.dumps(jsonable(record), indent=1)
 
 
 def _csv(responses) -> str:
@@ -78,13 +90,44 @@ def _csv(responses) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _mat(responses):
+def _mat(responses, qualities):
+    import numpy as np
     import scipy.io
 
     structs = {r.pair.replace("/", "_"): {**response_columns(r), "H": r.response,
                                           "input": r.input, "output": r.output}
                for r in responses}
+    if qualities is not None:       # MATLAB has no null: NaN where a crossing is missing
+        structs["handling_qualities"] = {
+            q.pair.replace("/", "_"): {k: np.nan if v is None else v
+                                       for k, v in q.as_dict().items()} for q in qualities}
     return lambda handle: scipy.io.savemat(handle, structs)
+
+
+def _attitude_pairs(sweeps, pairs) -> list[str]:
+    """``pairs`` and the ADS-33 attitude pairs the sweeps hold and excite (the heading's as
+    ``r/ped``)."""
+    from rotorid.verification.handling_qualities import available_pairs
+    from rotorid.verification.pairs import primary_axis
+
+    axes = {primary_axis(m) for m in sweeps}
+    wanted = [p.replace("psi/", "r/") for p in available_pairs(sweeps.output_names,
+                                                               sweeps.input_names)]
+    return list(dict.fromkeys([*pairs, *(p for p in wanted if p.split("/")[1] in axes)]))
+
+
+def _print_qualities(qualities) -> None:
+    def number(value, unit):
+        return "–" if value is None else f"{value:.3g} {unit}"
+
+    if not qualities:
+        print("handling qualities: the sweeps hold and excite none of theta/long, phi/lat, "
+              "r/ped")
+    for q in qualities:
+        print(f"{q.pair:<12} ADS-33 bandwidth {number(q.bandwidth, 'rad/s')} (phase "
+              f"{number(q.phase_bandwidth, 'rad/s')}, gain {number(q.gain_bandwidth, 'rad/s')}),"
+              f" ω180 {number(q.omega_180, 'rad/s')}, phase delay "
+              f"{number(q.phase_delay, 's')}")
 
 
 def run(args) -> int:
@@ -93,6 +136,7 @@ def run(args) -> int:
     from rotorid.io import atomic_write
     from rotorid.verification.compare import default_omega
     from rotorid.verification.frequency import moving_inputs, response_from_maneuvers
+    from rotorid.verification.handling_qualities import measured_handling_qualities
     from rotorid.verification.pairs import parse_pair, sweeps_exciting
 
     out = Path(args.out)
@@ -101,7 +145,10 @@ def run(args) -> int:
     sweeps = load_sweeps(args.sweeps)
     omega = default_omega(sweeps)
     responses = []
-    for pair in chosen_pairs(args.pairs, sweeps, sweeps.output_names, sweeps.input_names):
+    pairs = chosen_pairs(args.pairs, sweeps, sweeps.output_names, sweeps.input_names)
+    if args.handling_qualities:
+        pairs = _attitude_pairs(sweeps, pairs)
+    for pair in pairs:
         output, control = parse_pair(pair, sweeps.output_names, sweeps.input_names)
         subset = sweeps_exciting(sweeps, control, pair, UsageError)
         others = moving_inputs(subset, control) if args.conditioned else ()
@@ -109,13 +156,16 @@ def run(args) -> int:
                                                  conditioned_on=others))
     if out.parent != Path(""):
         out.parent.mkdir(parents=True, exist_ok=True)
+    qualities = (measured_handling_qualities(responses) if args.handling_qualities else None)
     suffix = out.suffix.lower()
-    atomic_write(out, _json(responses, sweeps) if suffix == ".json"
-                 else _csv(responses) if suffix == ".csv" else _mat(responses))
+    atomic_write(out, _json(responses, sweeps, qualities) if suffix == ".json"
+                 else _csv(responses) if suffix == ".csv" else _mat(responses, qualities))
     for r in responses:
         coherent = r.omega[r.coherence >= 0.6]
         band = (f"γ² ≥ 0.6 over {coherent.min():.2f}–{coherent.max():.2f} rad/s"
                 if coherent.size else "no frequency with γ² ≥ 0.6")
         print(f"{r.pair:<12} {band}")
+    if qualities is not None:
+        _print_qualities(qualities)
     print(f"wrote {len(responses)} responses to {out}")
     return 0
