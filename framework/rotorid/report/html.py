@@ -376,10 +376,13 @@ def handling_qualities_html(result) -> str:
         "attitude's phase reaches −180°, the phase bandwidth at −135°, the gain bandwidth "
         "where the gain is 6 dB above its value at ω180, the bandwidth the lesser, and the "
         "phase delay τ_p = −(Φ(2ω180) + 180°)/(57.3·2ω180). The heading is the integrated yaw "
-        "rate. Models: their analytic responses over 0.1–100 rad/s; measured: the sweeps' "
-        "composite responses over their points with γ² ≥ 0.6. – where the response does not "
-        "reach the crossing in those frequencies. The standard's Level boundaries are not "
-        "applied: read these numbers against its charts.</p>",
+        "rate. Measured: the sweeps' composite responses over their points with γ² ≥ 0.6; "
+        "models: their analytic responses on the same frequencies (over 0.1–100 rad/s for a "
+        "case without sweeps), so that the crossings are those of the band the data show, not "
+        "of slow modes below it. – where the response does not reach the crossing in those "
+        "frequencies (the phase delay needs 2ω180 inside them). A heading response nears "
+        "−180° slowly, so a few degrees move its crossings far. The standard's Level "
+        "boundaries are not applied: read these numbers against its charts.</p>",
         _html_table(handling_quality_rows(result))])
 
 

@@ -176,16 +176,10 @@ def model_handling_qualities(structure, values, omega=None,
     return tuple(results)
 
 
-def sweep_handling_qualities(sweeps, omega, threshold: float = 0.6
-                             ) -> tuple[HandlingQualities, ...]:
-    """Bandwidth and phase delay measured from sweeps: for each pair of :data:`HQ_PAIRS`
-    whose channels the sweeps hold and whose control one of them excites (its primary
-    axis), the composite response over those sweeps (:func:`measured_handling_qualities`).
-
-    Args:
-        sweeps: a :class:`~rotorid.data.ManeuverSet` of frequency sweeps.
-        omega: the frequencies of the responses, rad/s, shape (M,).
-    """
+def sweep_attitude_responses(sweeps, omega) -> tuple[FrequencyResponse, ...]:
+    """The composite responses behind the attitude pairs of :data:`HQ_PAIRS` whose channels
+    the sweeps hold and whose control one of them excites (its primary axis): ``theta/long``,
+    ``phi/lat`` and, for the heading, ``r/ped``, on ``omega`` (rad/s, shape (M,))."""
     axes = {primary_axis(m) for m in sweeps}
     responses = []
     for pair in available_pairs(sweeps.output_names, sweeps.input_names):
@@ -193,7 +187,20 @@ def sweep_handling_qualities(sweeps, omega, threshold: float = 0.6
         if control in axes:
             subset = sweeps.select(lambda m, c=control: primary_axis(m) == c)
             responses.append(response_from_maneuvers(subset, control, output, omega))
-    return measured_handling_qualities(responses, threshold)
+    return tuple(responses)
+
+
+def sweep_handling_qualities(sweeps, omega, threshold: float = 0.6
+                             ) -> tuple[HandlingQualities, ...]:
+    """Bandwidth and phase delay measured from sweeps (:func:`sweep_attitude_responses`,
+    :func:`measured_handling_qualities`)."""
+    return measured_handling_qualities(sweep_attitude_responses(sweeps, omega), threshold)
+
+
+def _coherent(measured: FrequencyResponse, threshold: float) -> np.ndarray:
+    """Where a measured response counts: finite, non-zero, coherence ≥ ``threshold``."""
+    return (np.isfinite(measured.response) & (measured.coherence >= threshold)
+            & (np.abs(np.nan_to_num(measured.response)) > 0))
 
 
 def measured_handling_qualities(responses: Sequence[FrequencyResponse],
@@ -206,8 +213,7 @@ def measured_handling_qualities(responses: Sequence[FrequencyResponse],
         pair = "psi/ped" if measured.pair == "r/ped" else measured.pair
         if pair not in HQ_PAIRS:
             continue
-        keep = (np.isfinite(measured.response) & (measured.coherence >= threshold)
-                & (np.abs(np.nan_to_num(measured.response)) > 0))
+        keep = _coherent(measured, threshold)
         if np.count_nonzero(keep) < 2:
             results.append(HandlingQualities(pair, "measured", None, None, None, None, None))
             continue
@@ -218,18 +224,33 @@ def measured_handling_qualities(responses: Sequence[FrequencyResponse],
     return tuple(results)
 
 
-def handling_qualities_table(models: Mapping[str, tuple], sweeps=None
-                             ) -> dict[str, tuple[HandlingQualities, ...]]:
+def handling_qualities_table(models: Mapping[str, tuple], sweeps=None,
+                             threshold: float = 0.6) -> dict[str, tuple[HandlingQualities, ...]]:
     """ADS-33 bandwidth and phase delay by source: each model's (analytic) and, with sweeps,
-    the measured ones (:func:`sweep_handling_qualities` on the verification grid,
-    :func:`rotorid.verification.compare.default_omega`).
+    the measured ones (``measured``).
+
+    With sweeps, a model's numbers are taken on the frequencies where the sweeps' response of
+    the same pair is coherent (γ² ≥ ``threshold``), as the measured ones are: the crossings
+    are then those of the band the data show, not of the slow modes below it (an unstable
+    hover model's phase passes −180° below 0.5 rad/s). Without sweeps, over 0.1–100 rad/s.
 
     Args:
         models: label → (structure, parameter vector).
         sweeps: the frequency sweeps, or None.
     """
-    table = {label: model_handling_qualities(structure, values)
-             for label, (structure, values) in models.items()}
-    if sweeps is not None and len(sweeps):
-        table["measured"] = sweep_handling_qualities(sweeps, default_omega(sweeps))
+    if sweeps is None or not len(sweeps):
+        return {label: model_handling_qualities(structure, values)
+                for label, (structure, values) in models.items()}
+    responses = sweep_attitude_responses(sweeps, default_omega(sweeps))
+    table = {}
+    for label, (structure, values) in models.items():
+        own = available_pairs(structure.outputs, structure.controls)
+        items = []
+        for measured in responses:
+            pair = "psi/ped" if measured.pair == "r/ped" else measured.pair
+            omega = measured.omega[_coherent(measured, threshold)]
+            if pair in own and omega.size >= 2:
+                items.extend(model_handling_qualities(structure, values, omega, [pair]))
+        table[label] = tuple(items)
+    table["measured"] = measured_handling_qualities(responses, threshold)
     return table
