@@ -19,9 +19,12 @@ fit's Cramér-Rao bounds (CR, propagated through the residualisation) and in %. 
 repository root::
 
     python docs/examples/turbulence_hover.py [--turbulence light|moderate] [--seed N] [--quick]
-                                             [--from-still]
+                                             [--from-still] [--decimate N --cutoff HZ]
 
-``--quick`` shortens the records to 60 %.
+``--quick`` shortens the records to 60 %. ``--decimate N --cutoff HZ`` fits both estimators to
+the records low-passed at HZ (zero phase) and kept at every N-th sample
+(:mod:`rotorid.resampling`): the band the hybrid describes, without the coning, inflow and
+actuator dynamics above it that the filter's one-step innovations otherwise weigh.
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ import rotorid
 from rotorid import FlightCondition, ModelStructure
 from rotorid.errors import IdentifiabilityWarning
 from rotorid.model.hybrid import hybrid_from_six_dof, quasi_steady_derivatives
+from rotorid.resampling import decimated
 from rotorid.study.truth import truth_derivatives
 
 KEY = ("L_p", "M_q", "L_lat", "M_long", "N_r", "N_ped", "Z_w", "Z_coll")
@@ -93,12 +97,17 @@ def main(argv=None) -> dict:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--from-still", action="store_true")
+    parser.add_argument("--decimate", type=int, default=1)
+    parser.add_argument("--cutoff", type=float, help="Hz, with --decimate")
     args = parser.parse_args(argv)
 
     still, turbulent, condition, source = data_sets(args.turbulence, args.seed, args.quick)
     six_dof = ModelStructure.six_dof(condition)
     truth = truth_derivatives(source, condition, six_dof)
     hybrid = hybrid_from_six_dof(six_dof, fit("output-error", six_dof, still).values)
+    if args.cutoff is not None:
+        still, turbulent = (decimated(data, args.decimate, args.cutoff)
+                            for data in (still, turbulent))
     columns, noise = {}, {}
     still_solution = None
     for air, data in (("still", still), (args.turbulence, turbulent)):
