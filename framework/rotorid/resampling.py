@@ -11,7 +11,10 @@ samples above the filter's band then leaves the estimator the band the model des
 
 The filter is a Butterworth low-pass run forwards and backwards (``scipy.signal.sosfiltfilt``:
 zero phase, the magnitude squared), applied to each channel's deviation from its first sample
-so that a trim offset causes no start transient.
+so that a trim offset causes no start transient. Columns read from files can be decimated as
+they are read (:mod:`rotorid.ingestion`, ``resample = "decimate"``: a FIR at the new Nyquist
+frequency); this works on maneuvers in memory, generated ones included, with the cutoff
+chosen by the band the model describes.
 """
 
 from __future__ import annotations
