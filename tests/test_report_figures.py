@@ -237,7 +237,14 @@ def test_a_files_case_is_compared_with_the_users_reference(hover, tmp_path):
                  removed: ReferenceValue(1.0)}
     case = attrs.evolve(hover.case, data={"source": "files", "identification": "f/*.csv"},
                         reference=reference)
-    result = attrs.evolve(hover, case=case, truth_derivatives=None, truth_delays=None)
+    # two maneuvers, one verified pair and no hybrid section: the figures are not the point
+    identification = attrs.evolve(hover.identification,
+                                  maneuvers=list(hover.identification)[:2])
+    verification = {label: attrs.evolve(v, pairs=v.pairs[:1])
+                    for label, v in hover.verification.items()}
+    result = attrs.evolve(hover, case=case, truth_derivatives=None, truth_delays=None,
+                          identification=identification, verification=verification,
+                          hybrid_comparison=None)
     rows = {r["name"]: r for r in result.as_dict()["reference_comparison"]}
     # 3 CR off with a reference uncertainty of 2 CR: √(1 + 4) = 2.24 CR combined, 1.34 < 2.
     assert rows["M_q"]["difference"] == pytest.approx(-3.0 * bound)
