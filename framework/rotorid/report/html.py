@@ -368,7 +368,7 @@ def handling_quality_rows(result) -> list[list[str]]:
 def handling_qualities_html(result) -> str:
     """The case report's section on ADS-33 bandwidth and phase delay (empty when neither the
     models nor the sweeps have an attitude pair)."""
-    if len(handling_quality_rows(result)) == 1:
+    if not any(result.handling_qualities.values()):
         return ""
     return "\n".join([
         '<h2 id="handling-qualities">Handling qualities: ADS-33 bandwidth and phase delay</h2>',
@@ -389,11 +389,11 @@ def handling_qualities_html(result) -> str:
 def hybrid_muad_rows(result) -> list[list[str]]:
     """With ``[compare] hybrid``: per model and verification pair, the points inside MUAD of
     those counted (the comparison's band within MUAD's own range)."""
-    comparison = result.hybrid_comparison
-    pairs = list(dict.fromkeys(p for points in comparison.muad.values() for p in points))
+    muad = result.hybrid_comparison.muad
+    pairs = list(dict.fromkeys(p for points in muad.values() for p in points))
     rows = [["model", *(f"MUAD {pair} [inside/counted]" for pair in pairs)]]
     for label in HYBRID_MODELS:
-        points = comparison.muad.get(label, {})
+        points = muad.get(label, {})
         rows.append([label, *(f"{points[pair][0]}/{points[pair][1]}" if pair in points else "–"
                               for pair in pairs)])
     return rows
@@ -764,7 +764,7 @@ def case_table_names(result, claims) -> list[str]:
     """The case's tables (``tables/<name>.csv``) in the report's order: the four every case
     has, then those of its ``claims``, ``[reference]`` values and comparisons it ran."""
     return ["removed", "parameters", "key_derivatives", "verification",
-            *(("handling_qualities",) if len(handling_quality_rows(result)) > 1 else ()),
+            *(("handling_qualities",) if any(result.handling_qualities.values()) else ()),
             *(("checks",) if claims else ()),
             *(("reference",) if result.case.reference else ()),
             *(("comparison_costs", "comparison_parameters")

@@ -110,6 +110,11 @@ class HybridComparison:
                 for label, result in self.verification.items()}
 
     @property
+    def values(self) -> np.ndarray:
+        """The hybrid's own parameter vector (an estimator's noise parameters left out)."""
+        return self.estimate.restricted(self.structure.parameter_names).values
+
+    @property
     def muad(self) -> dict[str, dict[str, tuple[int, int]]]:
         """(points inside MUAD, points counted) by model label and pair over :attr:`band` and
         MUAD's own range."""

@@ -182,14 +182,20 @@ def _profile_line(profile) -> str:
     return line
 
 
+def _model_values(structures, estimates) -> dict:
+    """Each model's own parameter vector by model label (an estimator's noise parameters, such
+    as filter error's F and R, left out)."""
+    return {label: estimates[label].restricted(structures[label].parameter_names).values
+            for label in MODELS}
+
+
 def _verify(case: FlightCase, structures, estimates, ident: ManeuverSet,
             verif: ManeuverSet | None, report: Progress) -> tuple[dict, dict]:
     """Each model's simulation of the identification data (:class:`SimulationFit`: its
     outputs and time-domain metrics) and sweep verification (when there are verification
     data), by model label. Pairs the data or the model cannot produce are skipped, with the
     reason in a progress line and in the verification's notes."""
-    values = {label: estimates[label].restricted(structures[label].parameter_names).values
-              for label in MODELS}
+    values = _model_values(structures, estimates)
     simulations = {label: simulation_fit(structures[label], values[label], ident)
                    for label in MODELS}
     if verif is None:
@@ -348,13 +354,10 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
                              estimator, truth, condition, report)
     if hybrid is not None:
         clock["hybrid comparison"] = time.perf_counter()
-    # each model's own parameters (an estimator's noise parameters left out)
-    models = {label: (structures[label],
-                      estimates[label].restricted(structures[label].parameter_names).values)
-              for label in MODELS}
+    models = {label: (structures[label], values)
+              for label, values in _model_values(structures, estimates).items()}
     if hybrid is not None:
-        models["hybrid"] = (hybrid.structure, hybrid.estimate.restricted(
-            hybrid.structure.parameter_names).values)
+        models["hybrid"] = (hybrid.structure, hybrid.values)
     result = CaseResult(
         case, condition, ident, verif, path, structures, estimates, simulations, verification,
         None if truth is None else truth_derivatives(truth, condition, structure),

@@ -176,25 +176,30 @@ def model_handling_qualities(structure, values, omega=None,
     return tuple(results)
 
 
-def sweep_attitude_responses(sweeps, omega) -> tuple[FrequencyResponse, ...]:
-    """The composite responses behind the attitude pairs of :data:`HQ_PAIRS` whose channels
+def _attitude_pair(measured_pair: str) -> str:
+    """The attitude pair a measured channel pair gives (``r/ped`` gives the heading's)."""
+    return "psi/ped" if measured_pair == "r/ped" else measured_pair
+
+
+def sweep_attitude_pairs(sweeps) -> tuple[str, ...]:
+    """The measured channel pairs behind the attitude pairs of :data:`HQ_PAIRS` whose channels
     the sweeps hold and whose control one of them excites (its primary axis): ``theta/long``,
-    ``phi/lat`` and, for the heading, ``r/ped``, on ``omega`` (rad/s, shape (M,))."""
+    ``phi/lat`` and, for the heading, ``r/ped``."""
     axes = {primary_axis(m) for m in sweeps}
+    return tuple("/".join(channel) for pair in available_pairs(sweeps.output_names,
+                                                                sweeps.input_names)
+                 if (channel := _measured_channel(pair))[1] in axes)
+
+
+def sweep_attitude_responses(sweeps, omega) -> tuple[FrequencyResponse, ...]:
+    """The composite responses of :func:`sweep_attitude_pairs`, each over the sweeps that
+    excite its control, on ``omega`` (rad/s, shape (M,))."""
     responses = []
-    for pair in available_pairs(sweeps.output_names, sweeps.input_names):
-        output, control = _measured_channel(pair)
-        if control in axes:
-            subset = sweeps.select(lambda m, c=control: primary_axis(m) == c)
-            responses.append(response_from_maneuvers(subset, control, output, omega))
+    for pair in sweep_attitude_pairs(sweeps):
+        output, control = pair.split("/")
+        subset = sweeps.select(lambda m, c=control: primary_axis(m) == c)
+        responses.append(response_from_maneuvers(subset, control, output, omega))
     return tuple(responses)
-
-
-def sweep_handling_qualities(sweeps, omega, threshold: float = 0.6
-                             ) -> tuple[HandlingQualities, ...]:
-    """Bandwidth and phase delay measured from sweeps (:func:`sweep_attitude_responses`,
-    :func:`measured_handling_qualities`)."""
-    return measured_handling_qualities(sweep_attitude_responses(sweeps, omega), threshold)
 
 
 def _coherent(measured: FrequencyResponse, threshold: float) -> np.ndarray:
@@ -210,7 +215,7 @@ def measured_handling_qualities(responses: Sequence[FrequencyResponse],
     ``threshold``; responses of other pairs are ignored."""
     results = []
     for measured in responses:
-        pair = "psi/ped" if measured.pair == "r/ped" else measured.pair
+        pair = _attitude_pair(measured.pair)
         if pair not in HQ_PAIRS:
             continue
         keep = _coherent(measured, threshold)
@@ -247,7 +252,7 @@ def handling_qualities_table(models: Mapping[str, tuple], sweeps=None,
         own = available_pairs(structure.outputs, structure.controls)
         items = []
         for measured in responses:
-            pair = "psi/ped" if measured.pair == "r/ped" else measured.pair
+            pair = _attitude_pair(measured.pair)
             omega = measured.omega[_coherent(measured, threshold)]
             if pair in own and omega.size >= 2:
                 items.extend(model_handling_qualities(structure, values, omega, [pair]))

@@ -104,18 +104,6 @@ def _mat(responses, qualities):
     return lambda handle: scipy.io.savemat(handle, structs)
 
 
-def _attitude_pairs(sweeps, pairs) -> list[str]:
-    """``pairs`` and the ADS-33 attitude pairs the sweeps hold and excite (the heading's as
-    ``r/ped``)."""
-    from rotorid.verification.handling_qualities import available_pairs
-    from rotorid.verification.pairs import primary_axis
-
-    axes = {primary_axis(m) for m in sweeps}
-    wanted = [p.replace("psi/", "r/") for p in available_pairs(sweeps.output_names,
-                                                               sweeps.input_names)]
-    return list(dict.fromkeys([*pairs, *(p for p in wanted if p.split("/")[1] in axes)]))
-
-
 def _print_qualities(qualities) -> None:
     def number(value, unit):
         return "–" if value is None else f"{value:.3g} {unit}"
@@ -136,7 +124,10 @@ def run(args) -> int:
     from rotorid.io import atomic_write
     from rotorid.verification.compare import default_omega
     from rotorid.verification.frequency import moving_inputs, response_from_maneuvers
-    from rotorid.verification.handling_qualities import measured_handling_qualities
+    from rotorid.verification.handling_qualities import (
+        measured_handling_qualities,
+        sweep_attitude_pairs,
+    )
     from rotorid.verification.pairs import parse_pair, sweeps_exciting
 
     out = Path(args.out)
@@ -147,7 +138,7 @@ def run(args) -> int:
     responses = []
     pairs = chosen_pairs(args.pairs, sweeps, sweeps.output_names, sweeps.input_names)
     if args.handling_qualities:
-        pairs = _attitude_pairs(sweeps, pairs)
+        pairs = list(dict.fromkeys([*pairs, *sweep_attitude_pairs(sweeps)]))
     for pair in pairs:
         output, control = parse_pair(pair, sweeps.output_names, sweeps.input_names)
         subset = sweeps_exciting(sweeps, control, pair, UsageError)
