@@ -19,7 +19,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--out", required=True, type=output_directory, help="results directory")
     parser.add_argument("--quick", action="store_true",
                         help="reduced but honest run: shorter records, reduction stopped by "
-                             "the criteria (hover: about 40 s on 2 cores)")
+                             "the criteria (hover: about 110 s on 2 cores)")
     parser.add_argument("--seed", type=seed, help="noise seed of generated data (≥ 0)")
     parser.add_argument("--speeds", help="airspeeds of speed-sweep in kt: '0,40,80' or "
                                          "START:STOP:STEP (default 0:120:10)")
