@@ -31,15 +31,18 @@ def structure(delays=()):
 
 
 def noisy_data(process, seed=1, dt=0.02, model=None, truth=SMALL_TRUTH, variance=VARIANCE,
-               disturbances=None, gusts=None):
+               disturbances=None, gusts=None, initial_states=None, biases=None):
     """Doublet maneuvers of ``model`` (default the small six-dof hover model) in its own
-    channels, simulated by :func:`noisy_outputs`."""
+    channels, simulated by :func:`noisy_outputs`; ``biases`` (records, p) are added to each
+    record's outputs."""
     model = structure() if model is None else model
     controls = [rotorid.CONTROLS.index(u) for u in model.controls]
     records = [r for r in doublet_maneuvers(dt=dt) if np.any(r.inputs[:, controls])]
     inputs = [r.inputs[:, controls] for r in records]
     outputs = noisy_outputs(model, truth, inputs, dt, process, variance,
-                            np.random.default_rng(seed), disturbances, gusts)
+                            np.random.default_rng(seed), disturbances, gusts, initial_states)
+    if biases is not None:
+        outputs = [y + b for y, b in zip(outputs, biases)]
     return rotorid.ManeuverSet([
         rotorid.Maneuver(r.name, r.time, u, y, input_names=model.controls,
                          output_names=model.outputs)
@@ -47,7 +50,7 @@ def noisy_data(process, seed=1, dt=0.02, model=None, truth=SMALL_TRUTH, variance
 
 
 def noisy_outputs(model, truth, inputs, dt, process, variance, rng, disturbances=None,
-                  gusts=None):
+                  gusts=None, initial_states=None):
     """The outputs (N_i, p) of ``model`` at ``truth`` for each input record (N_i, m),
     simulated independently of the estimator (zero-order-hold discretisation by one matrix
     exponential) from trim, with white process noise (state → σ per sample) added to the
@@ -58,7 +61,8 @@ def noisy_outputs(model, truth, inputs, dt, process, variance, rng, disturbances
     too; ``gusts`` (state → (σ, τ s)) adds a first-order Gauss-Markov air velocity g of that
     state, held over each sample and started at zero, which enters as the state's negative in
     the derivative terms: −(A − A0)·e_j·g in the state equations (discretised with the
-    controls) and −(C − C0)·e_j·g in the outputs."""
+    controls) and −(C − C0)·e_j·g in the outputs. ``initial_states`` (records, n) starts each
+    record there instead of at trim."""
     a, b, c, d = model.matrices(model.as_vector(truth))
     n, m = b.shape
     gust = dict(gusts or {})
@@ -86,8 +90,9 @@ def noisy_outputs(model, truth, inputs, dt, process, variance, rng, disturbances
         if accelerometer.get(state) in model.outputs:
             sensed[model.outputs.index(accelerometer[state]), j] = 1.0
     records = []
-    for record in inputs:
-        x, outputs = np.zeros(n), np.empty((len(record), len(model.outputs)))
+    for i, record in enumerate(inputs):
+        x = np.zeros(n) if initial_states is None else np.array(initial_states[i], dtype=float)
+        outputs = np.empty((len(record), len(model.outputs)))
         acceleration, air = np.zeros(len(coloured)), np.zeros(len(gust))
         for k, u in enumerate(record):
             outputs[k] = c @ x + d @ u + sensed @ acceleration + gust_reading @ air

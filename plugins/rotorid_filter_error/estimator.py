@@ -53,6 +53,7 @@ from rotorid.units import rmse_reference_factors
 from rotorid_output_error.levenberg_marquardt import Settings, run
 
 from .kalman import Records, innovation_blocks
+from .maneuver_parameters import ManeuverParameters, chosen_initial_states, filter_state_names
 from .riccati import steady_state_filter
 from .system import companion_system, seen_states, with_disturbances
 
@@ -234,6 +235,44 @@ def matched_measurement_noise(problem: "FilterErrorProblem", values: np.ndarray,
     return values
 
 
+def matched_biases(problem: "FilterErrorProblem", values: np.ndarray,
+                   keep: tuple[str, ...] = ()) -> np.ndarray:
+    """``values`` with each output bias (except those in ``keep``) started at its record's
+    mean innovation at these values: a sensor offset left to the fit from zero makes the
+    first steps trade it against the process noise, which can reach its bound 0 there and
+    never leave it (F enters as F², whose gradient vanishes at 0). Unchanged when the filter
+    does not exist at ``values``."""
+    values = np.array(values, dtype=float)
+    names = problem.parameter_names
+    rows = [i for i, n in enumerate(names) if n.startswith("bias_") and n not in keep]
+    if not rows:
+        return values
+    try:
+        innovations, _ = problem.innovations(values)
+    except (EstimationError, np.linalg.LinAlgError):
+        return values
+    mask = problem.records.mask[..., None]
+    means = np.sum(innovations * mask, axis=0) / np.sum(mask, axis=0)          # (M, p)
+    parts = problem.maneuver_parameters
+    for i in rows:
+        record, output = divmod(i - problem.n_global, parts.per_maneuver)
+        column = output - len(parts.states)
+        values[i] += means[record, column]
+    return values
+
+
+def _noise_held(problem: "FilterErrorProblem", values: np.ndarray, bounds):
+    """``bounds`` with the noise parameters (F, D, G, T, R) held at ``values``: the first
+    stage of a fit with per-maneuver parameters. Fitted together from the start, the first
+    steps trade a record's offsets against the process noise, and an F that reaches its
+    bound 0 never leaves it (F enters as F², whose gradient vanishes there): on doublet data
+    with sensor biases the fit stopped at F_w = 0, its cost 8 % above the truth's."""
+    lower, upper = (np.array(b, dtype=float) for b in bounds)
+    noise = slice(problem.n_structure, problem.n_global)
+    lower[noise] = upper[noise] = values[noise]
+    return lower, upper
+
+
 def _equation_columns(structure: ModelStructure, states: tuple[str, ...]) -> list[int]:
     """The equation column (``structure.equation_rows`` order) of each disturbance state."""
     equations = [structure.states[i] for i in structure.equation_rows]
@@ -243,6 +282,13 @@ def _equation_columns(structure: ModelStructure, states: tuple[str, ...]) -> lis
                               f"of derivatives (a disturbance is an acceleration of one); "
                               f"choose among {', '.join(equations)}")
     return [equations.index(s) for s in states]
+
+
+def _initial_state_choice(value) -> bool | tuple[str, ...]:
+    """``initial_states`` as given: a bool, or the names as a tuple."""
+    if isinstance(value, bool):
+        return value
+    return (value,) if isinstance(value, str) else tuple(value)
 
 
 def _start_choice(instance, attribute, value):
@@ -271,7 +317,8 @@ class FilterErrorProblem:
 
     def __init__(self, structure: ModelStructure, maneuvers: ManeuverSet,
                  process_noise: tuple[str, ...], settings: Settings,
-                 disturbances: tuple[str, ...] = (), gusts: tuple[str, ...] = ()):
+                 disturbances: tuple[str, ...] = (), gusts: tuple[str, ...] = (),
+                 initial_states=False, output_biases: bool = False):
         self.structure = structure
         self.hold = maneuvers.hold
         self.records = Records.from_maneuvers(maneuvers, structure)
@@ -297,6 +344,13 @@ class FilterErrorProblem:
                                 + tuple(f"T_{s}" for s in disturbances)
                                 + tuple(f"Tg_{s}" for s in gusts)
                                 + tuple(f"R_{o}" for o in structure.outputs))
+        self.n_global = len(self.parameter_names)
+        available = filter_state_names(structure, tuple(kept), disturbances, gusts)
+        self.maneuver_parameters = ManeuverParameters.of(
+            maneuvers.names, available, len(disturbances) + len(gusts),
+            chosen_initial_states(initial_states, available, structure.states),
+            structure.outputs, output_biases)
+        self.parameter_names += self.maneuver_parameters.names
         signals = structure.signals
         self.output_units = signals.outputs.units
         self.parameter_units = {
@@ -305,16 +359,30 @@ class FilterErrorProblem:
             **{f"G_{s}": signals.states[s].unit for s in gusts},
             **{f"T_{s}": "s" for s in disturbances},
             **{f"Tg_{s}": "s" for s in gusts},
-            **{f"R_{o.name}": f"({o.unit})²" for o in signals.outputs}}
+            **{f"R_{o.name}": f"({o.unit})²" for o in signals.outputs},
+            **self.maneuver_parameters.units(structure)}
         # The innovations' RMSE counts each output in its reference unit (a pure number).
         scale = rmse_reference_factors(self.output_units)
         self.rmse_scale = np.ones(len(self.output_names)) if scale is None else scale
 
     def split(self, values) -> NoiseParameters:
-        """The parts of a parameter vector."""
+        """The parts of a parameter vector (the per-maneuver parameters left out)."""
         n_coloured = len(self.disturbances) + len(self.gusts)
         sizes = np.cumsum([self.n_structure, len(self.noise_rows), n_coloured, n_coloured])
-        return NoiseParameters(*np.split(np.asarray(values), sizes))
+        return NoiseParameters(*np.split(np.asarray(values)[: self.n_global], sizes))
+
+    def record_terms(self, values, system) -> dict:
+        """The filter's start x̃_0 (M, S) and the output biases (M, p) at ``values``, as
+        keywords of :func:`.kalman.innovation_blocks` (none without per-maneuver
+        parameters)."""
+        parts = self.maneuver_parameters
+        if not parts.size:
+            return {}
+        default = np.zeros((len(self.records.lengths), system.size))
+        default[:, : system.states.size] = self.records.x0[:, system.states]
+        tail = np.asarray(values, dtype=float)[self.n_global:]
+        return {"start": parts.filter_start(tail, default),
+                "biases": parts.output_biases(tail, len(self.output_names))}
 
     def filter(self, values, directions: bool = False):
         """The companion system (with its disturbance states) and its steady-state filter at
@@ -378,7 +446,8 @@ class FilterErrorProblem:
     def innovations(self, values) -> tuple[np.ndarray, np.ndarray]:
         """Time-major innovations (N, M, p) and their covariance B (p, p) at ``values``."""
         system, steady = self.filter(values)
-        blocks = [block for _, block, _ in innovation_blocks(system, steady, self.records)]
+        blocks = [block for _, block, _ in innovation_blocks(
+            system, steady, self.records, **self.record_terms(values, system))]
         return np.concatenate(blocks), steady.innovation[0]
 
     def evaluate(self, values):
@@ -416,26 +485,59 @@ class FilterErrorProblem:
         """Fisher information M (P, P) and gradient G (P,) of L at ``values`` (module
         docstring); ``b`` and ``residuals`` are B and the innovations there."""
         system, steady = self.filter(values, directions=True)
-        p = len(self.parameter_names)
+        p = self.n_global
         b_inv = np.linalg.inv(b)
         whiten = np.linalg.cholesky(b_inv)                           # B⁻¹ = W Wᵀ
+        terms = self.record_terms(values, system)
+        patterns = self._whitened_patterns(system, steady, whiten) if terms else None
 
-        def products(block, d_block):
+        def products(first, block, d_block):
             flat = d_block.reshape(-1, p)                                # (L·M·p_out, P)
-            return flat.T @ flat, flat.T @ block.reshape(-1)
+            parts = [flat.T @ flat, flat.T @ block.reshape(-1)]
+            if patterns is not None:                 # the maneuvers' own parameters' terms
+                z = patterns[first:first + block.shape[0]]                # (L, p_out, q)
+                parts += [np.einsum("lmyd,lyq->mdq", d_block, z),
+                          np.einsum("lmy,lyq->mq", block, z)]
+            return parts
 
         # the products of one block run on a second thread while the filter steps the next
         with ThreadPoolExecutor(max_workers=1) as pool:
-            parts = [pool.submit(products, block, d_block) for _, block, d_block
-                     in innovation_blocks(system, steady, self.records, whiten)]
-            information = sum(part.result()[0] for part in parts)
-            gradient = sum(part.result()[1] for part in parts)
+            parts = [pool.submit(products, first, block, d_block) for first, block, d_block
+                     in innovation_blocks(system, steady, self.records, whiten, **terms)]
+            sums = [sum(part) for part in zip(*(part.result() for part in parts))]
+        information, gradient = sums[:2]
         db = b_inv @ (steady.innovation.imag / COMPLEX_STEP)          # B⁻¹ ∂B/∂θ_i
         scatter = sum(e.T @ e for e in residuals)
         n = self.n_samples
         information += 0.5 * n * np.einsum("iab,jba->ij", db, db)
         gradient += 0.5 * np.einsum("iab,ba->i", db, b_inv @ (n * b - scatter))
-        return information, gradient
+        if patterns is None:
+            return information, gradient
+        return self._with_maneuver_terms(information, gradient, patterns, *sums[2:])
+
+    def _whitened_patterns(self, system, steady, whiten: np.ndarray) -> np.ndarray:
+        """Wᵀ Z (N, p, q): the whitened innovations' sensitivities to one maneuver's own
+        parameters (:meth:`ManeuverParameters.patterns`) at the nominal filter."""
+        transition, output = system.transition[0].real, system.output[0].real
+        correction = transition @ steady.gain[0].real                              # ΦK
+        patterns = self.maneuver_parameters.patterns(
+            transition - correction @ output, output, correction, self.records.mask.shape[0])
+        return np.einsum("yk,nyq->nkq", whiten, patterns)
+
+    def _with_maneuver_terms(self, information, gradient, patterns, cross, own_gradient):
+        """The information and gradient over every parameter: the global block, the
+        cross terms ``cross`` (M, P, q), each maneuver's own block (its patterns' Gram matrix
+        up to its length) and ``own_gradient`` (M, q)."""
+        count, p, q = cross.shape
+        gram = np.cumsum(np.einsum("nyq,nyr->nqr", patterns, patterns), axis=0)
+        full = np.zeros((p + count * q, p + count * q))
+        full[:p, :p] = information
+        for m, length in enumerate(self.records.lengths):
+            own = slice(p + m * q, p + (m + 1) * q)
+            full[:p, own] = cross[m]
+            full[own, :p] = cross[m].T
+            full[own, own] = gram[length - 1]
+        return full, np.concatenate([gradient, own_gradient.ravel()])
 
 
 @attrs.frozen
@@ -462,6 +564,14 @@ class FilterErrorEstimator:
             themselves), with stationary standard deviation ``G_<state>`` (state units) and
             correlation time ``Tg_<state>`` (s), both estimated; G starts at
             :func:`gust_start`, Tg at 1 s.
+        initial_states: estimate each maneuver's initial filter state (``x0_<maneuver>_<state>``,
+            module :mod:`.maneuver_parameters`): ``True`` for every state the outputs see and
+            every disturbance (``d_<state>``) and gust (``g_<state>``), or the names of some;
+            default none (each record starts at its recorded initial state, disturbances and
+            gusts at zero). A gust slower than the records is nearly a constant per record:
+            its initial value is the one to estimate.
+        output_biases: estimate one constant bias per maneuver and output
+            (``bias_<maneuver>_<output>``).
         enforce_signs: use the sign priors as bounds.
         start: ``"auto"`` (equation error when every derivative's initial value is zero, else
             the initial values), ``"initial"`` or ``"equation-error"`` for the derivatives and delays.
@@ -476,6 +586,9 @@ class FilterErrorEstimator:
     process_noise_start: Mapping[str, float] | None = None
     disturbances: tuple[str, ...] = attrs.field(default=(), converter=_names)
     gusts: tuple[str, ...] = attrs.field(default=(), converter=_names)
+    initial_states: bool | tuple[str, ...] = attrs.field(default=False,
+                                                         converter=_initial_state_choice)
+    output_biases: bool = False
     enforce_signs: bool = False
     start: str = attrs.field(default="auto", validator=_start_choice)
     callback: Callable | None = None
@@ -499,9 +612,10 @@ class FilterErrorEstimator:
             problem = FilterErrorProblem(
                 structure, maneuvers, process_noise_states(structure, self.process_noise),
                 settings, process_noise_states(structure, self.disturbances, "disturbances"),
-                gust_states(structure, self.gusts))
+                gust_states(structure, self.gusts), self.initial_states, self.output_biases)
             values, note, given = self._start_values(problem, maneuvers, start)
-            values = matched_measurement_noise(problem, values, given)
+            values = matched_measurement_noise(problem, matched_biases(problem, values, given),
+                                               given)
             bounds = self._bounds(problem, values)
 
             def progress(record):
@@ -512,6 +626,9 @@ class FilterErrorEstimator:
                     self.callback("full", record)
 
             try:
+                if problem.maneuver_parameters.size:
+                    values = run(problem, values, _noise_held(problem, values, bounds),
+                                 progress).values
                 result = run(problem, values, bounds, progress)
             except SimulationDivergedError:
                 raise EstimationError(f"no finite likelihood at the start values: "
@@ -553,7 +670,9 @@ class FilterErrorEstimator:
         values = np.concatenate([initial, [steps[s] for s in states],
                                  [disturbances.get(s, np.nan) / dt for s in problem.disturbances],
                                  [gusts.get(s, np.nan) for s in problem.gusts],
-                                 np.full(coloured, _CORRELATION_START), variance])
+                                 np.full(coloured, _CORRELATION_START), variance,
+                                 problem.maneuver_parameters.start(
+                                     problem.records.x0, seen_states(structure).nonzero()[0])])
         if start is None:
             return values, note, ()
         if isinstance(start, Mapping):
@@ -585,11 +704,12 @@ class FilterErrorEstimator:
         dt = problem.records.dt
         shortest = np.concatenate([np.full(len(problem.disturbances), dt),
                                    np.full(len(problem.gusts), _SHORTEST_GUST_SAMPLES * dt)])
+        free = np.full(problem.maneuver_parameters.size, np.inf)
         return (np.concatenate([lower, np.zeros(n_f), _SIZE_FLOOR * parts.disturbance, shortest,
-                                _VARIANCE_FLOOR * parts.measurement]),
+                                _VARIANCE_FLOOR * parts.measurement, -free]),
                 np.concatenate([upper, np.full(n_f + n_d, np.inf),
                                 np.full(n_d, _LONGEST_CORRELATION),
-                                np.full(parts.measurement.size, np.inf)]))
+                                np.full(parts.measurement.size, np.inf), free]))
 
     def _estimate(self, problem, result, start, bounds, note) -> Estimate:
         lower, upper = bounds

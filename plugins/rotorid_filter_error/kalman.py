@@ -113,11 +113,14 @@ def _run(start: np.ndarray, transition_t: np.ndarray, forcing: np.ndarray) -> np
 
 
 def innovation_blocks(system: CompanionSystem, steady: SteadyStateFilter, records: Records,
-                      weight: np.ndarray | None = None
+                      weight: np.ndarray | None = None, start: np.ndarray | None = None,
+                      biases: np.ndarray | None = None
                       ) -> Iterator[tuple[int, np.ndarray, np.ndarray | None]]:
     """Yield ``(first, ν, ∂ν)`` for samples first … first+L−1: innovations ν (L, M, p) and,
     when ``system`` and ``steady`` hold complex-step directions, their derivatives ∂ν
     (L, M, p, D) (else None); with ``weight`` W (p, p) both multiplied by it, ν W.
+    ``start`` (M, S) is each maneuver's x̃_0 (default its recorded initial state, zero in
+    the other companion states), ``biases`` (M, p) constants subtracted from its outputs.
 
     The step runs in closed-loop form x̃_n+1 = A x̃_n + e_n with A = Φ(I − KH) and
     e_n = Σ Pu u + ΦK (z_n − Σ Du u). The sensitivities ∂x̃ obey the same A, forced by ∂A x̃_n
@@ -137,8 +140,12 @@ def innovation_blocks(system: CompanionSystem, steady: SteadyStateFilter, record
     size, n_y = a.shape[0], h.shape[0]
     weight = np.eye(n_y) if weight is None else weight
     a_t = np.ascontiguousarray(a.T)
-    state = np.zeros((count, size))
-    state[:, :system.states.size] = records.x0[:, system.states]
+    if start is None:
+        state = np.zeros((count, size))
+        state[:, :system.states.size] = records.x0[:, system.states]
+    else:
+        state = np.array(start, dtype=float)
+    measured = records.outputs if biases is None else records.outputs - biases
     n_dir = 1 if d_a is None else d_a.shape[0]
     if d_a is not None:
         sens = np.zeros((count * n_dir, size))                     # rows (maneuver, direction)
@@ -157,7 +164,7 @@ def innovation_blocks(system: CompanionSystem, steady: SteadyStateFilter, record
         length = stop - first
         inputs = lagged[first:stop]                                                # (L, M, T)
         mask = records.mask[first:stop, :, None]
-        corrected = records.outputs[first:stop] - inputs @ du                      # (L, M, p)
+        corrected = measured[first:stop] - inputs @ du                      # (L, M, p)
         states = _run(state, a_t, inputs @ pu + corrected @ k.T)                   # (L, M, S)
         innovations = ((corrected - states @ h.T) * mask) @ weight
         if d_a is None:
