@@ -164,3 +164,29 @@ def test_bad_channel_maps_are_one_line_errors_naming_the_file(tmp_path, capsys, 
     assert len(error.strip().splitlines()) == 1, error
     assert re.search(fragment, error), error
     assert "model.toml" in error or ".csv" in error
+
+
+#: Constant sensor offsets of ax az q θ in every file of the bias test (flight-test units).
+OFFSETS = np.array([0.4, -0.3, 0.5, -0.6])
+
+
+def test_filter_error_estimates_each_files_sensor_offsets(tmp_path, capsys):
+    """The same files with constant offsets on every output: ``--estimator filter-error
+    --output-biases`` writes one bias per file and output, each within 3 bounds of the offset
+    (every file has the same), and the derivatives within 5 bounds of the truth."""
+    files = _data(tmp_path, transform=lambda table: table + np.r_[0.0, 0.0, 0.0, OFFSETS])
+    model = tmp_path / "model.toml"
+    model.write_text(MODEL, encoding="utf-8")
+    out = tmp_path / "result.json"
+    status = main(["identify", str(model), *files, "--out", str(out), "--quiet",
+                   "--estimator", "filter-error", "--output-biases"])
+    assert status == 0, capsys.readouterr()
+    parameters = json.loads(out.read_text(encoding="utf-8"))["parameters"]
+    for maneuver in ("long3211", "coll3211", "mixed"):
+        for output, offset in zip(("ax", "az", "q", "theta"), OFFSETS):
+            bias = parameters[f"bias_{maneuver}_{output}"]
+            assert bias["value"] == pytest.approx(offset, abs=3 * bias["cramer_rao"]), (
+                maneuver, output)
+    for name, truth in TRUTH.items():
+        bound = parameters[name]["cramer_rao"]
+        assert parameters[name]["value"] == pytest.approx(truth, abs=max(5 * bound, 1e-3)), name

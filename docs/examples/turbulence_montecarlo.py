@@ -36,6 +36,7 @@ import attrs
 import numpy as np
 import rotorid
 from rotorid import FlightCondition, ManeuverSet, ModelStructure
+from rotorid.resampling import decimated
 from rotorid.study.montecarlo import monte_carlo
 from rotorid_helisim.linear_truth import LinearisedPlant, linearised_trim
 from rotorid_helisim.source import HelisimSource
@@ -48,6 +49,19 @@ ESTIMATORS = {"output-error": {},
               "filter-error": {"process_noise": (), "disturbances": ("u", "w", "q"),
                                "max_iterations": 200}}
 TRUTHS = ("nonlinear", "linear", "linear-longitudinal", "linear-rotor")
+
+
+@attrs.frozen
+class Decimated:
+    """``data(seed)`` low-passed at ``cutoff_hz`` and kept at every ``factor``-th sample
+    (:func:`rotorid.resampling.decimated`)."""
+
+    data: Callable[[int], ManeuverSet]
+    factor: int
+    cutoff_hz: float
+
+    def __call__(self, seed: int) -> ManeuverSet:
+        return decimated(self.data(seed), self.factor, self.cutoff_hz)
 
 
 @attrs.frozen
@@ -109,6 +123,11 @@ def main(argv=None) -> dict:
     parser.add_argument("--turbulence", default="moderate", choices=("light", "moderate"))
     parser.add_argument("--truth", nargs="+", default=["nonlinear"], choices=TRUTHS)
     parser.add_argument("--duration-scale", type=float, default=1.0)
+    parser.add_argument("--decimate", type=int, default=1)
+    parser.add_argument("--cutoff", type=float, help="Hz, with --decimate")
+    parser.add_argument("--initial-states", nargs="*", default=(),
+                        help="filter states whose initial values filter error estimates, "
+                             "e.g. d_u d_w d_q")
     parser.add_argument("--executor", default=None, choices=(None, "process"))
     parser.add_argument("--out", type=Path, default=Path("montecarlo-turbulence"))
     args = parser.parse_args(argv)
@@ -121,9 +140,13 @@ def main(argv=None) -> dict:
         out.mkdir(parents=True, exist_ok=True)
         data, condition = flights(args.turbulence, args.duration_scale, out / "data",
                                   truth_name)
+        if args.cutoff is not None:
+            data = Decimated(data, args.decimate, args.cutoff)
         structure = ModelStructure.populated(condition, "longitudinal")
         truth = truth_values(rotorid.create("data-sources", "helisim"), structure)
         for name, options in ESTIMATORS.items():
+            if name == "filter-error" and args.initial_states:
+                options = {**options, "initial_states": tuple(args.initial_states)}
             result = monte_carlo(structure, data, range(args.runs), estimator=name,
                                  estimator_options=options, truth=truth,
                                  executor=args.executor,
