@@ -237,11 +237,9 @@ def matched_measurement_noise(problem: "FilterErrorProblem", values: np.ndarray,
 
 def matched_biases(problem: "FilterErrorProblem", values: np.ndarray,
                    keep: tuple[str, ...] = ()) -> np.ndarray:
-    """``values`` with each output bias (except those in ``keep``) started at its record's
-    mean innovation at these values: a sensor offset left to the fit from zero makes the
-    first steps trade it against the process noise, which can reach its bound 0 there and
-    never leave it (F enters as F², whose gradient vanishes at 0). Unchanged when the filter
-    does not exist at ``values``."""
+    """``values`` with each output bias (except those in ``keep``) moved by its record's mean
+    innovation at these values, so that the fit starts near each sensor's offset. Unchanged
+    when the filter does not exist at ``values``."""
     values = np.array(values, dtype=float)
     names = problem.parameter_names
     rows = [i for i, n in enumerate(names) if n.startswith("bias_") and n not in keep]
