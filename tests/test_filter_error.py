@@ -369,7 +369,8 @@ def test_start_values_and_options_are_checked():
         estimator(process_noise=("u", "x")).estimate(structure(), data)
     with pytest.raises(EstimationError, match="unknown parameters"):
         estimator().estimate(structure(), data, start={"F_theta": 1.0})
-    with pytest.raises(EstimationError, match="linear model structures"):
+    with pytest.raises(EstimationError, match="a linear model structure .* or a nonlinear "
+                                              "model of one's own"):
         estimator().estimate(object(), data)
     with pytest.raises(EstimationError, match="no finite likelihood at the start values: the "
                                               "innovations overflow .*; give other start"):

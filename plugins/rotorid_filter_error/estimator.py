@@ -593,15 +593,17 @@ class FilterErrorEstimator:
 
     def estimate(self, structure: ModelStructure, maneuvers: ManeuverSet, *,
                  start=None) -> Estimate:
-        """Fit ``structure``'s derivatives and delays, F and R to ``maneuvers``.
+        """Fit ``structure``'s derivatives and delays, F and R to ``maneuvers``; a nonlinear
+        model of one's own (or its :class:`~rotorid.estimation.integrated.IntegratedModel`)
+        instead goes to :func:`.nonlinear.fit_nonlinear`.
 
         ``start`` overrides start values: a vector over the estimate's parameter names or a
         mapping of some of them.
         """
         if not isinstance(structure, ModelStructure):
-            raise EstimationError("the filter-error estimator identifies linear model "
-                                  "structures (ModelStructure); use output error for a model "
-                                  "of one's own")
+            from .nonlinear import fit_nonlinear
+
+            return fit_nonlinear(self, structure, maneuvers, start)
         with blas.single_threaded():
             # projected steps: in still air every F heads for its bound 0, and one F just above
             # it would otherwise shorten every step (the fit then stalls far from the optimum)
@@ -632,7 +634,7 @@ class FilterErrorEstimator:
                 raise EstimationError(f"no finite likelihood at the start values: "
                                       f"{problem.failure(values)}; give other start values "
                                       f"(derivatives, F or R)") from None
-        return self._estimate(problem, result, values, bounds, note)
+        return filter_error_estimate(problem, result, values, bounds, note)
 
     def _start_values(self, problem, maneuvers, start):
         structure = problem.structure
@@ -645,7 +647,7 @@ class FilterErrorEstimator:
         if wants_ee and structure.n_parameters:
             initial = LinearModel(structure).start_values(maneuvers)
             note = "start values from equation error"
-        variance = self._noise_start(problem.records)
+        variance = measurement_noise_start(problem.records)
         states = problem.process_noise
         given = dict(self.process_noise_start or {})
         unknown = set(given) - {f"F_{s}" for s in states}
@@ -686,15 +688,6 @@ class FilterErrorEstimator:
                                   f"has {values.size} parameters ({', '.join(names)})")
         return vector.copy(), None, names
 
-    @staticmethod
-    def _noise_start(records) -> np.ndarray:
-        """Half the mean square first difference of each output: the white measurement
-        noise's variance plus the (small) signal change over one sample."""
-        both = records.mask[1:] & records.mask[:-1]
-        change = np.diff(records.outputs, axis=0) * both[..., None]
-        pairs = max(int(np.sum(both)), 1)
-        return np.maximum(0.5 * np.sum(change**2, axis=(0, 1)) / pairs, 1e-12)
-
     def _bounds(self, problem, values):
         lower, upper = problem.structure.bounds(enforce_signs=self.enforce_signs)
         parts = problem.split(values)
@@ -709,20 +702,34 @@ class FilterErrorEstimator:
                                 np.full(n_d, _LONGEST_CORRELATION),
                                 np.full(parts.measurement.size, np.inf), free]))
 
-    def _estimate(self, problem, result, start, bounds, note) -> Estimate:
-        lower, upper = bounds
-        values, information = result.values, result.information
-        at_bound = tuple(n for n, v, lo, hi in zip(problem.parameter_names, values,
-                                                   lower, upper)
-                         if (np.isfinite(lo) and v <= lo) or (np.isfinite(hi) and v >= hi))
-        notes = ([note] if note else []) + [
-            "cost exp(2L/N) = det B·exp(mean νᵀB⁻¹ν); RMSE of the innovations; "
-            "noise_covariance is the measurement noise R"]
-        return Estimate.from_fit(
-            problem, values, information, estimator=NAME, start=start,
-            noise_covariance=np.diag(problem.split(values).measurement), cost=result.cost,
-            rmse=result.rmse, residual_rms=result.residual_rms, n_samples=problem.n_samples,
-            cost_history=result.cost_history,
-            rmse_history=result.rmse_history, iterations=result.iterations,
-            converged=result.converged, stop_reason=result.stop_reason, at_bound=at_bound,
-            notes=tuple(notes))
+
+def measurement_noise_start(records) -> np.ndarray:
+    """Start of R (p,): half the mean square first difference of each output of ``records``
+    (time-major ``outputs`` (N, M, p) and ``mask`` (N, M)): the white measurement noise's
+    variance plus the (small) signal change over one sample."""
+    both = records.mask[1:] & records.mask[:-1]
+    change = np.diff(records.outputs, axis=0) * both[..., None]
+    pairs = max(int(np.sum(both)), 1)
+    return np.maximum(0.5 * np.sum(change**2, axis=(0, 1)) / pairs, 1e-12)
+
+
+def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
+    """The :class:`Estimate` of a filter-error fit ``result`` of ``problem`` (a linear or a
+    nonlinear one: parameters ``R_<output>`` hold the measurement noise)."""
+    lower, upper = bounds
+    values, information = result.values, result.information
+    at_bound = tuple(n for n, v, lo, hi in zip(problem.parameter_names, values, lower, upper)
+                     if (np.isfinite(lo) and v <= lo) or (np.isfinite(hi) and v >= hi))
+    notes = ([note] if note else []) + [
+        "cost exp(2L/N) = det B·exp(mean νᵀB⁻¹ν); RMSE of the innovations; "
+        "noise_covariance is the measurement noise R"]
+    names = problem.parameter_names
+    measurement = values[[names.index(f"R_{o}") for o in problem.output_names]]
+    return Estimate.from_fit(
+        problem, values, information, estimator=NAME, start=start,
+        noise_covariance=np.diag(measurement), cost=result.cost,
+        rmse=result.rmse, residual_rms=result.residual_rms, n_samples=problem.n_samples,
+        cost_history=result.cost_history,
+        rmse_history=result.rmse_history, iterations=result.iterations,
+        converged=result.converged, stop_reason=result.stop_reason, at_bound=at_bound,
+        notes=tuple(notes))

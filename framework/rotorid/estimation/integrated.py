@@ -46,7 +46,7 @@ class InitialConditions:
 
 
 @attrs.frozen
-class _Record:
+class Record:
     """One maneuver in the model's signals: inputs (N, m) and the initial state (n,) from the
     fixed values and the data."""
 
@@ -113,9 +113,9 @@ class IntegratedModel:
             {f"x0_{m}_{s}": self.signals.states[s].unit
              for m in self._maneuver_names for s in initial.estimated})
         self.fixed = {p.name: p.start for p in parameters if p.fixed}
-        self._cache: dict[int, tuple[ManeuverSet, list[_Record]]] = {}
+        self._cache: dict[int, tuple[ManeuverSet, list[Record]]] = {}
         self._start_states = (np.concatenate([r.initial_state[self._estimated]
-                                              for r in self._records(maneuvers)])
+                                              for r in self.records(maneuvers)])
                               if self._maneuver_names else np.zeros(0))
 
     def _check_options(self, maneuvers):
@@ -195,7 +195,8 @@ class IntegratedModel:
         return outputs, sens
 
     # ------------------------------------------------------------ data
-    def _records(self, maneuvers: ManeuverSet) -> list[_Record]:
+    def records(self, maneuvers: ManeuverSet) -> list[Record]:
+        """Each maneuver's inputs and initial state in the model's signals (cached)."""
         cached = self._cache.get(id(maneuvers))
         if cached is None or cached[0] is not maneuvers:
             cached = (maneuvers, [self._record(m) for m in maneuvers])
@@ -208,16 +209,16 @@ class IntegratedModel:
         return self.channels.read(columns, self.signals.all, names,
                                   f"maneuver {maneuver.name!r}", units)
 
-    def _record(self, maneuver: Maneuver) -> _Record:
+    def _record(self, maneuver: Maneuver) -> Record:
         states = self.signals.states
         from_data = [s for s in states.names if s not in self.initial.fixed]
         initial = np.array([self.initial.fixed.get(s, np.nan) for s in states.names])
         initial[states.indices(from_data)] = self._read(maneuver, from_data)[0]
-        return _Record(maneuver.name, float(maneuver.time[0]), maneuver.dt,
+        return Record(maneuver.name, float(maneuver.time[0]), maneuver.dt,
                        self._read(maneuver, self.signals.inputs.names), initial)
 
     # ------------------------------------------------------------ simulation
-    def _expand(self, batch: np.ndarray, records: list[_Record]):
+    def expand(self, batch: np.ndarray, records: list[Record]):
         """Model parameters (B, p) and initial states (M, B, n) of B estimated vectors ψ."""
         theta = np.tile(self._theta, (batch.shape[0], 1))
         theta[:, self._free] = batch[:, :len(self._free)]
@@ -244,7 +245,7 @@ class IntegratedModel:
             groups.setdefault(round(r.dt, 12), []).append(i)
         return groups.values()
 
-    def _stacked(self, records, members, theta, states):
+    def stacked(self, records, members, theta, states):
         """Time-major inputs (N, R, m), t0 (R,), x0 (R, n) and θ (R, p) of R = members × B
         rows; shorter maneuvers hold their last input to the longest one's length."""
         n = max(records[i].inputs.shape[0] for i in members)
@@ -271,12 +272,12 @@ class IntegratedModel:
 
     def _simulate_batch(self, batch: np.ndarray, maneuvers: ManeuverSet) -> list[np.ndarray]:
         """Outputs (N_i, B, ny) per maneuver for B estimated vectors ψ (batch (B, P))."""
-        records = self._records(maneuvers)
-        theta, states = self._expand(batch, records)
+        records = self.records(maneuvers)
+        theta, states = self.expand(batch, records)
         result = [None] * len(records)
         b = batch.shape[0]
         for members in self._groups(records):
-            inputs, t0, x0, rows_theta = self._stacked(records, members, theta, states)
+            inputs, t0, x0, rows_theta = self.stacked(records, members, theta, states)
             dt = records[members[0]].dt
             x = integrate(self.model.derivatives, t0, dt, x0, inputs, rows_theta,
                           maneuvers.hold, self.integration)
@@ -307,14 +308,14 @@ class IntegratedModel:
         return outputs, sens
 
     def _exact_sensitivities(self, values, maneuvers):
-        records = self._records(maneuvers)
-        theta, states = self._expand(values[None, :], records)
+        records = self.records(maneuvers)
+        theta, states = self.expand(values[None, :], records)
         p_free, p = len(self._free), values.size
         theta_tangent = np.zeros((self._theta.size, p))
         theta_tangent[self._free, np.arange(p_free)] = 1.0
         outputs, sens = [None] * len(records), [None] * len(records)
         for members in self._groups(records):
-            inputs, t0, x0, rows_theta = self._stacked(records, members, theta, states)
+            inputs, t0, x0, rows_theta = self.stacked(records, members, theta, states)
             x0_tangent = np.zeros(x0.shape + (p,))
             for j, i in enumerate(members):
                 first = p_free + len(self._estimated) * (
