@@ -53,6 +53,7 @@ from rotorid.units import rmse_reference_factors
 from rotorid_output_error.levenberg_marquardt import Settings, run
 
 from .kalman import Records, innovation_blocks
+from .likelihood import InnovationLikelihood, covariance_terms
 from .maneuver_parameters import ManeuverParameters, chosen_initial_states, filter_state_names
 from .riccati import steady_state_filter
 from .system import companion_system, seen_states, with_disturbances
@@ -309,7 +310,7 @@ class NoiseParameters:
     measurement: np.ndarray
 
 
-class FilterErrorProblem:
+class FilterErrorProblem(InnovationLikelihood):
     """Cost, innovations and Fisher information of one structure on one maneuver set, in the
     form :func:`rotorid_output_error.levenberg_marquardt.run` drives."""
 
@@ -448,36 +449,9 @@ class FilterErrorProblem:
             system, steady, self.records, **self.record_terms(values, system))]
         return np.concatenate(blocks), steady.innovation[0]
 
-    def evaluate(self, values):
-        """(cost exp(2L/N), B, innovations per maneuver, innovation RMSE); cost = inf when the
-        filter does not exist, the innovations overflow or ``values`` are not finite (a
-        step from a non-finite information matrix)."""
-        if not np.all(np.isfinite(values)):
-            return np.inf, None, None, np.inf
-        try:
-            innovations, b = self.innovations(values)
-        except (EstimationError, np.linalg.LinAlgError):
-            return np.inf, None, None, np.inf
-        sign, log_det = np.linalg.slogdet(b)
-        with np.errstate(over="ignore", invalid="ignore"):
-            scatter = np.einsum("nmi,nmj->ij", innovations, innovations)
-            quadratic = np.trace(np.linalg.solve(b, scatter)) / self.n_samples
-            cost = float(np.exp(quadratic + log_det))
-        if sign <= 0 or not np.isfinite(cost):
-            return np.inf, None, None, np.inf
-        rmse = float(np.sqrt(np.sum((innovations * self.rmse_scale)**2)
-                             / (len(self.output_names) * self.n_samples)))
-        return cost, b, self.records.split(innovations), rmse
-
-    def failure(self, values) -> str:
-        """Why the cost at ``values`` is infinite: the filter's own error, or B."""
-        try:
-            innovations, b = self.innovations(values)
-        except (EstimationError, np.linalg.LinAlgError) as error:
-            return f"the Kalman filter does not exist ({error})"
-        if not np.all(np.isfinite(innovations)):
-            return "the innovations overflow (the model diverges at these values)"
-        return f"the innovation covariance B is singular (det B = {np.linalg.det(b):.3g})"
+    def per_maneuver(self, innovations: np.ndarray) -> list[np.ndarray]:
+        """Time-major (N, M, p) innovations → one (N_i, p) array per maneuver."""
+        return self.records.split(innovations)
 
     def gauss_newton(self, values, b: np.ndarray, residuals):
         """Fisher information M (P, P) and gradient G (P,) of L at ``values`` (module
@@ -504,11 +478,9 @@ class FilterErrorProblem:
                      in innovation_blocks(system, steady, self.records, whiten, **terms)]
             sums = [sum(part) for part in zip(*(part.result() for part in parts))]
         information, gradient = sums[:2]
-        db = b_inv @ (steady.innovation.imag / COMPLEX_STEP)          # B⁻¹ ∂B/∂θ_i
-        scatter = sum(e.T @ e for e in residuals)
-        n = self.n_samples
-        information += 0.5 * n * np.einsum("iab,jba->ij", db, db)
-        gradient += 0.5 * np.einsum("iab,ba->i", db, b_inv @ (n * b - scatter))
+        extra = covariance_terms(steady.innovation.imag / COMPLEX_STEP, b, residuals,
+                                 self.n_samples)
+        information, gradient = information + extra[0], gradient + extra[1]
         if patterns is None:
             return information, gradient
         return self._with_maneuver_terms(information, gradient, patterns, *sums[2:])
@@ -617,23 +589,9 @@ class FilterErrorEstimator:
             values = matched_measurement_noise(problem, matched_biases(problem, values, given),
                                                given)
             bounds = self._bounds(problem, values)
-
-            def progress(record):
-                notify("rotorid_estimation_iteration", estimator=NAME, stage="",
-                       iteration=record.iteration, cost=record.cost, rmse=record.rmse,
-                       lm_lambda=record.lm_lambda)
-                if self.callback is not None:
-                    self.callback("full", record)
-
-            try:
-                if problem.maneuver_parameters.size:
-                    values = run(problem, values, _noise_held(problem, values, bounds),
-                                 progress).values
-                result = run(problem, values, bounds, progress)
-            except SimulationDivergedError:
-                raise EstimationError(f"no finite likelihood at the start values: "
-                                      f"{problem.failure(values)}; give other start values "
-                                      f"(derivatives, F or R)") from None
+            held = (_noise_held(problem, values, bounds) if problem.maneuver_parameters.size
+                    else None)
+            result = run_fit(problem, values, bounds, self.callback, held)
         return filter_error_estimate(problem, result, values, bounds, note)
 
     def _start_values(self, problem, maneuvers, start):
@@ -649,11 +607,7 @@ class FilterErrorEstimator:
             note = "start values from equation error"
         variance = measurement_noise_start(problem.records)
         states = problem.process_noise
-        given = dict(self.process_noise_start or {})
-        unknown = set(given) - {f"F_{s}" for s in states}
-        if unknown:
-            raise EstimationError(f"process_noise_start for unknown parameters {sorted(unknown)}; "
-                                  f"the process noise is {', '.join(f'F_{s}' for s in states)}")
+        given = given_process_noise_start(self.process_noise_start, states)
         missing = tuple(s for s in states if f"F_{s}" not in given)
         dt = problem.records.dt
         steps = {**process_noise_start(structure, missing, variance, dt),
@@ -673,20 +627,8 @@ class FilterErrorEstimator:
                                  np.full(coloured, _CORRELATION_START), variance,
                                  problem.maneuver_parameters.start(
                                      problem.records.x0, seen_states(structure).nonzero()[0])])
-        if start is None:
-            return values, note, ()
-        if isinstance(start, Mapping):
-            unknown = set(start) - set(names)
-            if unknown:
-                raise EstimationError(f"start values for unknown parameters {sorted(unknown)}")
-            for name, value in start.items():
-                values[names.index(name)] = float(value)
-            return values, None, tuple(start)
-        vector = np.asarray(start, dtype=float)
-        if vector.shape != values.shape:
-            raise EstimationError(f"start has shape {vector.shape}; the filter-error estimate "
-                                  f"has {values.size} parameters ({', '.join(names)})")
-        return vector.copy(), None, names
+        values, given = with_start(values, start, names)
+        return values, (note if start is None else None), given
 
     def _bounds(self, problem, values):
         lower, upper = problem.structure.bounds(enforce_signs=self.enforce_signs)
@@ -733,3 +675,54 @@ def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
         rmse_history=result.rmse_history, iterations=result.iterations,
         converged=result.converged, stop_reason=result.stop_reason, at_bound=at_bound,
         notes=tuple(notes))
+
+
+def given_process_noise_start(starts, states) -> dict[str, float]:
+    """``process_noise_start`` checked: every name an ``F_<state>`` of ``states``."""
+    given = dict(starts or {})
+    unknown = set(given) - {f"F_{s}" for s in states}
+    if unknown:
+        raise EstimationError(f"process_noise_start for unknown parameters {sorted(unknown)}; "
+                              f"the process noise is {', '.join(f'F_{s}' for s in states)}")
+    return given
+
+
+def with_start(values: np.ndarray, start, names) -> tuple[np.ndarray, tuple[str, ...]]:
+    """(``values`` with ``start`` applied, the names it gives): ``start`` is None, a mapping
+    of some of ``names`` or a whole vector."""
+    if start is None:
+        return values, ()
+    if isinstance(start, Mapping):
+        unknown = set(start) - set(names)
+        if unknown:
+            raise EstimationError(f"start values for unknown parameters {sorted(unknown)}")
+        for name, value in start.items():
+            values[names.index(name)] = float(value)
+        return values, tuple(start)
+    vector = np.asarray(start, dtype=float)
+    if vector.shape != values.shape:
+        raise EstimationError(f"start has shape {vector.shape}; the filter-error estimate has "
+                              f"{values.size} parameters ({', '.join(names)})")
+    return vector.copy(), tuple(names)
+
+
+def run_fit(problem, values, bounds, callback=None, held=None):
+    """Levenberg-Marquardt on ``problem`` from ``values`` within ``bounds``, first within
+    ``held`` bounds when given, reporting every accepted iteration (the
+    ``rotorid_estimation_iteration`` hook and ``callback``)."""
+
+    def progress(record):
+        notify("rotorid_estimation_iteration", estimator=NAME, stage="",
+               iteration=record.iteration, cost=record.cost, rmse=record.rmse,
+               lm_lambda=record.lm_lambda)
+        if callback is not None:
+            callback("full", record)
+
+    try:
+        if held is not None:
+            values = run(problem, values, held, progress).values
+        return run(problem, values, bounds, progress)
+    except SimulationDivergedError:
+        raise EstimationError(f"no finite likelihood at the start values: "
+                              f"{problem.failure(values)}; give other start values "
+                              f"(parameters, F or R)") from None

@@ -21,35 +21,35 @@ uses for output error).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-
 import numpy as np
 import scipy.linalg
 from rotorid import blas
-from rotorid.errors import DataError, EstimationError, SimulationDivergedError
+from rotorid.errors import DataError, EstimationError
 from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.integrated import IntegratedModel
 from rotorid.model.nonlinear import NonlinearModel
-from rotorid.plugin.manager import notify
 from rotorid.simulation.integrators import integrate
 from rotorid.units import rmse_reference_factors
-from rotorid_output_error.levenberg_marquardt import Settings, run
+from rotorid_output_error.levenberg_marquardt import Settings
 
 from .estimator import (
     _PROCESS_START,
     _VARIANCE_FLOOR,
-    NAME,
     filter_error_estimate,
+    given_process_noise_start,
     matched_measurement_noise,
     measurement_noise_start,
+    run_fit,
+    with_start,
 )
+from .likelihood import InnovationLikelihood, covariance_terms
 from .riccati import steady_state_filter
 
 #: Relative central-difference step of the linearisation in the states: h = step·max(|x|, 1).
 _LINEARISATION_STEP = 1e-6
 
 
-class NonlinearFilterErrorProblem:
+class NonlinearFilterErrorProblem(InnovationLikelihood):
     """Cost, innovations and Fisher information of a nonlinear model on one maneuver set, in
     the form :func:`rotorid_output_error.levenberg_marquardt.run` drives.
 
@@ -168,35 +168,9 @@ class NonlinearFilterErrorProblem:
         nu, b = self.run(np.asarray(values, dtype=float)[None])
         return nu[:, :, 0], b[0]
 
-    def evaluate(self, values):
-        """(cost exp(2L/N), B, innovations per maneuver, innovation RMSE); cost = inf when the
-        filter does not exist or the innovations are not finite."""
-        if not np.all(np.isfinite(values)):
-            return np.inf, None, None, np.inf
-        try:
-            innovations, b = self.innovations(values)
-        except (EstimationError, np.linalg.LinAlgError):
-            return np.inf, None, None, np.inf
-        sign, log_det = np.linalg.slogdet(b)
-        with np.errstate(over="ignore", invalid="ignore"):
-            scatter = np.einsum("nmi,nmj->ij", innovations, innovations)
-            quadratic = np.trace(np.linalg.solve(b, scatter)) / self.n_samples
-            cost = float(np.exp(quadratic + log_det))
-        if sign <= 0 or not np.isfinite(cost):
-            return np.inf, None, None, np.inf
-        rmse = float(np.sqrt(np.sum((innovations * self.rmse_scale)**2)
-                             / (len(self.output_names) * self.n_samples)))
-        return cost, b, [innovations[:n, i] for i, n in enumerate(self.lengths)], rmse
-
-    def failure(self, values) -> str:
-        """Why the cost at ``values`` is infinite."""
-        try:
-            innovations, b = self.innovations(values)
-        except (EstimationError, np.linalg.LinAlgError) as error:
-            return f"the Kalman filter does not exist ({error})"
-        if not np.all(np.isfinite(innovations)):
-            return "the innovations are not finite (the model diverges at these values)"
-        return f"the innovation covariance B is singular (det B = {np.linalg.det(b):.3g})"
+    def per_maneuver(self, innovations: np.ndarray) -> list[np.ndarray]:
+        """Time-major (N, M, p) innovations → one (N_i, p) array per maneuver."""
+        return [innovations[:n, i] for i, n in enumerate(self.lengths)]
 
     def steps(self, values: np.ndarray) -> np.ndarray:
         """Central-difference steps (P,): step·max(|ψ|, 1) for the model's parameters,
@@ -224,12 +198,8 @@ class NonlinearFilterErrorProblem:
         weighted = d_nu @ b_inv                                                  # (N, M, P, p)
         information = np.einsum("nmip,nmjp->ij", weighted, d_nu)
         gradient = np.einsum("nmip,nmp->i", weighted, innovations)
-        db = b_inv @ d_b
-        scatter = sum(e.T @ e for e in residuals)
-        n = self.n_samples
-        information += 0.5 * n * np.einsum("iab,jba->ij", db, db)
-        gradient += 0.5 * np.einsum("iab,ba->i", db, b_inv @ (n * b - scatter))
-        return information, gradient
+        extra = covariance_terms(d_b, b, residuals, self.n_samples)
+        return information + extra[0], gradient + extra[1]
 
 
 #: Options of the linear estimator that a nonlinear model does not take, and what to do.
@@ -280,20 +250,7 @@ def fit_nonlinear(estimator, model, maneuvers, start=None) -> Estimate:
         n_f = len(process)
         bounds = (np.concatenate([lower, np.zeros(n_f), floor]),
                   np.concatenate([upper, np.full(n_f + floor.size, np.inf)]))
-
-        def progress(record):
-            notify("rotorid_estimation_iteration", estimator=NAME, stage="",
-                   iteration=record.iteration, cost=record.cost, rmse=record.rmse,
-                   lm_lambda=record.lm_lambda)
-            if estimator.callback is not None:
-                estimator.callback("full", record)
-
-        try:
-            result = run(problem, values, bounds, progress)
-        except SimulationDivergedError:
-            raise EstimationError(f"no finite likelihood at the start values: "
-                                  f"{problem.failure(values)}; give other start values "
-                                  f"(parameters, F or R)") from None
+        result = run_fit(problem, values, bounds, estimator.callback)
     return filter_error_estimate(problem, result, values, bounds, None)
 
 
@@ -303,12 +260,7 @@ def _start_values(estimator, problem: NonlinearFilterErrorProblem, start):
     names = problem.parameter_names
     variance = measurement_noise_start(problem)
     outputs = problem.output_names
-    given_f = dict(estimator.process_noise_start or {})
-    unknown = set(given_f) - {f"F_{s}" for s in problem.process_noise}
-    if unknown:
-        raise EstimationError(f"process_noise_start for unknown parameters {sorted(unknown)}; "
-                              f"the process noise is "
-                              f"{', '.join(f'F_{s}' for s in problem.process_noise)}")
+    given_f = given_process_noise_start(estimator.process_noise_start, problem.process_noise)
     f = []
     for state in problem.process_noise:
         if f"F_{state}" in given_f:
@@ -320,17 +272,4 @@ def _start_values(estimator, problem: NonlinearFilterErrorProblem, start):
                                   f"start; give process_noise_start={{'F_{state}': …}} or leave "
                                   f"{state} out of process_noise")
     values = np.concatenate([problem.model.initial_values(), f, variance])
-    if start is None:
-        return values, ()
-    if isinstance(start, Mapping):
-        unknown = set(start) - set(names)
-        if unknown:
-            raise EstimationError(f"start values for unknown parameters {sorted(unknown)}")
-        for name, value in start.items():
-            values[names.index(name)] = float(value)
-        return values, tuple(start)
-    vector = np.asarray(start, dtype=float)
-    if vector.shape != values.shape:
-        raise EstimationError(f"start has shape {vector.shape}; the filter-error estimate has "
-                              f"{values.size} parameters ({', '.join(names)})")
-    return vector.copy(), names
+    return with_start(values, start, names)
