@@ -30,7 +30,9 @@ through the discretisation and the doubling algorithm of the Riccati equation gi
 derivatives of Φ, H, K and B, and one batched pass runs the predicted states' sensitivities
 through the filter's own recursion (:mod:`.kalman`). M is also the information matrix
 of the Cramér-Rao bounds. Because the filter is stable whatever the model's stability, an
-unstable model is identified directly, on the full records.
+unstable model is identified directly, on the full records. Start values come from
+:mod:`.starts`, each maneuver's own parameters (initial states, output biases) from
+:mod:`.maneuver_parameters`; a nonlinear model of one's own goes to :mod:`.nonlinear`.
 """
 
 from __future__ import annotations
@@ -56,25 +58,27 @@ from .kalman import Records, innovation_blocks
 from .likelihood import InnovationLikelihood, covariance_terms
 from .maneuver_parameters import ManeuverParameters, chosen_initial_states, filter_state_names
 from .riccati import steady_state_filter
+from .starts import (
+    CORRELATION_START,
+    given_process_noise_start,
+    gust_start,
+    matched_biases,
+    matched_measurement_noise,
+    measurement_noise_start,
+    process_noise_start,
+    with_start,
+)
 from .system import companion_system, seen_states, with_disturbances
 
 NAME = "filter-error"
-#: Default start of F relative to the measurement-noise size of the state's output: small,
-#: because large process noise lets the filter follow the data, a poor local minimum.
-_PROCESS_START = 0.1
 #: Lower bound of a measurement-noise variance relative to its start value (a standard
 #: deviation of 1 % of the start's). Lower, a still-air fit on decimated hover records drove
 #: R_az and R_r to 10⁻⁸ of their starts, where the filter trusts those outputs exactly and its
 #: Riccati equation stopped converging (docs/estimation.md).
 _VARIANCE_FLOOR = 1e-4
-#: Passes of the measurement-noise start matched to the start innovations (B depends on R
-#: through the filter's P, so R and B are matched alternately; three passes settle it).
-_MATCH_PASSES = 3
 #: Lower bound of a disturbance's size relative to its start: at zero its driving variance
 #: D²(1 − a²) has zero gradient in D, so a fit that reached zero could never leave it.
 _SIZE_FLOOR = 1e-4
-#: Start of a disturbance's correlation time, s.
-_CORRELATION_START = 1.0
 #: Longest correlation time of a disturbance, s (a random walk for the record lengths flown).
 _LONGEST_CORRELATION = 1000.0
 #: Shortest correlation time of a gust, in samples: the outputs reading a gust's derivative
@@ -82,8 +86,6 @@ _LONGEST_CORRELATION = 1000.0
 #: measurement noise; with one sample allowed the linear tests' fit went there (Tg_w 0.027 s,
 #: R_az at its floor) and the filter's covariance overflowed.
 _SHORTEST_GUST_SAMPLES = 10
-#: Lowest matched R, relative to the output's mean square innovation.
-_MATCH_FLOOR = 0.05
 
 
 def _names(value) -> tuple[str, ...] | None:
@@ -135,129 +137,6 @@ def gust_states(structure: ModelStructure, names: tuple[str, ...]) -> tuple[str,
                                   f"{', '.join(delayed)} read; a gust acts without delay, so "
                                   f"remove their delays or leave {state} out")
     return states
-
-
-def _measuring_output(structure: ModelStructure, state: str, parameter: str,
-                      option: str) -> tuple[int, bool]:
-    """:func:`measuring_output`, refusing a state no output measures: ``parameter`` (such as
-    ``F_w``) then has no default start, and ``option`` names the setting to leave it out of."""
-    output, reads_rate = measuring_output(structure, state)
-    if output is None:
-        raise EstimationError(f"no output measures state {state} or its rate, so {parameter} "
-                              f"has no default start; give its start value or leave {state} "
-                              f"out of {option}")
-    return output, reads_rate
-
-
-def process_noise_start(structure: ModelStructure, states: tuple[str, ...],
-                        variance: np.ndarray, dt: float, parameter: str = "F",
-                        option: str = "process_noise") -> dict[str, float]:
-    """Default start of ``F_<state>`` (structure units per sample): a tenth of the noise size
-    of an output that measures the state, either the state itself (σ) or an output that reads
-    its equation's derivative terms, such as a velocity's specific force (σ·dt, the change
-    over one sample).
-
-    ``variance`` (p,) is the start of R over the structure's outputs; ``parameter`` and
-    ``option`` name the parameter and the setting in errors (the disturbances' starts are
-    built from these).
-    """
-    starts = {}
-    for state in states:
-        output, reads_rate = _measuring_output(structure, state, f"{parameter}_{state}", option)
-        size = np.sqrt(variance[output]) * (dt if reads_rate else 1.0)
-        starts[state] = _PROCESS_START * float(size)
-    return starts
-
-
-def gust_start(structure: ModelStructure, states: tuple[str, ...],
-               records: Records) -> dict[str, float]:
-    """Default start of ``G_<state>`` (state units): the standard deviation of the recorded
-    output measuring the state (:func:`measuring_output`), or of the accelerometer reading its
-    equation times the correlation time's start (the speed that acceleration builds in that
-    time). Measured, not a fraction of the noise: from a gust far smaller than the data's
-    the fit ends with the gust switched off through its derivative (on the linear tests'
-    data, from a tenth of the noise size, L_v and L_p near zero, 50–560 CR off)."""
-    starts = {}
-    for state in states:
-        output, reads_rate = _measuring_output(structure, state, f"G_{state}", "gusts")
-        signal = records.outputs[..., output][records.mask]
-        starts[state] = float(np.std(signal)) * (_CORRELATION_START if reads_rate else 1.0)
-    return starts
-
-
-def measuring_output(structure: ModelStructure, state: str) -> tuple[int | None, bool]:
-    """(index of the output that measures ``state``, whether it reads the state's equation
-    rather than the state): the state itself if an output does, else an output reading its
-    equation's derivative terms (a velocity's specific force); (None, False) if none."""
-    known = structure.known_terms()
-    column = structure.states.index(state)
-    direct = np.flatnonzero(known.c[:, column])
-    rate = np.flatnonzero(known.measured[:, column])
-    if direct.size:
-        return int(direct[0]), False
-    return (int(rate[0]), True) if rate.size else (None, False)
-
-
-def _innovation_scatter(problem: "FilterErrorProblem", values: np.ndarray):
-    """(mean square innovation (p,), B (p, p)) at ``values``; None when the filter does not
-    exist or the innovations overflow there."""
-    try:
-        innovations, b = problem.innovations(values)
-    except (EstimationError, np.linalg.LinAlgError):
-        return None
-    mean_square = np.einsum("nmi,nmi->i", innovations, innovations) / problem.n_samples
-    return (mean_square, b) if np.all(np.isfinite(mean_square)) else None
-
-
-def matched_measurement_noise(problem: "FilterErrorProblem", values: np.ndarray,
-                              keep: tuple[str, ...] = ()) -> np.ndarray:
-    """``values`` with the measurement noise R (except the ``R_<output>`` in ``keep``) set so
-    that each output's innovation variance B_ii = (HPHᵀ)_ii + R_ii equals its mean square
-    innovation at these values.
-
-    The noise start from first differences fits a model that already follows the data; from
-    equation-error derivatives in turbulence the innovations are tens of times larger, the
-    quadratic term of the likelihood then dwarfs ln det B, and Levenberg-Marquardt stalls
-    after one step (on the hover case in moderate turbulence at a cost of 3e32). Matched,
-    the quadratic term starts at its optimum value, the number of outputs. Left unchanged
-    when the filter does not exist or the innovations overflow at ``values``.
-    """
-    values = np.array(values, dtype=float)
-    rows = [i for i, n in enumerate(problem.parameter_names)
-            if n.startswith("R_") and n not in keep]
-    outputs = [problem.output_names.index(problem.parameter_names[i][2:]) for i in rows]
-    for _ in range(_MATCH_PASSES if rows else 0):
-        found = _innovation_scatter(problem, values)
-        if found is None:
-            return values
-        mean_square = found[0][outputs]
-        predicted = np.diag(found[1])[outputs] - values[rows]            # (HPHᵀ)_ii
-        values[rows] = np.maximum(mean_square - predicted, _MATCH_FLOOR * mean_square)
-    return values
-
-
-def matched_biases(problem: "FilterErrorProblem", values: np.ndarray,
-                   keep: tuple[str, ...] = ()) -> np.ndarray:
-    """``values`` with each output bias (except those in ``keep``) moved by its record's mean
-    innovation at these values, so that the fit starts near each sensor's offset. Unchanged
-    when the filter does not exist at ``values``."""
-    values = np.array(values, dtype=float)
-    names = problem.parameter_names
-    rows = [i for i, n in enumerate(names) if n.startswith("bias_") and n not in keep]
-    if not rows:
-        return values
-    try:
-        innovations, _ = problem.innovations(values)
-    except (EstimationError, np.linalg.LinAlgError):
-        return values
-    mask = problem.records.mask[..., None]
-    means = np.sum(innovations * mask, axis=0) / np.sum(mask, axis=0)          # (M, p)
-    parts = problem.maneuver_parameters
-    for i in rows:
-        record, output = divmod(i - problem.n_global, parts.per_maneuver)
-        column = output - len(parts.states)
-        values[i] += means[record, column]
-    return values
 
 
 def _noise_held(problem: "FilterErrorProblem", values: np.ndarray, bounds):
@@ -624,7 +503,7 @@ class FilterErrorEstimator:
         values = np.concatenate([initial, [steps[s] for s in states],
                                  [disturbances.get(s, np.nan) / dt for s in problem.disturbances],
                                  [gusts.get(s, np.nan) for s in problem.gusts],
-                                 np.full(coloured, _CORRELATION_START), variance,
+                                 np.full(coloured, CORRELATION_START), variance,
                                  problem.maneuver_parameters.start(
                                      problem.records.x0, seen_states(structure).nonzero()[0])])
         values, given = with_start(values, start, names)
@@ -643,16 +522,6 @@ class FilterErrorEstimator:
                 np.concatenate([upper, np.full(n_f + n_d, np.inf),
                                 np.full(n_d, _LONGEST_CORRELATION),
                                 np.full(parts.measurement.size, np.inf), free]))
-
-
-def measurement_noise_start(records) -> np.ndarray:
-    """Start of R (p,): half the mean square first difference of each output of ``records``
-    (time-major ``outputs`` (N, M, p) and ``mask`` (N, M)): the white measurement noise's
-    variance plus the (small) signal change over one sample."""
-    both = records.mask[1:] & records.mask[:-1]
-    change = np.diff(records.outputs, axis=0) * both[..., None]
-    pairs = max(int(np.sum(both)), 1)
-    return np.maximum(0.5 * np.sum(change**2, axis=(0, 1)) / pairs, 1e-12)
 
 
 def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
@@ -675,35 +544,6 @@ def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
         rmse_history=result.rmse_history, iterations=result.iterations,
         converged=result.converged, stop_reason=result.stop_reason, at_bound=at_bound,
         notes=tuple(notes))
-
-
-def given_process_noise_start(starts, states) -> dict[str, float]:
-    """``process_noise_start`` checked: every name an ``F_<state>`` of ``states``."""
-    given = dict(starts or {})
-    unknown = set(given) - {f"F_{s}" for s in states}
-    if unknown:
-        raise EstimationError(f"process_noise_start for unknown parameters {sorted(unknown)}; "
-                              f"the process noise is {', '.join(f'F_{s}' for s in states)}")
-    return given
-
-
-def with_start(values: np.ndarray, start, names) -> tuple[np.ndarray, tuple[str, ...]]:
-    """(``values`` with ``start`` applied, the names it gives): ``start`` is None, a mapping
-    of some of ``names`` or a whole vector."""
-    if start is None:
-        return values, ()
-    if isinstance(start, Mapping):
-        unknown = set(start) - set(names)
-        if unknown:
-            raise EstimationError(f"start values for unknown parameters {sorted(unknown)}")
-        for name, value in start.items():
-            values[names.index(name)] = float(value)
-        return values, tuple(start)
-    vector = np.asarray(start, dtype=float)
-    if vector.shape != values.shape:
-        raise EstimationError(f"start has shape {vector.shape}; the filter-error estimate has "
-                              f"{values.size} parameters ({', '.join(names)})")
-    return vector.copy(), tuple(names)
 
 
 def run_fit(problem, values, bounds, callback=None, held=None):

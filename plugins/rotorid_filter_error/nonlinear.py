@@ -32,18 +32,16 @@ from rotorid.simulation.integrators import integrate
 from rotorid.units import rmse_reference_factors
 from rotorid_output_error.levenberg_marquardt import Settings
 
-from .estimator import (
-    _PROCESS_START,
-    _VARIANCE_FLOOR,
-    filter_error_estimate,
+from .estimator import _VARIANCE_FLOOR, filter_error_estimate, run_fit
+from .likelihood import InnovationLikelihood, covariance_terms
+from .riccati import steady_state_filter
+from .starts import (
+    PROCESS_START,
     given_process_noise_start,
     matched_measurement_noise,
     measurement_noise_start,
-    run_fit,
     with_start,
 )
-from .likelihood import InnovationLikelihood, covariance_terms
-from .riccati import steady_state_filter
 
 #: Relative central-difference step of the linearisation in the states: h = step·max(|x|, 1).
 _LINEARISATION_STEP = 1e-6
@@ -266,7 +264,7 @@ def _start_values(estimator, problem: NonlinearFilterErrorProblem, start):
         if f"F_{state}" in given_f:
             f.append(float(given_f[f"F_{state}"]))
         elif state in outputs:
-            f.append(_PROCESS_START * float(np.sqrt(variance[outputs.index(state)])))
+            f.append(PROCESS_START * float(np.sqrt(variance[outputs.index(state)])))
         else:
             raise EstimationError(f"no output is named {state}, so F_{state} has no default "
                                   f"start; give process_noise_start={{'F_{state}': …}} or leave "
