@@ -56,7 +56,12 @@ from rotorid_output_error.levenberg_marquardt import Settings, run
 
 from .kalman import Records, innovation_blocks
 from .likelihood import InnovationLikelihood, covariance_terms
-from .maneuver_parameters import ManeuverParameters, chosen_initial_states, filter_state_names
+from .maneuver_parameters import (
+    ManeuverParameters,
+    chosen_initial_states,
+    filter_state_names,
+    initial_state_option,
+)
 from .riccati import steady_state_filter
 from .starts import (
     CORRELATION_START,
@@ -75,7 +80,7 @@ NAME = "filter-error"
 #: deviation of 1 % of the start's). Lower, a still-air fit on decimated hover records drove
 #: R_az and R_r to 10⁻⁸ of their starts, where the filter trusts those outputs exactly and its
 #: Riccati equation stopped converging (docs/estimation.md).
-_VARIANCE_FLOOR = 1e-4
+VARIANCE_FLOOR = 1e-4
 #: Lower bound of a disturbance's size relative to its start: at zero its driving variance
 #: D²(1 − a²) has zero gradient in D, so a fit that reached zero could never leave it.
 _SIZE_FLOOR = 1e-4
@@ -162,13 +167,6 @@ def _equation_columns(structure: ModelStructure, states: tuple[str, ...]) -> lis
     return [equations.index(s) for s in states]
 
 
-def _initial_state_choice(value) -> bool | tuple[str, ...]:
-    """``initial_states`` as given: a bool, or the names as a tuple."""
-    if isinstance(value, bool):
-        return value
-    return (value,) if isinstance(value, str) else tuple(value)
-
-
 def _start_choice(instance, attribute, value):
     if value not in ("auto", "initial", "equation-error"):
         raise EstimationError(f"start must be 'auto', 'initial' or 'equation-error', "
@@ -203,7 +201,8 @@ class FilterErrorProblem(InnovationLikelihood):
         self.settings = settings
         self.n_samples = self.records.n_samples
         self.process_noise = process_noise
-        kept = [structure.states[i] for i in np.flatnonzero(seen_states(structure))]
+        self.kept_indices = np.flatnonzero(seen_states(structure))
+        kept = [structure.states[i] for i in self.kept_indices]
         self.noise_rows = [kept.index(s) for s in process_noise]
         self.disturbances = disturbances
         self.disturbance_columns = _equation_columns(structure, disturbances)
@@ -223,7 +222,7 @@ class FilterErrorProblem(InnovationLikelihood):
                                 + tuple(f"Tg_{s}" for s in gusts)
                                 + tuple(f"R_{o}" for o in structure.outputs))
         self.n_global = len(self.parameter_names)
-        available = filter_state_names(structure, tuple(kept), disturbances, gusts)
+        available = filter_state_names(tuple(kept), disturbances, gusts)
         self.maneuver_parameters = ManeuverParameters.of(
             maneuvers.names, available, len(disturbances) + len(gusts),
             chosen_initial_states(initial_states, available, structure.states),
@@ -436,7 +435,7 @@ class FilterErrorEstimator:
     disturbances: tuple[str, ...] = attrs.field(default=(), converter=_names)
     gusts: tuple[str, ...] = attrs.field(default=(), converter=_names)
     initial_states: bool | tuple[str, ...] = attrs.field(default=False,
-                                                         converter=_initial_state_choice)
+                                                         converter=initial_state_option)
     output_biases: bool = False
     enforce_signs: bool = False
     start: str = attrs.field(default="auto", validator=_start_choice)
@@ -504,8 +503,8 @@ class FilterErrorEstimator:
                                  [disturbances.get(s, np.nan) / dt for s in problem.disturbances],
                                  [gusts.get(s, np.nan) for s in problem.gusts],
                                  np.full(coloured, CORRELATION_START), variance,
-                                 problem.maneuver_parameters.start(
-                                     problem.records.x0, seen_states(structure).nonzero()[0])])
+                                 problem.maneuver_parameters.start(problem.records.x0,
+                                                                   problem.kept_indices)])
         values, given = with_start(values, start, names)
         return values, (note if start is None else None), given
 
@@ -518,7 +517,7 @@ class FilterErrorEstimator:
                                    np.full(len(problem.gusts), _SHORTEST_GUST_SAMPLES * dt)])
         free = np.full(problem.maneuver_parameters.size, np.inf)
         return (np.concatenate([lower, np.zeros(n_f), _SIZE_FLOOR * parts.disturbance, shortest,
-                                _VARIANCE_FLOOR * parts.measurement, -free]),
+                                VARIANCE_FLOOR * parts.measurement, -free]),
                 np.concatenate([upper, np.full(n_f + n_d, np.inf),
                                 np.full(n_d, _LONGEST_CORRELATION),
                                 np.full(parts.measurement.size, np.inf), free]))

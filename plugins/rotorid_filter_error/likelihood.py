@@ -2,7 +2,7 @@
 
 With innovations ν_n and their covariance B the negative log-likelihood is
 L = ½ Σ ν_nᵀ B⁻¹ ν_n + ½ N ln det B, reported as the cost exp(2L/N); B's part of the Fisher
-information and of the gradient is ½ N tr(B⁻¹∂B_i B⁻¹∂B_j) and ½ tr(B⁻¹∂B_i B⁻¹(N·B − Σνν ᵀ)).
+information and of the gradient is ½ N tr(B⁻¹∂B_i B⁻¹∂B_j) and ½ tr(B⁻¹∂B_i B⁻¹(N·B − Σννᵀ)).
 """
 
 from __future__ import annotations

@@ -28,23 +28,30 @@ from rotorid.model.parameter_units import rate_unit
 from rotorid.model.structure import ModelStructure
 
 
-def filter_state_names(structure: ModelStructure, kept: tuple[str, ...],
-                       disturbances: tuple[str, ...], gusts: tuple[str, ...]) -> tuple[str, ...]:
+def filter_state_names(kept: tuple[str, ...], disturbances: tuple[str, ...],
+                       gusts: tuple[str, ...]) -> tuple[str, ...]:
     """Names of the filter states an initial value can be given for: the structure's states
     the outputs see (``kept``), then ``d_<state>`` per disturbance and ``g_<state>`` per
     gust."""
     return kept + tuple(f"d_{s}" for s in disturbances) + tuple(f"g_{s}" for s in gusts)
 
 
+def initial_state_option(value) -> bool | tuple[str, ...]:
+    """The ``initial_states`` option as given: a bool, or the names as a tuple."""
+    if isinstance(value, bool):
+        return value
+    return (value,) if isinstance(value, str) else tuple(value)
+
+
 def chosen_initial_states(option, available: tuple[str, ...],
                           structure_states: tuple[str, ...]) -> tuple[str, ...]:
     """The filter states whose initial values are estimated: none (False), all ``available``
     (True) or the named ones, checked, in the order of ``available``."""
-    if option is False or option is None:
+    names = initial_state_option(option)
+    if names is False:
         return ()
-    if option is True:
+    if names is True:
         return available
-    names = (option,) if isinstance(option, str) else tuple(option)
     unknown = [n for n in names if n not in available]
     if unknown:
         unseen = [n for n in unknown if n in structure_states]

@@ -32,7 +32,7 @@ from rotorid.simulation.integrators import integrate
 from rotorid.units import rmse_reference_factors
 from rotorid_output_error.levenberg_marquardt import Settings
 
-from .estimator import _VARIANCE_FLOOR, filter_error_estimate, run_fit
+from .estimator import VARIANCE_FLOOR, filter_error_estimate, run_fit
 from .likelihood import InnovationLikelihood, covariance_terms
 from .riccati import steady_state_filter
 from .starts import (
@@ -238,11 +238,12 @@ def fit_nonlinear(estimator, model, maneuvers, start=None) -> Estimate:
         settings = Settings(estimator.max_iterations, estimator.cost_tolerance,
                             estimator.step_tolerance, shorten_steps=False)
         problem = NonlinearFilterErrorProblem(model, maneuvers, process, settings)
-        values, given = _start_values(estimator, problem, start)
+        variance = measurement_noise_start(problem)
+        values, given = _start_values(estimator, problem, variance, start)
         # R's floor from the data's own first differences, not from R matched to the start's
         # innovations: from textbook guesses those are far larger, and a floor of 1e-4 of
         # them held R_theta at 4 times the sensor's variance (the fit stopped there)
-        floor = _VARIANCE_FLOOR * measurement_noise_start(problem)
+        floor = VARIANCE_FLOOR * variance
         values = matched_measurement_noise(problem, values, given)
         lower, upper = model.bounds()
         n_f = len(process)
@@ -252,11 +253,12 @@ def fit_nonlinear(estimator, model, maneuvers, start=None) -> Estimate:
     return filter_error_estimate(problem, result, values, bounds, None)
 
 
-def _start_values(estimator, problem: NonlinearFilterErrorProblem, start):
-    """(start vector, names given explicitly): the model's starts, F and R as
-    :func:`fit_nonlinear` says, then ``start`` (a vector or a mapping of some names)."""
+def _start_values(estimator, problem: NonlinearFilterErrorProblem, variance: np.ndarray,
+                  start):
+    """(start vector, names given explicitly): the model's starts, F as :func:`fit_nonlinear`
+    says, R at ``variance`` (the outputs' first-difference start), then ``start`` (a vector
+    or a mapping of some names)."""
     names = problem.parameter_names
-    variance = measurement_noise_start(problem)
     outputs = problem.output_names
     given_f = given_process_noise_start(estimator.process_noise_start, problem.process_noise)
     f = []
