@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from rotorid import Maneuver, ManeuverSet, ModelStructure
 from rotorid.cli.main import main
+from rotorid.errors import ExitStatus
 from rotorid.simulation.simulator import simulate
 from rotorid_files.formats import read_maneuver
 from sweeps import log_sweep
@@ -187,3 +188,23 @@ def test_frequency_estimates_the_on_axis_responses_of_longitudinal_sweeps(identi
     assert main(["frequency", *sweeps, "--out", str(out)]) == 0, capsys.readouterr().err
     responses = json.loads(out.read_text(encoding="utf-8"))
     assert [p["pair"] for p in responses["pairs"]] == ["q/long", "az/coll"]
+
+
+def test_verify_leaves_out_sweeps_of_controls_the_model_lacks(identified, tmp_path, capsys):
+    model, result, sweeps = identified
+    lateral = tmp_path / "sweep_lat.csv"       # a lateral sweep read for this model: no
+    table = np.loadtxt(sweeps[0], delimiter=",", skiprows=1)   # long or coll moves in it
+    table[:, 1:3] = 0.0
+    lateral.write_text(",".join(COLUMNS) + "\n" + "\n".join(
+        ",".join(f"{v:.10g}" for v in row) for row in table) + "\n", encoding="utf-8")
+    out = tmp_path / "v"
+    status = main(["verify", str(result), *sweeps, str(lateral), "--no-figures",
+                   "--out", str(out)])
+    printed = capsys.readouterr()
+    assert status == 0, printed.err
+    assert "left out sweep_lat: none of the model's controls (long, coll) moves in it" \
+        in printed.out
+    summary = json.loads((out / "verification.json").read_text(encoding="utf-8"))
+    assert summary["sweeps"] == ["sweep_long", "sweep_coll"]
+    assert main(["verify", str(result), str(lateral), "--out", str(out)]) == ExitStatus.ERROR
+    assert "no sweep excites a control of the model: sweep_lat" in capsys.readouterr().err

@@ -133,7 +133,7 @@ def run(args) -> int:
     out = Path(args.out)
     if out.suffix.lower() not in FORMATS:
         raise UsageError(f"--out {out}: give a file ending in {', '.join(FORMATS)}")
-    sweeps = load_sweeps(args.sweeps)
+    sweeps, _ = load_sweeps(args.sweeps)
     omega = default_omega(sweeps)
     responses = []
     pairs = chosen_pairs(args.pairs, sweeps, sweeps.output_names, sweeps.input_names)

@@ -15,7 +15,9 @@ are dropped; output biases and initial states of the identification records are 
 SWEEPS are maneuver files, directories or glob patterns, read through the model file's
 ``[channels]`` map and converted to its unit system; when the maneuvers carry ``kind``
 metadata only the ``sweep`` ones are used. They need only the channels the model uses (a
-``longitudinal`` model verifies on sweeps without lateral columns).
+``longitudinal`` model verifies on sweeps without lateral columns); a sweep of a control the
+model lacks (``axis`` metadata, or none of the model's controls moving in it) is left out with
+a line saying so, so a directory holding every axis's sweeps can be given.
 
 Pairs are ``OUTPUT/INPUT`` names of the model's signals; by default the paper's pairs the model
 has (q/long and az/coll for the ``longitudinal`` template), else every output over every input
@@ -103,14 +105,35 @@ def _split(files: list[str]):
 
 
 def load_sweeps(locations, units: str | None = None, ingestion=None):
-    """The maneuvers of files, directories or patterns (:func:`rotorid.cli.files.load_maneuvers`);
-    only the ``sweep`` ones when the maneuvers carry ``kind`` metadata."""
+    """(sweeps, left out): the maneuvers of files, directories or patterns
+    (:func:`rotorid.cli.files.load_maneuvers`), only the ``sweep`` ones when the maneuvers carry
+    ``kind`` metadata, without those whose ``axis`` metadata names a control the model does not
+    have (a lateral sweep in a directory read for a longitudinal model); left out: name →
+    reason."""
     from rotorid.cli.files import load_maneuvers
+    from rotorid.errors import VerificationError
 
     sweeps = load_maneuvers(locations, units=units, ingestion=ingestion)
     if any("kind" in m.metadata for m in sweeps):
         sweeps = sweeps.select(kind="sweep")
-    return sweeps
+    left_out = {m.name: reason for m in sweeps if (reason := _not_sweeping(m)) is not None}
+    if left_out and len(left_out) == len(sweeps):
+        raise VerificationError("no sweep excites a control of the model: " + "; ".join(
+            f"{name}: {reason}" for name, reason in left_out.items()))
+    return sweeps.select(lambda m: m.name not in left_out), left_out
+
+
+def _not_sweeping(sweep) -> str | None:
+    """Why ``sweep``, read with a model's controls, sweeps none of them; None when it does."""
+    import numpy as np
+
+    controls = ", ".join(sweep.input_names)
+    axis = sweep.metadata.get("axis")
+    if axis is not None and axis not in sweep.input_names:
+        return f"it sweeps {axis!r}, not a control of the model ({controls})"
+    if not np.any(np.ptp(sweep.inputs, axis=0) > 0):
+        return f"none of the model's controls ({controls}) moves in it"
+    return None
 
 
 def chosen_pairs(option: str | None, sweeps, outputs, inputs) -> list[str]:
@@ -185,7 +208,9 @@ def run(args) -> int:
     ingestion = {"signals": structure.signals}
     if model_file is not None:
         ingestion["channels"] = load_channel_map(model_file)
-    sweeps = load_sweeps(locations, structure.units.name, ingestion)
+    sweeps, left_out = load_sweeps(locations, structure.units.name, ingestion)
+    for name, reason in left_out.items():
+        print(f"left out {name}: {reason}")
     selection = producible_pairs(structure, values, sweeps,
                                  chosen_pairs(args.pairs, sweeps, structure.outputs,
                                               structure.controls))
