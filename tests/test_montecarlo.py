@@ -2,6 +2,7 @@
 noise by the expected factor, identical through a process pool, failures kept apart."""
 
 import json
+import re
 
 import attrs
 import numpy as np
@@ -92,8 +93,12 @@ def test_runs_are_identical_in_a_process_pool_and_failures_are_kept_apart(proble
     assert partial.seeds == (0, 1, 3)
     assert "seed 2" in partial.failures[2] and "no data for seed 2" in partial.failures[2]
     assert np.array_equal(partial.estimates, serial.estimates[[0, 1, 3]])
-    with pytest.raises(StudyError, match="2 of 2 Monte Carlo runs failed"):
-        run(problem, lambda seed: broken(2), range(2))
+    with pytest.raises(StudyError, match="3 of 3 Monte Carlo runs failed") as caught:
+        run(problem, lambda seed: broken(2), range(3))
+    told = str(caught.value)                         # one reason, told once, for all three
+    assert told.count("no data for seed 2") == 1
+    assert re.search(r"seed 0, case \S* ?run with seed 1, case \S* ?run with seed 2: "
+                     r"DataError: no data for seed 2", told), told
 
 
 def test_record_report_and_figure(problem, tmp_path):

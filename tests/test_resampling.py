@@ -1,12 +1,20 @@
 """Zero-phase low-pass and decimation of records (rotorid.resampling): a tone in the band
 keeps its amplitude and phase, one above it goes, a trim offset stays, every channel is
-filtered alike, and bad settings are refused with the fix."""
+filtered alike, bad settings are refused with the fix, and the kept samples' noise
+correlation is predicted (against white noise run through the filter) and warned about."""
+
+import warnings
 
 import numpy as np
 import pytest
 from rotorid import Maneuver, ManeuverSet
-from rotorid.errors import DataError
-from rotorid.resampling import decimated, decimated_maneuver
+from rotorid.errors import DataError, DataWarning
+from rotorid.resampling import (
+    decimated,
+    decimated_maneuver,
+    noise_correlation,
+    white_noise_factor,
+)
 
 DT = 0.02
 
@@ -65,3 +73,38 @@ def test_short_records_are_refused():
     short = _record(np.arange(10) * DT, np.zeros((10, 4)), np.zeros((10, 8)))
     with pytest.raises(DataError, match="too few to filter"):
         decimated_maneuver(short, 2, 5.0)
+
+
+@pytest.mark.parametrize("factor, cutoff", [(4, 4.0), (3, 6.0), (6, 4.0), (8, 3.0)])
+def test_the_kept_noise_correlation_matches_white_noise_through_the_filter(factor, cutoff):
+    rng = np.random.default_rng(11)
+    time = np.arange(200_000) * DT
+    noise = np.zeros((time.size, 8))
+    noise[:, 0] = rng.standard_normal(time.size)
+    record = _record(time, np.zeros((time.size, 4)), noise)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DataWarning)
+        kept = decimated_maneuver(record, factor, cutoff).outputs[:, 0]
+    kept = kept - kept.mean()
+    sample = np.mean(kept[:-1] * kept[1:]) / np.mean(kept ** 2)
+    assert noise_correlation(DT, factor, cutoff) == pytest.approx(sample, abs=0.02)
+
+
+def test_the_white_noise_factor_keeps_the_nyquist_frequency_just_above_the_cutoff():
+    assert [white_noise_factor(DT, c) for c in (4.0, 6.0, 6.25, 3.0, 20.0)] == [6, 4, 3, 8, 1]
+    for cutoff in (1.3, 2.0, 4.0, 7.7):
+        factor = white_noise_factor(DT, cutoff)
+        assert 0.5 / (factor * DT) > cutoff >= 0.5 / ((factor + 1) * DT)
+        assert noise_correlation(DT, factor, cutoff) < 0.2
+    with pytest.raises(DataError, match="Nyquist frequency 25 Hz"):
+        white_noise_factor(DT, 30.0)
+
+
+def test_decimation_that_colours_the_noise_warns_with_the_factor_to_use():
+    time, low, _ = _tones(seconds=4.0)
+    record = _record(time, np.column_stack([low] * 4), np.zeros((time.size, 8)))
+    with pytest.warns(DataWarning, match=r"correlated 0\.51 .* Keep every 6th sample"):
+        decimated_maneuver(record, 4, 4.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DataWarning)
+        decimated_maneuver(record, 6, 4.0)

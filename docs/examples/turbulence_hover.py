@@ -19,12 +19,13 @@ fit's Cramér-Rao bounds (CR, propagated through the residualisation) and in %. 
 repository root::
 
     python docs/examples/turbulence_hover.py [--turbulence light|moderate] [--seed N] [--quick]
-                                             [--from-still] [--decimate N --cutoff HZ]
+                                             [--from-still] [--cutoff HZ [--decimate N]]
 
-``--quick`` shortens the records to 60 %. ``--decimate N --cutoff HZ`` fits both estimators to
-the records low-passed at HZ (zero phase) and kept at every N-th sample
-(:mod:`rotorid.resampling`): the band the hybrid describes, without the coning, inflow and
-actuator dynamics above it that the filter's one-step innovations otherwise weigh.
+``--quick`` shortens the records to 60 %. ``--cutoff HZ`` fits both estimators to the records
+low-passed at HZ (zero phase) and kept at every N-th sample (:mod:`rotorid.resampling`; N by
+default the largest whose Nyquist frequency lies above HZ, which keeps the sensor noise
+white): the band the hybrid describes, without the coning, inflow and actuator dynamics above
+it that the filter's one-step innovations otherwise weigh.
 """
 
 from __future__ import annotations
@@ -97,8 +98,11 @@ def main(argv=None) -> dict:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--from-still", action="store_true")
-    parser.add_argument("--decimate", type=int, default=1)
-    parser.add_argument("--cutoff", type=float, help="Hz, with --decimate")
+    parser.add_argument("--cutoff", type=float,
+                        help="Hz: fit records low-passed there and decimated")
+    parser.add_argument("--decimate", type=int,
+                        help="samples per kept sample, with --cutoff (default: the white-noise "
+                             "factor, rotorid.resampling.white_noise_factor)")
     args = parser.parse_args(argv)
 
     still, turbulent, condition, source = data_sets(args.turbulence, args.seed, args.quick)

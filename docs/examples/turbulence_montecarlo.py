@@ -21,8 +21,12 @@ This is the reduced problem: the six-dof structure with delays takes minutes per
 fit on a shared 2-core machine, 30 runs of it hours. Run from the repository root::
 
     python docs/examples/turbulence_montecarlo.py [--runs 30] [--turbulence moderate]
-        [--truth nonlinear] [--duration-scale 1.0] [--executor process]
-        [--out montecarlo-turbulence]
+        [--truth nonlinear] [--duration-scale 1.0] [--cutoff HZ [--decimate N]]
+        [--executor process] [--out montecarlo-turbulence]
+
+``--cutoff HZ`` fits records low-passed at HZ and kept at every N-th sample
+(:func:`rotorid.resampling.decimated`; N by default the largest whose Nyquist frequency lies
+above HZ, which keeps the sensor noise white).
 """
 
 from __future__ import annotations
@@ -54,10 +58,10 @@ TRUTHS = ("nonlinear", "linear", "linear-longitudinal", "linear-rotor")
 @attrs.frozen
 class Decimated:
     """``data(seed)`` low-passed at ``cutoff_hz`` and kept at every ``factor``-th sample
-    (:func:`rotorid.resampling.decimated`)."""
+    (:func:`rotorid.resampling.decimated`; None: the white-noise factor)."""
 
     data: Callable[[int], ManeuverSet]
-    factor: int
+    factor: int | None
     cutoff_hz: float
 
     def __call__(self, seed: int) -> ManeuverSet:
@@ -123,8 +127,11 @@ def main(argv=None) -> dict:
     parser.add_argument("--turbulence", default="moderate", choices=("light", "moderate"))
     parser.add_argument("--truth", nargs="+", default=["nonlinear"], choices=TRUTHS)
     parser.add_argument("--duration-scale", type=float, default=1.0)
-    parser.add_argument("--decimate", type=int, default=1)
-    parser.add_argument("--cutoff", type=float, help="Hz, with --decimate")
+    parser.add_argument("--cutoff", type=float,
+                        help="Hz: fit records low-passed there and decimated")
+    parser.add_argument("--decimate", type=int,
+                        help="samples per kept sample, with --cutoff (default: the white-noise "
+                             "factor, rotorid.resampling.white_noise_factor)")
     parser.add_argument("--initial-states", nargs="*", default=(),
                         help="filter states whose initial values filter error estimates, "
                              "e.g. d_u d_w d_q")

@@ -148,12 +148,23 @@ def _collect(futures: Mapping, label) -> tuple[dict, dict]:
     return results, failures
 
 
-def failure_error(what: str, results: Mapping, failures: Mapping, where: str) -> StudyError:
-    """One error naming every failed task and the finished ones, which it carries along."""
+def failure_error(what: str, results: Mapping, failures: Mapping, where: str,
+                  label=None) -> StudyError:
+    """One error naming every failed task and the finished ones, which it carries along.
+    With the tasks' ``label`` (the one :func:`run_tasks` was given) tasks that failed for the
+    same reason are named once with it: ``case a, case b: DataError: …``."""
     finished = ", ".join(str(k) for k in results) or "none"
+    reasons: dict[str, list[str]] = {}
+    for key, message in failures.items():
+        name = "" if label is None else label(key)
+        if name and message.startswith(f"{name}: "):
+            reasons.setdefault(message[len(name) + 2:], []).append(name)
+        else:
+            reasons.setdefault(message, [])
+    told = "; ".join(f"{', '.join(names)}: {reason}" if names else reason
+                     for reason, names in reasons.items())
     return StudyError(f"{len(failures)} of {len(results) + len(failures)} {what} failed: "
-                      + "; ".join(failures.values())
-                      + f" (finished: {finished}; their results are in {where})",
+                      + told + f" (finished: {finished}; their results are in {where})",
                       results=results, failures=failures)
 
 

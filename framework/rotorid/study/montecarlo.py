@@ -222,10 +222,10 @@ def monte_carlo(structure: ModelStructure, data: Callable[[int], ManeuverSet],
     """
     options = dict(estimator_options or {})
     tasks = {int(s): ((structure, data, int(s), estimator, options, start), {}) for s in seeds}
-    results, failures = run_tasks(estimate_run, tasks, executor,
-                                  label=lambda s: f"case {case} run with seed {s}")
+    label = f"case {case} run with seed {{}}".format
+    results, failures = run_tasks(estimate_run, tasks, executor, label=label)
     if not results:
-        raise failure_error("Monte Carlo runs", results, failures, "no directory")
+        raise failure_error("Monte Carlo runs", results, failures, "no directory", label)
     names = next(iter(results.values()))[0]
     truth_vector = [float((truth or {}).get(n, np.nan)) for n in names]
     return MonteCarloResult(

@@ -454,9 +454,9 @@ class Study:
         holding = contextlib.nullcontext() if self.executor is None else hold_lease(self.out_dir)
         with holding as lease:
             results, failures = run_tasks(run_case_task, tasks, self.executor,
-                                          label=lambda name: f"case {name}", lease=lease)
+                                          label="case {}".format, lease=lease)
         if failures:
-            raise failure_error("cases", results, failures, self.out_dir)
+            raise failure_error("cases", results, failures, self.out_dir, "case {}".format)
         if self.report_writer is not None:
             self.report_writer.write_study(results, self.out_dir)
         return results
