@@ -47,20 +47,20 @@ def test_a_tone_in_the_band_keeps_amplitude_and_phase_and_one_above_it_goes():
     assert np.all(record.outputs[:, 0] == 0.0)           # an untouched channel stays exact
 
 
-def test_a_set_keeps_its_hold_names_and_metadata():
+def test_a_set_keeps_its_names_and_metadata_and_takes_the_first_order_hold():
     time, low, _ = _tones(seconds=4.0)
     inputs = np.column_stack([low, 0 * low, 0 * low, 0 * low])
     maneuvers = ManeuverSet([Maneuver("a", time, inputs, np.zeros((time.size, 8)),
-                                      metadata={"kind": "3211"})], hold="foh")
+                                      metadata={"kind": "3211"})])
     out = decimated(maneuvers, factor=2, cutoff_hz=5.0)
-    assert out.hold == "foh" and out.names == ("a",)
+    assert maneuvers.hold == "zoh" and out.hold == "foh" and out.names == ("a",)
     assert out[0].metadata == {"kind": "3211"} and out[0].time.size == (time.size + 1) // 2
     assert maneuvers[0].time.size == time.size       # the given set is left as it was
 
 
 @pytest.mark.parametrize("factor, cutoff, message", [
     (0, 4.0, "whole number ≥ 1"), (2.5, 4.0, "whole number ≥ 1"),
-    (4, 6.25, "Nyquist frequency 6.25 Hz"), (4, -1.0, "between 0 and"),
+    (4, 6.3, "Nyquist frequency 6.25 Hz"), (4, -1.0, "between 0 and"),
 ])
 def test_bad_settings_are_refused_with_the_fix(factor, cutoff, message):
     time, low, _ = _tones(seconds=4.0)
@@ -91,10 +91,11 @@ def test_the_kept_noise_correlation_matches_white_noise_through_the_filter(facto
 
 
 def test_the_white_noise_factor_keeps_the_nyquist_frequency_just_above_the_cutoff():
-    assert [white_noise_factor(DT, c) for c in (4.0, 6.0, 6.25, 3.0, 20.0)] == [6, 4, 3, 8, 1]
-    for cutoff in (1.3, 2.0, 4.0, 7.7):
+    assert [white_noise_factor(DT, c) for c in (4.0, 6.0, 6.25, 5.0, 3.0, 20.0)] == \
+        [6, 4, 4, 5, 8, 1]
+    for cutoff in (1.3, 2.0, 4.0, 5.0, 7.7):
         factor = white_noise_factor(DT, cutoff)
-        assert 0.5 / (factor * DT) > cutoff >= 0.5 / ((factor + 1) * DT)
+        assert 0.5 / (factor * DT) >= cutoff > 0.5 / ((factor + 1) * DT)
         assert noise_correlation(DT, factor, cutoff) < 0.2
     with pytest.raises(DataError, match="Nyquist frequency 25 Hz"):
         white_noise_factor(DT, 30.0)
@@ -103,7 +104,7 @@ def test_the_white_noise_factor_keeps_the_nyquist_frequency_just_above_the_cutof
 def test_decimation_that_colours_the_noise_warns_with_the_factor_to_use():
     time, low, _ = _tones(seconds=4.0)
     record = _record(time, np.column_stack([low] * 4), np.zeros((time.size, 8)))
-    with pytest.warns(DataWarning, match=r"correlated 0\.51 .* Keep every 6th sample"):
+    with pytest.warns(DataWarning, match=r"correlated 0\.51 .* keep every 6th sample"):
         decimated_maneuver(record, 4, 4.0)
     with warnings.catch_warnings():
         warnings.simplefilter("error", DataWarning)

@@ -25,8 +25,8 @@ fit on a shared 2-core machine, 30 runs of it hours. Run from the repository roo
         [--executor process] [--out montecarlo-turbulence]
 
 ``--cutoff HZ`` fits records low-passed at HZ and kept at every N-th sample
-(:func:`rotorid.resampling.decimated`; N by default the largest whose Nyquist frequency lies
-above HZ, which keeps the sensor noise white).
+(:class:`rotorid.resampling.DecimatedRealisations`; N by default the largest whose Nyquist
+frequency lies above HZ, which keeps the sensor noise white).
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ import attrs
 import numpy as np
 import rotorid
 from rotorid import FlightCondition, ManeuverSet, ModelStructure
-from rotorid.resampling import decimated
+from rotorid.resampling import DecimatedRealisations
 from rotorid.study.montecarlo import monte_carlo
 from rotorid_helisim.linear_truth import LinearisedPlant, linearised_trim
 from rotorid_helisim.source import HelisimSource
@@ -53,19 +53,6 @@ ESTIMATORS = {"output-error": {},
               "filter-error": {"process_noise": (), "disturbances": ("u", "w", "q"),
                                "max_iterations": 200}}
 TRUTHS = ("nonlinear", "linear", "linear-longitudinal", "linear-rotor")
-
-
-@attrs.frozen
-class Decimated:
-    """``data(seed)`` low-passed at ``cutoff_hz`` and kept at every ``factor``-th sample
-    (:func:`rotorid.resampling.decimated`; None: the white-noise factor)."""
-
-    data: Callable[[int], ManeuverSet]
-    factor: int | None
-    cutoff_hz: float
-
-    def __call__(self, seed: int) -> ManeuverSet:
-        return decimated(self.data(seed), self.factor, self.cutoff_hz)
 
 
 @attrs.frozen
@@ -148,7 +135,7 @@ def main(argv=None) -> dict:
         data, condition = flights(args.turbulence, args.duration_scale, out / "data",
                                   truth_name)
         if args.cutoff is not None:
-            data = Decimated(data, args.decimate, args.cutoff)
+            data = DecimatedRealisations(data, args.decimate, args.cutoff)
         structure = ModelStructure.populated(condition, "longitudinal")
         truth = truth_values(rotorid.create("data-sources", "helisim"), structure)
         for name, options in ESTIMATORS.items():
@@ -186,6 +173,9 @@ def _report(truth_name: str, name: str, result, truth: dict) -> dict:
     for label, part in runs.items():
         ratio = part.ratio[[part.parameter_names.index(n) for n in derivatives(part)]]
         finite = ratio[np.isfinite(ratio)]
+        if not finite.size:
+            print(f"{label}: no derivative has finite bounds in every run")
+            continue
         print(f"{label}: std/CR of the {finite.size} derivatives with finite bounds: median "
               f"{np.median(finite):.2f}, range {finite.min():.2f}–{finite.max():.2f}, within "
               f"30 % {int(np.sum(np.abs(finite - 1) <= 0.3))}")

@@ -33,6 +33,7 @@ from rotorid.errors import DataFileError, MissingFileError, VerificationError
 from rotorid.io import require_file
 from rotorid.model.structure import PAPER_DELAYED
 from rotorid.plugin.manager import create
+from rotorid.resampling import decimated
 from rotorid.study.checks import check_case, check_registered
 from rotorid.study.hybrid_comparison import HYBRID_OMEGA_MAX
 from rotorid.study.reference import ReferenceValue, parse_reference
@@ -53,6 +54,7 @@ _TABLES = {
     "compare": {"frequency", "pairs", "band_max", "estimators", "hybrid", "hybrid_band_max",
                 "hybrid_reduction"},
     "reference": None,
+    "identification": {"cutoff_hz", "decimate"},
 }
 _TOP_LEVEL = {"name", "description", *_TABLES}
 #: Case settings by table and key: the :class:`FlightCase` field and its converter.
@@ -77,6 +79,8 @@ _FIELDS = {
     ("compare", "hybrid"): ("compare_hybrid", bool),
     ("compare", "hybrid_band_max"): ("compare_hybrid_band_max", float),
     ("compare", "hybrid_reduction"): ("compare_hybrid_reduction", bool),
+    ("identification", "cutoff_hz"): ("cutoff_hz", float),
+    ("identification", "decimate"): ("decimate", int),
 }
 
 #: What each converter of :data:`_FIELDS` reads, for the error messages.
@@ -106,7 +110,10 @@ class FlightCase:
     Empty ``pairs`` are the structure's own default pairs
     (:func:`rotorid.verification.pairs.default_pairs`: the paper's pairs it has).
     ``delay_profile_points`` is the number of grid values in [0, ``delay_upper``] of each kept
-    delay's profile (0: no profiles).
+    delay's profile (0: no profiles). With ``cutoff_hz`` (``[identification]``) the
+    identification records are low-passed there and kept at every ``decimate``-th sample
+    before any fit (:func:`band_limited`; ``decimate`` by default the factor that keeps the
+    sensor noise white), in the study and in its Monte Carlo runs alike.
     """
 
     name: str
@@ -140,6 +147,8 @@ class FlightCase:
     compare_hybrid: bool = False
     compare_hybrid_band_max: float = HYBRID_OMEGA_MAX
     compare_hybrid_reduction: bool = False
+    cutoff_hz: float | None = None
+    decimate: int | None = None
     quick_settings: Mapping = attrs.field(factory=dict, converter=dict)
     is_quick: bool = False
 
@@ -160,6 +169,13 @@ class FlightCase:
     def data_settings(self) -> dict:
         """The data source's settings: ``[data]`` without ``source``."""
         return {k: v for k, v in self.data.items() if k != "source"}
+
+    def band_limited(self, maneuvers):
+        """The identification ``maneuvers`` as the fits see them: low-passed at ``cutoff_hz``
+        and decimated (:func:`rotorid.resampling.decimated`), or unchanged without it."""
+        if self.cutoff_hz is None:
+            return maneuvers
+        return decimated(maneuvers, self.decimate, self.cutoff_hz)
 
     @property
     def frequency_pairs(self) -> tuple[str, ...]:
@@ -224,10 +240,11 @@ class FlightCase:
 
     def as_dict(self) -> dict:
         """Plain settings, as recorded in ``result.json``; ``compare_estimators``,
-        ``compare_hybrid`` and ``compare_hybrid_reduction`` only when set, so that cases without
-        them keep the record they had before they existed."""
+        ``compare_hybrid``, ``compare_hybrid_reduction``, ``cutoff_hz`` and ``decimate`` only
+        when set, so that cases without them keep the record they had before they existed."""
         return attrs.asdict(self, filter=lambda a, v: not (
-            a.name in ("compare_estimators", "compare_hybrid", "compare_hybrid_reduction")
+            a.name in ("compare_estimators", "compare_hybrid", "compare_hybrid_reduction",
+                       "cutoff_hz", "decimate")
             and not v
             or a.name == "compare_hybrid_band_max" and not self.compare_hybrid))
 

@@ -70,6 +70,22 @@ def check_case(case, where: str) -> None:
         raise DataFileError(f"{where}: [reduction] rmse_tolerance must be a fraction ≥ 0 "
                             f"(e.g. 0.01), got {case.rmse_tolerance!r}")
     _check_compare(case, where)
+    _check_band_limit(case, where)
+
+
+def _check_band_limit(case, where: str) -> None:
+    """``[identification]``: a cutoff > 0 Hz, a decimation factor ≥ 1 only with it."""
+    if case.cutoff_hz is not None and not (math.isfinite(case.cutoff_hz)
+                                           and case.cutoff_hz > 0):
+        raise DataFileError(f"{where}: [identification] cutoff_hz must be a frequency > 0 Hz "
+                            f"(below the records' Nyquist frequency), got {case.cutoff_hz!r}")
+    if case.decimate is not None:
+        if case.cutoff_hz is None:
+            raise DataFileError(f"{where}: [identification] decimate needs cutoff_hz, the "
+                                f"low-pass that comes before it")
+        if case.decimate < 1:
+            raise DataFileError(f"{where}: [identification] decimate must be a whole number "
+                                f"≥ 1 (samples per kept sample), got {case.decimate!r}")
 
 
 def _check_compare(case, where: str) -> None:

@@ -31,6 +31,7 @@ from rotorid.frozen import readonly_array
 from rotorid.io import atomic_write, jsonable
 from rotorid.model.structure import ModelStructure
 from rotorid.plugin.manager import create
+from rotorid.resampling import DecimatedRealisations
 
 #: Half-width of the interval whose coverage is reported, in Cramér-Rao bounds.
 INTERVAL = 2.0
@@ -261,6 +262,8 @@ def case_monte_carlo(case, runs: int, out_dir: str | Path, *, seed: int | None =
     study = run_case(case, out_dir, resume=True, progress=progress)
     directory = Path(out_dir) / case.name
     data = source.noise_realisations(case.data_settings, directory / "montecarlo-data")
+    if case.cutoff_hz is not None:               # the records the study's fits saw
+        data = DecimatedRealisations(data, case.decimate, case.cutoff_hz)
     first = int(case.data.get("seed", 0) if seed is None else seed)
     estimate = study.estimates["with delays"]
     result = monte_carlo(

@@ -316,10 +316,13 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     clock = {"start": time.perf_counter()}
     report(case.name, f"data: {case.data_source} ({'quick' if case.is_quick else 'full'} set)")
     data, condition = load_data(case, directory / "data")
-    ident, verif = data.identification, data.verification
+    ident, verif = case.band_limited(data.identification), data.verification
     clock["data"] = time.perf_counter()
     report(case.name, f"{len(ident)} identification and {0 if verif is None else len(verif)} "
                       f"verification maneuvers; trim {condition.describe()}")
+    if case.cutoff_hz is not None:
+        report(case.name, f"identification records low-passed at {case.cutoff_hz:g} Hz, "
+                          f"sample time {data.identification[0].dt:g} → {ident[0].dt:g} s")
     structure = base_structure(case, condition, ident.units)
     check_fit_data(ident, case.estimator_options.get("outputs"), structure)
     structure, data_warnings = checked_structure(case, structure, ident, report)
