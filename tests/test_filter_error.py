@@ -385,3 +385,20 @@ def test_start_values_and_options_are_checked():
     mixed = rotorid.ManeuverSet([data[1], coarse])
     with pytest.raises(DataError, match="one sample time"):
         estimator().estimate(structure(), mixed)
+
+
+def test_a_disturbance_read_by_an_accelerometer_needs_no_seen_state():
+    """Without a derivative of w (as after a reduction removed them) no output sees the state
+    w: white process noise on it changes no innovation and is refused, but a disturbance of
+    the w equation is an acceleration az reads, and it is fitted."""
+    model = ModelStructure(HOVER, [Derivative(n) for n in SMALL_TRUTH if n != "Z_w"])
+    data = noisy_data({}, disturbances={"w": (1.0, 1.0)})
+    with pytest.raises(EstimationError, match="process_noise names w, which no output of the "
+                                              "structure sees"):
+        estimator(process_noise=("w",)).estimate(model, data)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
+        result = estimator(process_noise=(), disturbances=("w",), max_iterations=30
+                           ).estimate(model, data, start={"D_w": 0.5, "T_w": 0.5})
+    assert result.value("D_w") == pytest.approx(1.0, rel=0.5)
+    assert result.value("Z_coll") == pytest.approx(SMALL_TRUTH["Z_coll"], rel=0.1)

@@ -82,3 +82,29 @@ def test_rotor_kept_has_the_truth_models_states_and_the_same_quasi_steady_limit(
     np.testing.assert_allclose(quasi_steady, plant.a, rtol=1e-9, atol=1e-12)
     with pytest.raises(DataError, match="rigid-body plant"):
         full.longitudinal()
+
+
+@pytest.mark.parametrize("template", ["longitudinal", "lateral", "hybrid"])
+def test_truth_derivatives_of_a_template_with_fewer_controls_read_their_own_columns(template):
+    """A structure with fewer controls than the truth (long and coll of `longitudinal`) reads
+    each control's own column of the linearisation: the same values as the six-dof
+    structure's (hybrid: the flap-coupled model, whose control columns are checked against
+    the full linearisation residualised by hand)."""
+    import rotorid
+    from rotorid import FlightCondition, ModelStructure
+    from rotorid.study.truth import truth_derivatives
+
+    source = rotorid.create("data-sources", "helisim")
+    condition = FlightCondition.from_airspeed(0.0)
+    six_dof = truth_derivatives(source, condition, ModelStructure.populated(condition))
+    reduced = truth_derivatives(source, condition,
+                                ModelStructure.populated(condition, template))
+    shared = [name for name in reduced if name in six_dof]
+    assert any(name.endswith("_coll") or name.endswith("_ped") for name in shared)
+    if template != "hybrid":
+        for name in shared:
+            assert reduced[name] == pytest.approx(six_dof[name], rel=1e-9, abs=1e-12), name
+    else:
+        # the coll and ped columns reach the body without the flap: as in the six-dof model
+        for name in ("Z_coll", "N_ped"):
+            assert reduced[name] == pytest.approx(six_dof[name], rel=0.05), name

@@ -42,6 +42,7 @@ import rotorid
 from rotorid import FlightCondition, ManeuverSet, ModelStructure
 from rotorid.resampling import DecimatedRealisations
 from rotorid.study.montecarlo import monte_carlo
+from rotorid.study.truth import truth_derivatives
 from rotorid_helisim.linear_truth import LinearisedPlant, linearised_trim
 from rotorid_helisim.source import HelisimSource
 
@@ -94,20 +95,6 @@ def flights(turbulence: str, duration_scale: float, directory: Path, truth: str 
     return data, condition
 
 
-def truth_values(source, structure: ModelStructure) -> dict[str, float]:
-    """The truth model's residualised linearisation as the structure's derivatives."""
-    linear = source.linearize(0.0, units=structure.units.name)
-    rows = [linear.states.index(s) for s in structure.states]
-    a = np.asarray(linear.A)[np.ix_(rows, rows)] - structure.known_state_matrix()
-    values = {}
-    for d in structure.derivatives:
-        row = structure.states.index(structure.equation_of(d))
-        values[d.name] = float(
-            linear.B[rows[row], linear.controls.index(d.variable)] if structure.is_control(d)
-            else a[row, structure.states.index(d.variable)])
-    return values
-
-
 def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=30)
@@ -137,7 +124,8 @@ def main(argv=None) -> dict:
         if args.cutoff is not None:
             data = DecimatedRealisations(data, args.decimate, args.cutoff)
         structure = ModelStructure.populated(condition, "longitudinal")
-        truth = truth_values(rotorid.create("data-sources", "helisim"), structure)
+        truth = truth_derivatives(rotorid.create("data-sources", "helisim"), condition,
+                                  structure)
         for name, options in ESTIMATORS.items():
             if name == "filter-error" and args.initial_states:
                 options = {**options, "initial_states": tuple(args.initial_states)}

@@ -108,10 +108,15 @@ def process_noise_states(structure: ModelStructure, names: tuple[str, ...] | Non
     order: ``names``, or by default the states of the structure's force and moment equations
     that the outputs see (:func:`seen_states`; noise on a state they cannot see changes no
     innovation, and leaves the filter without a steady state when that state's mode is not
-    stable); ``option`` names the setting in errors."""
+    stable); ``option`` names the setting in errors. A disturbance (an acceleration of its
+    state's equation) may also name a state no output sees if an accelerometer reads that
+    equation (az reads the w equation's disturbance when a reduction has removed every
+    derivative of w)."""
     seen = seen_states(structure)
     if names is None:
         return tuple(structure.states[i] for i in structure.equation_rows if seen[i])
+    if option == "disturbances":
+        seen = seen | np.any(structure.known_terms().measured != 0, axis=0)
     unknown = [s for s in names if s not in structure.states]
     if unknown:
         raise EstimationError(f"{option} names {', '.join(unknown)}, not states of the "

@@ -30,9 +30,13 @@ def truth_derivatives(truth: TruthModel, condition: FlightCondition,
     if set(structure.states) <= set(states):
         rows = [states.index(name) for name in structure.states]
         a, b = np.asarray(linear.A)[np.ix_(rows, rows)], np.asarray(linear.B)[rows]
+        controls = linear.controls
     else:
         full = truth.linearize(condition.airspeed_kt, full=True, units=units)
         a, b = residualise(full.A, full.B, full.states, structure.states)
+        controls = full.controls
+    # the structure's controls may be fewer, in another order (long, coll of `longitudinal`)
+    b = np.asarray(b)[:, [list(controls).index(name) for name in structure.controls]]
     return derivatives_of(structure, a, b)
 
 
