@@ -17,11 +17,12 @@ CASE = {"name": "banded", "data": {"source": "helisim", "condition": "hover"}}
 
 def test_the_setting_is_read_and_recorded_only_when_set():
     case = FlightCase.from_mapping({**CASE, "identification": {"cutoff_hz": 3.0,
-                                                               "decimate": 8}})
-    assert (case.cutoff_hz, case.decimate) == (3.0, 8)
-    assert case.as_dict()["cutoff_hz"] == 3.0 and case.as_dict()["decimate"] == 8
+                                                               "decimate": 8, "hold": "foh"}})
+    assert (case.cutoff_hz, case.decimate, case.identification_hold) == (3.0, 8, "foh")
+    assert {k: case.as_dict()[k] for k in ("cutoff_hz", "decimate", "identification_hold")} \
+        == {"cutoff_hz": 3.0, "decimate": 8, "identification_hold": "foh"}
     plain = FlightCase.from_mapping(CASE).as_dict()
-    assert "cutoff_hz" not in plain and "decimate" not in plain
+    assert not {"cutoff_hz", "decimate", "identification_hold"} & set(plain)
 
 
 @pytest.mark.parametrize("table, message", [
@@ -30,6 +31,7 @@ def test_the_setting_is_read_and_recorded_only_when_set():
     ({"decimate": 4}, r"\[identification\] decimate needs cutoff_hz"),
     ({"cutoff_hz": 3.0, "decimate": 0}, r"decimate must be a whole number ≥ 1"),
     ({"cutoff": 3.0}, r"\[identification\] unknown key\(s\) \['cutoff'\]"),
+    ({"hold": "linear"}, r"\[identification\] hold must be \"zoh\" .* got 'linear'"),
 ])
 def test_bad_settings_are_refused_when_the_case_is_read(table, message):
     with pytest.raises(DataFileError, match=message):
@@ -37,7 +39,7 @@ def test_bad_settings_are_refused_when_the_case_is_read(table, message):
 
 
 def test_the_study_fits_the_band_limited_records(tmp_path, data):  # noqa: F811
-    case = attrs.evolve(files_case(tmp_path, data), cutoff_hz=8.0)
+    case = attrs.evolve(files_case(tmp_path, data), cutoff_hz=8.0, identification_hold="foh")
     messages = []
     result = run_case(case, tmp_path / "out", progress=lambda c, m: messages.append(m))
     assert "identification records low-passed at 8 Hz, sample time 0.02 → 0.06 s" in messages
@@ -45,7 +47,7 @@ def test_the_study_fits_the_band_limited_records(tmp_path, data):  # noqa: F811
     record = json.loads((tmp_path / "out" / "own" / "result.json").read_text())
     assert record["case"]["cutoff_hz"] == 8.0
     # the doublets' dynamics lie below 8 Hz: the band keeps the true model (with the
-    # first-order hold the decimated set takes; held constant over 0.1 s at 5 Hz, M_q came out
+    # first-order hold the case asks for; held constant over 0.1 s at 5 Hz, M_q came out
     # 24 % off)
     assert result.identification.hold == "foh"
     estimate = result.estimates["with delays"]

@@ -47,13 +47,13 @@ def test_a_tone_in_the_band_keeps_amplitude_and_phase_and_one_above_it_goes():
     assert np.all(record.outputs[:, 0] == 0.0)           # an untouched channel stays exact
 
 
-def test_a_set_keeps_its_names_and_metadata_and_takes_the_first_order_hold():
+def test_a_set_keeps_its_hold_names_and_metadata():
     time, low, _ = _tones(seconds=4.0)
     inputs = np.column_stack([low, 0 * low, 0 * low, 0 * low])
     maneuvers = ManeuverSet([Maneuver("a", time, inputs, np.zeros((time.size, 8)),
-                                      metadata={"kind": "3211"})])
+                                      metadata={"kind": "3211"})], hold="foh")
     out = decimated(maneuvers, factor=2, cutoff_hz=5.0)
-    assert maneuvers.hold == "zoh" and out.hold == "foh" and out.names == ("a",)
+    assert out.hold == "foh" and out.names == ("a",)
     assert out[0].metadata == {"kind": "3211"} and out[0].time.size == (time.size + 1) // 2
     assert maneuvers[0].time.size == time.size       # the given set is left as it was
 

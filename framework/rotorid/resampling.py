@@ -130,13 +130,17 @@ def decimated_maneuver(maneuver: Maneuver, factor: int | None, cutoff_hz: float)
 
 
 def decimated(maneuvers: ManeuverSet, factor: int | None, cutoff_hz: float) -> ManeuverSet:
-    """Every record of ``maneuvers`` through :func:`decimated_maneuver`, with the first-order
-    hold: the low-passed inputs are smooth, and held constant over the longer kept interval
-    they would lag by half of it, which the fitted derivatives then absorb (measured on a
-    doublet data set at 3 Hz, every 8th sample: M_q 45 % off with the zero-order hold, within
-    3 % of the undecimated fit with the first-order one)."""
+    """Every record of ``maneuvers`` through :func:`decimated_maneuver` (same hold).
+
+    Choose the hold deliberately: the low-passed inputs are smooth, and held constant over
+    the longer kept interval they lag by half of it, which the fitted derivatives absorb as a
+    delay. On doublet data of a known linear model at 3 Hz, every 8th sample, that made M_q
+    45 % off, where the first-order hold came within 3 % of the undecimated fit. On the
+    helicopter truth model the same half-interval stands in for the actuator and rotor lags a
+    structure without delays lacks, and the first-order hold without delays got other
+    derivatives wrong (docs/estimation.md, the hover key derivatives)."""
     return attrs.evolve(maneuvers, maneuvers=[decimated_maneuver(m, factor, cutoff_hz)
-                                              for m in maneuvers], hold="foh")
+                                              for m in maneuvers])
 
 
 @attrs.frozen

@@ -54,7 +54,7 @@ _TABLES = {
     "compare": {"frequency", "pairs", "band_max", "estimators", "hybrid", "hybrid_band_max",
                 "hybrid_reduction"},
     "reference": None,
-    "identification": {"cutoff_hz", "decimate"},
+    "identification": {"cutoff_hz", "decimate", "hold"},
 }
 _TOP_LEVEL = {"name", "description", *_TABLES}
 #: Case settings by table and key: the :class:`FlightCase` field and its converter.
@@ -81,6 +81,7 @@ _FIELDS = {
     ("compare", "hybrid_reduction"): ("compare_hybrid_reduction", bool),
     ("identification", "cutoff_hz"): ("cutoff_hz", float),
     ("identification", "decimate"): ("decimate", int),
+    ("identification", "hold"): ("identification_hold", str),
 }
 
 #: What each converter of :data:`_FIELDS` reads, for the error messages.
@@ -112,8 +113,9 @@ class FlightCase:
     ``delay_profile_points`` is the number of grid values in [0, ``delay_upper``] of each kept
     delay's profile (0: no profiles). With ``cutoff_hz`` (``[identification]``) the
     identification records are low-passed there and kept at every ``decimate``-th sample
-    before any fit (:func:`band_limited`; ``decimate`` by default the factor that keeps the
-    sensor noise white), in the study and in its Monte Carlo runs alike.
+    before any fit (:meth:`identification_records`; ``decimate`` by default the factor that
+    keeps the sensor noise white), in the study and in its Monte Carlo runs alike;
+    ``identification_hold`` (``[identification] hold``) sets their input hold.
     """
 
     name: str
@@ -149,6 +151,7 @@ class FlightCase:
     compare_hybrid_reduction: bool = False
     cutoff_hz: float | None = None
     decimate: int | None = None
+    identification_hold: str | None = None
     quick_settings: Mapping = attrs.field(factory=dict, converter=dict)
     is_quick: bool = False
 
@@ -170,12 +173,15 @@ class FlightCase:
         """The data source's settings: ``[data]`` without ``source``."""
         return {k: v for k, v in self.data.items() if k != "source"}
 
-    def band_limited(self, maneuvers):
+    def identification_records(self, maneuvers):
         """The identification ``maneuvers`` as the fits see them: low-passed at ``cutoff_hz``
-        and decimated (:func:`rotorid.resampling.decimated`), or unchanged without it."""
-        if self.cutoff_hz is None:
-            return maneuvers
-        return decimated(maneuvers, self.decimate, self.cutoff_hz)
+        and decimated (:func:`rotorid.resampling.decimated`), with ``identification_hold``;
+        unchanged without those settings."""
+        if self.cutoff_hz is not None:
+            maneuvers = decimated(maneuvers, self.decimate, self.cutoff_hz)
+        if self.identification_hold is not None:
+            maneuvers = attrs.evolve(maneuvers, hold=self.identification_hold)
+        return maneuvers
 
     @property
     def frequency_pairs(self) -> tuple[str, ...]:
@@ -240,11 +246,11 @@ class FlightCase:
 
     def as_dict(self) -> dict:
         """Plain settings, as recorded in ``result.json``; ``compare_estimators``,
-        ``compare_hybrid``, ``compare_hybrid_reduction``, ``cutoff_hz`` and ``decimate`` only
-        when set, so that cases without them keep the record they had before they existed."""
+        ``compare_hybrid``, ``compare_hybrid_reduction`` and the ``[identification]`` settings
+        only when set, so that cases without them keep the record they had before they existed."""
         return attrs.asdict(self, filter=lambda a, v: not (
             a.name in ("compare_estimators", "compare_hybrid", "compare_hybrid_reduction",
-                       "cutoff_hz", "decimate")
+                       "cutoff_hz", "decimate", "identification_hold")
             and not v
             or a.name == "compare_hybrid_band_max" and not self.compare_hybrid))
 

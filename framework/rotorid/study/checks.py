@@ -74,7 +74,11 @@ def check_case(case, where: str) -> None:
 
 
 def _check_band_limit(case, where: str) -> None:
-    """``[identification]``: a cutoff > 0 Hz, a decimation factor ≥ 1 only with it."""
+    """``[identification]``: a cutoff > 0 Hz, a decimation factor ≥ 1 only with it, a
+    known hold."""
+    if case.identification_hold not in (None, "zoh", "foh"):
+        raise DataFileError(f"{where}: [identification] hold must be \"zoh\" (zero-order) or "
+                            f"\"foh\" (first-order), got {case.identification_hold!r}")
     if case.cutoff_hz is not None and not (math.isfinite(case.cutoff_hz)
                                            and case.cutoff_hz > 0):
         raise DataFileError(f"{where}: [identification] cutoff_hz must be a frequency > 0 Hz "

@@ -31,7 +31,6 @@ from rotorid.frozen import readonly_array
 from rotorid.io import atomic_write, jsonable
 from rotorid.model.structure import ModelStructure
 from rotorid.plugin.manager import create
-from rotorid.resampling import DecimatedRealisations
 
 #: Half-width of the interval whose coverage is reported, in Cramér-Rao bounds.
 INTERVAL = 2.0
@@ -262,8 +261,7 @@ def case_monte_carlo(case, runs: int, out_dir: str | Path, *, seed: int | None =
     study = run_case(case, out_dir, resume=True, progress=progress)
     directory = Path(out_dir) / case.name
     data = source.noise_realisations(case.data_settings, directory / "montecarlo-data")
-    if case.cutoff_hz is not None:               # the records the study's fits saw
-        data = DecimatedRealisations(data, case.decimate, case.cutoff_hz)
+    data = IdentificationRecords(data, case)        # the records the study's fits saw
     first = int(case.data.get("seed", 0) if seed is None else seed)
     estimate = study.estimates["with delays"]
     result = monte_carlo(
@@ -273,6 +271,18 @@ def case_monte_carlo(case, runs: int, out_dir: str | Path, *, seed: int | None =
         executor=executor, case=case.name)
     write_monte_carlo(result, directory)
     return result
+
+
+@attrs.frozen
+class IdentificationRecords:
+    """``data(seed)`` (a Monte Carlo data factory) as the case's fits see it
+    (:meth:`~rotorid.study.case.FlightCase.identification_records`); picklable."""
+
+    data: Callable[[int], ManeuverSet]
+    case: object
+
+    def __call__(self, seed: int) -> ManeuverSet:
+        return self.case.identification_records(self.data(seed))
 
 
 def write_monte_carlo(result: MonteCarloResult, directory: str | Path) -> Path:

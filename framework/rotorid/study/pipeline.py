@@ -316,7 +316,7 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     clock = {"start": time.perf_counter()}
     report(case.name, f"data: {case.data_source} ({'quick' if case.is_quick else 'full'} set)")
     data, condition = load_data(case, directory / "data")
-    ident, verif = case.band_limited(data.identification), data.verification
+    ident, verif = case.identification_records(data.identification), data.verification
     clock["data"] = time.perf_counter()
     report(case.name, f"{len(ident)} identification and {0 if verif is None else len(verif)} "
                       f"verification maneuvers; trim {condition.describe()}")
