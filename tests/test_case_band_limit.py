@@ -1,12 +1,14 @@
-"""A case's ``[identification] cutoff_hz``: the identification records are low-passed and
+"""A case's ``[resampling] cutoff_hz``: the identification records are low-passed and
 decimated before every fit of the study (and of its Monte Carlo), the setting is checked
 when the case is read, and it is recorded in result.json only when set."""
 
 import json
+from pathlib import Path
 
 import attrs
 import numpy as np
 import pytest
+from rotorid.cli.main import main
 from rotorid.errors import DataFileError
 from rotorid.study.case import FlightCase
 from rotorid.study.pipeline import run_case
@@ -16,7 +18,7 @@ CASE = {"name": "banded", "data": {"source": "helisim", "condition": "hover"}}
 
 
 def test_the_setting_is_read_and_recorded_only_when_set():
-    case = FlightCase.from_mapping({**CASE, "identification": {"cutoff_hz": 3.0,
+    case = FlightCase.from_mapping({**CASE, "resampling": {"cutoff_hz": 3.0,
                                                                "decimate": 8, "hold": "foh"}})
     assert (case.cutoff_hz, case.decimate, case.identification_hold) == (3.0, 8, "foh")
     assert {k: case.as_dict()[k] for k in ("cutoff_hz", "decimate", "identification_hold")} \
@@ -26,16 +28,16 @@ def test_the_setting_is_read_and_recorded_only_when_set():
 
 
 @pytest.mark.parametrize("table, message", [
-    ({"cutoff_hz": -1.0}, r"\[identification\] cutoff_hz must be a frequency > 0 Hz"),
+    ({"cutoff_hz": -1.0}, r"\[resampling\] cutoff_hz must be a frequency > 0 Hz"),
     ({"cutoff_hz": float("nan")}, r"cutoff_hz must be a frequency > 0 Hz"),
-    ({"decimate": 4}, r"\[identification\] decimate needs cutoff_hz"),
+    ({"decimate": 4}, r"\[resampling\] decimate needs cutoff_hz"),
     ({"cutoff_hz": 3.0, "decimate": 0}, r"decimate must be a whole number ≥ 1"),
-    ({"cutoff": 3.0}, r"\[identification\] unknown key\(s\) \['cutoff'\]"),
-    ({"hold": "linear"}, r"\[identification\] hold must be \"zoh\" .* got 'linear'"),
+    ({"cutoff": 3.0}, r"\[resampling\] unknown key\(s\) \['cutoff'\]"),
+    ({"hold": "linear"}, r"\[resampling\] hold must be \"zoh\" .* got 'linear'"),
 ])
 def test_bad_settings_are_refused_when_the_case_is_read(table, message):
     with pytest.raises(DataFileError, match=message):
-        FlightCase.from_mapping({**CASE, "identification": table}, "case.toml")
+        FlightCase.from_mapping({**CASE, "resampling": table}, "case.toml")
 
 
 def test_the_study_fits_the_band_limited_records(tmp_path, data):  # noqa: F811
@@ -56,3 +58,24 @@ def test_the_study_fits_the_band_limited_records(tmp_path, data):  # noqa: F811
     for name in ("M_q", "M_long", "L_p", "L_lat"):
         assert values[name] == pytest.approx(TRUE[name], rel=0.1), name
     assert np.all(np.isfinite(estimate.cramer_rao))
+
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "docs" / "examples" / "turbulence_longitudinal.toml"
+
+
+def test_the_turbulence_case_file_reads():
+    case = FlightCase.load(EXAMPLE)
+    assert (case.cutoff_hz, case.decimate, case.estimator) == (3.0, None, "filter-error")
+    assert case.data_settings["turbulence"] == "moderate"
+
+
+@pytest.mark.slow
+def test_rotorid_montecarlo_runs_the_turbulence_case_file(tmp_path, capsys):
+    """docs/estimation.md has 30 runs of it (about 2 minutes); four here."""
+    assert main(["montecarlo", str(EXAMPLE), "--runs", "4", "--out", str(tmp_path)]) == 0
+    capsys.readouterr()
+    record = json.loads((tmp_path / "hover-turbulence-longitudinal" / "montecarlo.json")
+                        .read_text())
+    assert record["converged"] == 4 and record["failed"] == 0
+    study = json.loads((tmp_path / "hover-turbulence-longitudinal" / "result.json").read_text())
+    assert study["case"]["cutoff_hz"] == 3.0

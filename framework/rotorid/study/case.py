@@ -54,7 +54,7 @@ _TABLES = {
     "compare": {"frequency", "pairs", "band_max", "estimators", "hybrid", "hybrid_band_max",
                 "hybrid_reduction"},
     "reference": None,
-    "identification": {"cutoff_hz", "decimate", "hold"},
+    "resampling": {"cutoff_hz", "decimate", "hold"},
 }
 _TOP_LEVEL = {"name", "description", *_TABLES}
 #: Case settings by table and key: the :class:`FlightCase` field and its converter.
@@ -79,9 +79,9 @@ _FIELDS = {
     ("compare", "hybrid"): ("compare_hybrid", bool),
     ("compare", "hybrid_band_max"): ("compare_hybrid_band_max", float),
     ("compare", "hybrid_reduction"): ("compare_hybrid_reduction", bool),
-    ("identification", "cutoff_hz"): ("cutoff_hz", float),
-    ("identification", "decimate"): ("decimate", int),
-    ("identification", "hold"): ("identification_hold", str),
+    ("resampling", "cutoff_hz"): ("cutoff_hz", float),
+    ("resampling", "decimate"): ("decimate", int),
+    ("resampling", "hold"): ("identification_hold", str),
 }
 
 #: What each converter of :data:`_FIELDS` reads, for the error messages.
@@ -111,11 +111,11 @@ class FlightCase:
     Empty ``pairs`` are the structure's own default pairs
     (:func:`rotorid.verification.pairs.default_pairs`: the paper's pairs it has).
     ``delay_profile_points`` is the number of grid values in [0, ``delay_upper``] of each kept
-    delay's profile (0: no profiles). With ``cutoff_hz`` (``[identification]``) the
+    delay's profile (0: no profiles). With ``cutoff_hz`` (``[resampling]``) the
     identification records are low-passed there and kept at every ``decimate``-th sample
     before any fit (:meth:`identification_records`; ``decimate`` by default the factor that
     keeps the sensor noise white), in the study and in its Monte Carlo runs alike;
-    ``identification_hold`` (``[identification] hold``) sets their input hold.
+    ``identification_hold`` (``[resampling] hold``) sets their input hold.
     """
 
     name: str
@@ -246,7 +246,7 @@ class FlightCase:
 
     def as_dict(self) -> dict:
         """Plain settings, as recorded in ``result.json``; ``compare_estimators``,
-        ``compare_hybrid``, ``compare_hybrid_reduction`` and the ``[identification]`` settings
+        ``compare_hybrid``, ``compare_hybrid_reduction`` and the ``[resampling]`` settings
         only when set, so that cases without them keep the record they had before they existed."""
         return attrs.asdict(self, filter=lambda a, v: not (
             a.name in ("compare_estimators", "compare_hybrid", "compare_hybrid_reduction",

@@ -74,21 +74,21 @@ def check_case(case, where: str) -> None:
 
 
 def _check_band_limit(case, where: str) -> None:
-    """``[identification]``: a cutoff > 0 Hz, a decimation factor ≥ 1 only with it, a
+    """``[resampling]``: a cutoff > 0 Hz, a decimation factor ≥ 1 only with it, a
     known hold."""
     if case.identification_hold not in (None, "zoh", "foh"):
-        raise DataFileError(f"{where}: [identification] hold must be \"zoh\" (zero-order) or "
+        raise DataFileError(f"{where}: [resampling] hold must be \"zoh\" (zero-order) or "
                             f"\"foh\" (first-order), got {case.identification_hold!r}")
     if case.cutoff_hz is not None and not (math.isfinite(case.cutoff_hz)
                                            and case.cutoff_hz > 0):
-        raise DataFileError(f"{where}: [identification] cutoff_hz must be a frequency > 0 Hz "
+        raise DataFileError(f"{where}: [resampling] cutoff_hz must be a frequency > 0 Hz "
                             f"(below the records' Nyquist frequency), got {case.cutoff_hz!r}")
     if case.decimate is not None:
         if case.cutoff_hz is None:
-            raise DataFileError(f"{where}: [identification] decimate needs cutoff_hz, the "
+            raise DataFileError(f"{where}: [resampling] decimate needs cutoff_hz, the "
                                 f"low-pass that comes before it")
         if case.decimate < 1:
-            raise DataFileError(f"{where}: [identification] decimate must be a whole number "
+            raise DataFileError(f"{where}: [resampling] decimate must be a whole number "
                                 f"≥ 1 (samples per kept sample), got {case.decimate!r}")
 
 
