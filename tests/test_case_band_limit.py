@@ -60,7 +60,8 @@ def test_the_study_fits_the_band_limited_records(tmp_path, data):  # noqa: F811
     assert np.all(np.isfinite(estimate.cramer_rao))
 
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "docs" / "examples" / "turbulence_longitudinal.toml"
+EXAMPLE = (Path(__file__).resolve().parents[1] / "docs" / "examples"
+           / "turbulence_longitudinal.toml")
 
 
 def test_the_turbulence_case_file_reads():

@@ -22,7 +22,8 @@ def _write(tmp_path, parameters):
 
 def test_noise_parameters_are_kept_apart_from_the_model(tmp_path):
     path = _write(tmp_path, {"M_q": -2.0, "M_long": 0.8, "F_q": 0.3, "D_w": 0.1, "T_w": 1.5,
-                             "G_u": 2.0, "Tg_u": 5.0, "R_theta": 0.01, "bias_m1_q": 0.2, "x0_m1_w": 1.5,
+                             "G_u": 2.0, "Tg_u": 5.0, "R_theta": 0.01, "bias_m1_q": 0.2,
+                             "x0_m1_w": 1.5,
                              "x0_m1_d_q": 0.02})
     identified = load_result(path)
     assert identified.values == {"M_q": -2.0, "M_long": 0.8, "tau_M_long": 0.05}

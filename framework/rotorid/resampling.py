@@ -16,7 +16,7 @@ they are read (:mod:`rotorid.ingestion`, ``resample = "decimate"``: a FIR at the
 frequency); this works on maneuvers in memory, generated ones included, with the cutoff
 chosen by the band the model describes.
 
-Keep the decimated records' Nyquist frequency just above the cutoff
+Keep the decimated records' Nyquist frequency at or just above the cutoff
 (:func:`white_noise_factor`). With more samples kept, the measurement noise, white before, is
 band-limited below their Nyquist frequency and so correlated from one kept sample to the next
 (:func:`noise_correlation`: 0.51 for a 4 Hz cutoff kept at every 4th of 50 Hz samples, 0.14 at
@@ -72,7 +72,15 @@ def noise_correlation(dt: float, factor: int, cutoff_hz: float) -> float:
                                                 fs=1.0 / dt)
     power = np.abs(response) ** 4
     lagged = power * np.cos(2.0 * np.pi * frequency * factor * dt)
-    return float(scipy.integrate.trapezoid(lagged, frequency) / scipy.integrate.trapezoid(power, frequency))
+    integral = scipy.integrate.trapezoid
+    return float(integral(lagged, frequency) / integral(power, frequency))
+
+
+def _ordinal(number: int) -> str:
+    """``3`` → ``"3rd"``."""
+    suffix = "th" if 10 <= number % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(
+        number % 10, "th")
+    return f"{number}{suffix}"
 
 
 def _low_pass(values: np.ndarray, sections: np.ndarray) -> np.ndarray:
@@ -107,15 +115,15 @@ def decimated_maneuver(maneuver: Maneuver, factor: int | None, cutoff_hz: float)
     correlation = noise_correlation(dt, factor, cutoff_hz)
     if correlation > NOISE_CORRELATION_LIMIT:
         better = white_noise_factor(dt, cutoff_hz)
-        fix = (f"keep every {better}th sample (rotorid.resampling.white_noise_factor: Nyquist "
-               f"frequency {0.5 / (better * dt):.3g} Hz, correlation "
+        fix = (f"keep every {_ordinal(better)} sample (rotorid.resampling.white_noise_factor: "
+               f"Nyquist frequency {0.5 / (better * dt):.3g} Hz, correlation "
                f"{noise_correlation(dt, better, cutoff_hz):.2f})" if better != factor else
                f"raise the cutoff to the kept samples' Nyquist frequency {nyquist:.3g} Hz")
         warnings.warn(DataWarning(
             f"white measurement noise low-passed at {cutoff_hz:g} Hz and kept at every "
-            f"{factor}th sample is correlated {correlation:.2f} from one kept sample to the "
-            f"next; the estimators take it as white, so their Cramér-Rao bounds come out too "
-            f"small: {fix}"), stacklevel=2)
+            f"{_ordinal(factor)} sample is correlated {correlation:.2f} from one kept sample "
+            f"to the next; the estimators take it as white, so their Cramér-Rao bounds come "
+            f"out too small: {fix}"), stacklevel=2)
     sections = _sections(dt, cutoff_hz)
     padding = 3 * (2 * len(sections) + 1)          # sosfiltfilt's default edge padding
     if time.size <= padding:
