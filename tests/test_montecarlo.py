@@ -115,6 +115,19 @@ def test_record_report_and_figure(problem, tmp_path):
     assert "std/CR" in report and all(name in report for name in NAMES)
 
 
+def test_the_figure_turns_logarithmic_for_a_far_off_ratio(problem):
+    from rotorid.report.plots.montecarlo import plot_monte_carlo
+
+    result = run(problem, WhiteNoise(problem[2], SIGMA), range(5))
+    assert plot_monte_carlo(result).axes[0].get_yscale() == "linear"
+    bounds = result.cramer_rao.copy()
+    bounds[:, NAMES.index("L_p")] /= 90.0            # one ratio 90 times the others
+    far = attrs.evolve(result, cramer_rao=bounds)
+    top = plot_monte_carlo(far).axes[0]
+    assert top.get_yscale() == "log"
+    assert top.get_ylim()[1] > 90 * far.ratio[NAMES.index("M_q")]
+
+
 def test_converged_runs_keep_the_statistics_of_those_runs_only(problem):
     result = run(problem, WhiteNoise(problem[2], SIGMA), range(4))
     marked = attrs.evolve(result, converged=[True, False, True, True])

@@ -2,7 +2,7 @@
 
 :func:`plot_monte_carlo` draws per parameter, top: the sample standard deviation over the
 mean Cramér-Rao bound (1 for honest bounds, with the band a sample of N honest runs stays in
-about 95 % of the time); bottom: the coverage of the ±2·CR interval around the sample mean
+about 95 % of the time; on a log scale when a ratio lies beyond :data:`LOG_SCALE_ABOVE`); bottom: the coverage of the ±2·CR interval around the sample mean
 (filled) and around the truth where known (open), against the nominal 95.4 % and its
 binomial band. Returns the :class:`matplotlib.figure.Figure`.
 """
@@ -13,6 +13,11 @@ import numpy as np
 
 from rotorid.model.derivatives import parameter_label
 from rotorid.study.montecarlo import NOMINAL_COVERAGE, MonteCarloResult
+
+#: The std/CR axis turns logarithmic when a ratio lies beyond this factor of 1 either way.
+LOG_SCALE_ABOVE = 5.0
+#: The lowest ratio the log axis shows; smaller ones are marked at its edge.
+LOG_SCALE_FLOOR = 0.05
 
 
 def plot_monte_carlo(result: MonteCarloResult, title: str | None = None):
@@ -28,10 +33,21 @@ def plot_monte_carlo(result: MonteCarloResult, title: str | None = None):
                 label=f"honest bounds, {result.runs} runs (±2 s.e.)")
     top.axhline(1.0, color="0.4", linewidth=1.0)
     top.plot(x, ratio, "o", color="C0", markersize=4, label="std / mean CR")
-    top.set_ylabel("sample std / mean CR")
-    top.set_ylim(0.0, max(2.0, float(np.nanmax(np.where(np.isfinite(ratio), ratio, np.nan),
-                                               initial=0.0)) * 1.1))
-    top.legend(loc="upper right", fontsize="small")
+    finite = ratio[np.isfinite(ratio) & (ratio > 0)]
+    if finite.size and (finite.max() > LOG_SCALE_ABOVE or finite.min() < 1 / LOG_SCALE_ABOVE):
+        # one far-off parameter (a noise variance 90 times its bound) would flatten the rest
+        low = max(min(0.5, finite.min() / 1.5), LOG_SCALE_FLOOR)
+        top.set_yscale("log")
+        top.set_ylim(low, max(2.0, finite.max() * 1.5))
+        top.set_ylabel("sample std / mean CR (log)")
+        below = np.isfinite(ratio) & (ratio < low)
+        if np.any(below):
+            top.plot(x[below], np.full(int(below.sum()), low * 1.15), "v", color="C0",
+                     markersize=5, label=f"below {low:g} (bound far above the spread)")
+    else:
+        top.set_ylim(0.0, max(2.0, float(finite.max(initial=0.0)) * 1.1))
+        top.set_ylabel("sample std / mean CR")
+    top.legend(loc="upper left", fontsize="small")
     bottom.axhspan(NOMINAL_COVERAGE - result.coverage_band,
                    min(1.0, NOMINAL_COVERAGE + result.coverage_band), color="0.9")
     bottom.axhline(NOMINAL_COVERAGE, color="0.4", linewidth=1.0,
@@ -48,6 +64,6 @@ def plot_monte_carlo(result: MonteCarloResult, title: str | None = None):
     bottom.set_xticks(x, [parameter_label(n) for n in names], rotation=90, fontsize="small")
     for axis in (top, bottom):
         axis.grid(True, axis="y", alpha=0.3)
-    figure.suptitle(title or f"Monte Carlo check of the Cramér-Rao bounds: case "
+    figure.suptitle(title or f"Monte Carlo check of the Cramér-Rao bounds\ncase "
                              f"{result.case}, {result.runs} runs")
     return figure
