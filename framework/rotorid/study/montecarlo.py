@@ -1,7 +1,7 @@
 """Monte Carlo check of the Cramér-Rao bounds.
 
-A case's final estimation (the selected structure with its delays, from the same start) is
-repeated on data sets that differ only in their measurement-noise seed. Per parameter the
+A case's final estimation (the selected structure with its delays, its parameters from the
+study's start) is repeated on data sets that differ only in their measurement-noise seed. Per parameter the
 runs give the sample mean and standard deviation; each run also reports its own Cramér-Rao
 bound. If the bounds are honest, the standard deviation equals the mean bound (ratio ≈ 1) and
 the ±2·CR interval of a run contains the centre in about 95 % of the runs. See
@@ -246,7 +246,9 @@ def case_monte_carlo(case, runs: int, out_dir: str | Path, *, seed: int | None =
     first otherwise, without figures). Each run regenerates the case's data with noise seed
     ``seed + k`` (k = 0 … runs − 1; ``seed`` defaults to the case's own, so run 0 repeats
     the study's data) and repeats the final estimation: the selected structure with its
-    delays, from the study's start values. Writes ``montecarlo.json`` and the figure
+    delays, from the study's start values of the structure's parameters; what an estimator
+    starts from its data (filter error's noise parameters, output biases, initial states) each
+    run starts from its own data, as the study did. Writes ``montecarlo.json`` and the figure
     ``montecarlo.png``/``.svg`` into ``out_dir/<case>``.
     """
     from rotorid.study.pipeline import run_case
@@ -263,11 +265,13 @@ def case_monte_carlo(case, runs: int, out_dir: str | Path, *, seed: int | None =
     data = source.noise_realisations(case.data_settings, directory / "montecarlo-data")
     data = IdentificationRecords(data, case)        # the records the study's fits saw
     first = int(case.data.get("seed", 0) if seed is None else seed)
-    estimate = study.estimates["with delays"]
+    structure, estimate = study.structures["with delays"], study.estimates["with delays"]
+    start = {name: float(value) for name, value in zip(estimate.parameter_names, estimate.start)
+             if name in structure.parameter_names}
     result = monte_carlo(
-        study.structures["with delays"], data, range(first, first + runs),
+        structure, data, range(first, first + runs),
         estimator=case.estimator, estimator_options=case.estimator_options,
-        start=estimate.start, truth=study.truth_derivatives, reference=estimate.values,
+        start=start, truth=study.truth_derivatives, reference=estimate.values,
         executor=executor, case=case.name)
     write_monte_carlo(result, directory)
     return result
