@@ -23,7 +23,7 @@ repository root::
 
 ``--quick`` shortens the records to 60 %. ``--cutoff HZ`` fits both estimators to the records
 low-passed at HZ (zero phase) and kept at every N-th sample (:mod:`rotorid.resampling`; N by
-default the largest whose Nyquist frequency lies above HZ, which keeps the sensor noise
+default the largest whose Nyquist frequency is at least HZ, which keeps the sensor noise
 white): the band the hybrid describes, without the coning, inflow and actuator dynamics above
 it that the filter's one-step innovations otherwise weigh.
 """

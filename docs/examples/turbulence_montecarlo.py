@@ -25,13 +25,14 @@ fit on a shared 2-core machine, 30 runs of it hours. Run from the repository roo
         [--executor process] [--out montecarlo-turbulence]
 
 ``--cutoff HZ`` fits records low-passed at HZ and kept at every N-th sample
-(:class:`rotorid.resampling.DecimatedRealisations`; N by default the largest whose Nyquist
-frequency lies above HZ, which keeps the sensor noise white).
+(:func:`rotorid.resampling.decimated`; N by default the largest whose Nyquist frequency is
+at least HZ, which keeps the sensor noise white).
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 from collections.abc import Callable
 from pathlib import Path
@@ -40,8 +41,8 @@ import attrs
 import numpy as np
 import rotorid
 from rotorid import FlightCondition, ManeuverSet, ModelStructure
-from rotorid.resampling import DecimatedRealisations
-from rotorid.study.montecarlo import monte_carlo
+from rotorid.resampling import decimated
+from rotorid.study.montecarlo import PreparedRealisations, monte_carlo
 from rotorid.study.truth import truth_derivatives
 from rotorid_helisim.linear_truth import LinearisedPlant, linearised_trim
 from rotorid_helisim.source import HelisimSource
@@ -122,7 +123,8 @@ def main(argv=None) -> dict:
         data, condition = flights(args.turbulence, args.duration_scale, out / "data",
                                   truth_name)
         if args.cutoff is not None:
-            data = DecimatedRealisations(data, args.decimate, args.cutoff)
+            data = PreparedRealisations(data, functools.partial(
+                decimated, factor=args.decimate, cutoff_hz=args.cutoff))
         structure = ModelStructure.populated(condition, "longitudinal")
         truth = truth_derivatives(rotorid.create("data-sources", "helisim"), condition,
                                   structure)

@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Callable
 
 import attrs
 import numpy as np
@@ -150,16 +149,3 @@ def decimated(maneuvers: ManeuverSet, factor: int | None, cutoff_hz: float) -> M
     return attrs.evolve(maneuvers, maneuvers=[decimated_maneuver(m, factor, cutoff_hz)
                                               for m in maneuvers])
 
-
-@attrs.frozen
-class DecimatedRealisations:
-    """A data factory ``data(seed) -> ManeuverSet`` (a Monte Carlo's, e.g.
-    ``noise_realisations``) whose sets come through :func:`decimated`; picklable when
-    ``data`` is, so it runs in process pools."""
-
-    data: Callable[[int], ManeuverSet]
-    factor: int | None
-    cutoff_hz: float
-
-    def __call__(self, seed: int) -> ManeuverSet:
-        return decimated(self.data(seed), self.factor, self.cutoff_hz)

@@ -247,7 +247,8 @@ class FlightCase:
     def as_dict(self) -> dict:
         """Plain settings, as recorded in ``result.json``; ``compare_estimators``,
         ``compare_hybrid``, ``compare_hybrid_reduction`` and the ``[resampling]`` settings
-        only when set, so that cases without them keep the record they had before they existed."""
+        only when set, so that cases without them keep the record they had before they
+        existed."""
         return attrs.asdict(self, filter=lambda a, v: not (
             a.name in ("compare_estimators", "compare_hybrid", "compare_hybrid_reduction",
                        "cutoff_hz", "decimate", "identification_hold")

@@ -12,6 +12,7 @@ import math
 import re
 from collections.abc import Mapping, Sequence
 
+from rotorid.data import HOLDS
 from rotorid.errors import DataFileError, RotoridError
 from rotorid.model.signals import ChannelMap
 from rotorid.estimation.reduction import RULES
@@ -76,7 +77,7 @@ def check_case(case, where: str) -> None:
 def _check_band_limit(case, where: str) -> None:
     """``[resampling]``: a cutoff > 0 Hz, a decimation factor ≥ 1 only with it, a
     known hold."""
-    if case.identification_hold not in (None, "zoh", "foh"):
+    if case.identification_hold not in (None, *HOLDS):
         raise DataFileError(f"{where}: [resampling] hold must be \"zoh\" (zero-order) or "
                             f"\"foh\" (first-order), got {case.identification_hold!r}")
     if case.cutoff_hz is not None and not (math.isfinite(case.cutoff_hz)

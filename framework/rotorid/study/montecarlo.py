@@ -1,16 +1,17 @@
 """Monte Carlo check of the Cramér-Rao bounds.
 
 A case's final estimation (the selected structure with its delays, its parameters from the
-study's start) is repeated on data sets that differ only in their measurement-noise seed. Per parameter the
-runs give the sample mean and standard deviation; each run also reports its own Cramér-Rao
-bound. If the bounds are honest, the standard deviation equals the mean bound (ratio ≈ 1) and
+study's start) is repeated on data sets that differ only in their measurement-noise seed.
+Per parameter the runs give the sample mean and standard deviation; each run also reports its
+own Cramér-Rao bound. If the bounds are honest, the standard deviation equals the mean bound (ratio ≈ 1) and
 the ±2·CR interval of a run contains the centre in about 95 % of the runs. See
 docs/montecarlo.md for what the numbers mean, and why bounds from coloured residuals are
 optimistic.
 
 * :func:`monte_carlo`: the runs of one structure on data from any ``data(seed)`` factory;
 * :func:`case_monte_carlo`: the same for a flight case, reusing (or first running) its study;
-* :class:`WhiteNoise`: a factory adding Gaussian white noise to noise-free maneuvers.
+* :class:`WhiteNoise`: a factory adding Gaussian white noise to noise-free maneuvers;
+* :class:`PreparedRealisations`: a factory's sets passed through a preparation (decimation).
 """
 
 from __future__ import annotations
@@ -51,6 +52,20 @@ class WhiteNoise:
         return ManeuverSet([m.with_outputs(m.outputs + rng.standard_normal(m.outputs.shape)
                                            * self.sigma) for m in self.clean],
                            hold=self.clean.hold)
+
+
+@attrs.frozen(eq=False)
+class PreparedRealisations:
+    """A data factory ``data(seed)`` whose sets go through ``prepare(ManeuverSet) ->
+    ManeuverSet`` (a case's :meth:`~rotorid.study.case.FlightCase.identification_records`,
+    a :func:`functools.partial` of :func:`rotorid.resampling.decimated`); picklable when both
+    are, so it runs in process pools."""
+
+    data: Callable[[int], ManeuverSet]
+    prepare: Callable[[ManeuverSet], ManeuverSet]
+
+    def __call__(self, seed: int) -> ManeuverSet:
+        return self.prepare(self.data(seed))
 
 
 @attrs.frozen(eq=False)
@@ -263,7 +278,7 @@ def case_monte_carlo(case, runs: int, out_dir: str | Path, *, seed: int | None =
     study = run_case(case, out_dir, resume=True, progress=progress)
     directory = Path(out_dir) / case.name
     data = source.noise_realisations(case.data_settings, directory / "montecarlo-data")
-    data = IdentificationRecords(data, case)        # the records the study's fits saw
+    data = PreparedRealisations(data, case.identification_records)   # as the study's fits
     first = int(case.data.get("seed", 0) if seed is None else seed)
     structure, estimate = study.structures["with delays"], study.estimates["with delays"]
     start = {name: float(value) for name, value in zip(estimate.parameter_names, estimate.start)
@@ -275,18 +290,6 @@ def case_monte_carlo(case, runs: int, out_dir: str | Path, *, seed: int | None =
         executor=executor, case=case.name)
     write_monte_carlo(result, directory)
     return result
-
-
-@attrs.frozen
-class IdentificationRecords:
-    """``data(seed)`` (a Monte Carlo data factory) as the case's fits see it
-    (:meth:`~rotorid.study.case.FlightCase.identification_records`); picklable."""
-
-    data: Callable[[int], ManeuverSet]
-    case: object
-
-    def __call__(self, seed: int) -> ManeuverSet:
-        return self.case.identification_records(self.data(seed))
 
 
 def write_monte_carlo(result: MonteCarloResult, directory: str | Path) -> Path:

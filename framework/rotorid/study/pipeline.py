@@ -59,6 +59,8 @@ from rotorid.verification.simulation_fit import SimulationFit, simulation_fit
 from rotorid.verification.verify import verify_model
 
 Progress = Callable[[str, str], None]
+#: How a study's task names a case in progress lines and errors.
+_CASE_LABEL = "case {}".format
 
 
 def log_progress(case: str, message: str) -> None:
@@ -457,9 +459,9 @@ class Study:
         holding = contextlib.nullcontext() if self.executor is None else hold_lease(self.out_dir)
         with holding as lease:
             results, failures = run_tasks(run_case_task, tasks, self.executor,
-                                          label="case {}".format, lease=lease)
+                                          label=_CASE_LABEL, lease=lease)
         if failures:
-            raise failure_error("cases", results, failures, self.out_dir, "case {}".format)
+            raise failure_error("cases", results, failures, self.out_dir, _CASE_LABEL)
         if self.report_writer is not None:
             self.report_writer.write_study(results, self.out_dir)
         return results

@@ -107,9 +107,9 @@ def _split(files: list[str]):
 def load_sweeps(locations, units: str | None = None, ingestion=None):
     """(sweeps, left out): the maneuvers of files, directories or patterns
     (:func:`rotorid.cli.files.load_maneuvers`), only the ``sweep`` ones when the maneuvers carry
-    ``kind`` metadata, without those whose ``axis`` metadata names a control the model does not
-    have (a lateral sweep in a directory read for a longitudinal model); left out: name →
-    reason."""
+    ``kind`` metadata, without those that sweep none of the model's controls
+    (:func:`_not_sweeping`: a lateral sweep in a directory read for a longitudinal model);
+    left out: name → reason. Raises VerificationError when no sweep is left."""
     from rotorid.cli.files import load_maneuvers
     from rotorid.errors import VerificationError
 

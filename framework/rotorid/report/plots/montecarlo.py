@@ -2,9 +2,10 @@
 
 :func:`plot_monte_carlo` draws per parameter, top: the sample standard deviation over the
 mean Cramér-Rao bound (1 for honest bounds, with the band a sample of N honest runs stays in
-about 95 % of the time; on a log scale when a ratio lies beyond :data:`LOG_SCALE_ABOVE`); bottom: the coverage of the ±2·CR interval around the sample mean
-(filled) and around the truth where known (open), against the nominal 95.4 % and its
-binomial band. Returns the :class:`matplotlib.figure.Figure`.
+about 95 % of the time; on a log scale when a ratio lies beyond :data:`LOG_SCALE_ABOVE`);
+bottom: the coverage of the ±2·CR interval around the sample mean (filled) and around the
+truth where known (open), against the nominal 95.4 % and its binomial band. Returns the
+:class:`matplotlib.figure.Figure`.
 """
 
 from __future__ import annotations
