@@ -41,10 +41,16 @@ RMSE_VIEW = 0.15
 def save_figure(figure, stem: str | Path, formats: tuple[str, ...] = ("png", "svg"),
                 dpi: int = 110) -> list[Path]:
     """Write ``figure`` as ``<stem>.<format>`` for each of ``formats``, atomically; returns the
-    paths. The same figure gives the same bytes: SVGs carry no date and fixed element ids."""
-    return [atomic_write(Path(f"{stem}.{fmt}"),
-                         lambda handle, fmt=fmt: _save(figure, handle, fmt, dpi))
-            for fmt in formats]
+    paths. The same figure gives the same bytes: SVGs carry no date and fixed element ids.
+
+    The layout engine's result of the first format is kept for the others (the figure's
+    layout engine is then off), which saves a constrained layout per further format."""
+    paths = []
+    for fmt in formats:
+        paths.append(atomic_write(Path(f"{stem}.{fmt}"),
+                                  lambda handle, fmt=fmt: _save(figure, handle, fmt, dpi)))
+        figure.set_layout_engine("none")
+    return paths
 
 
 def _save(figure, handle, fmt: str, dpi: int) -> None:
