@@ -78,3 +78,17 @@ def test_a_refit_that_did_not_converge_is_a_cross_off_the_line():
     assert cross.get_marker() == "x" and cross.get_xdata().tolist() == [0.2]
     assert cross.get_ydata() == pytest.approx([70.0])
     assert "did not converge" in proxy.get_label()
+
+
+def test_the_progress_line_says_whether_a_grid_point_beats_the_free_fit():
+    from rotorid.estimation.profiles import DelayProfile
+    from rotorid.study.pipeline import _profile_line
+
+    def profile(cost):
+        return DelayProfile("tau_L_p", [0.0, 0.15, 0.3], cost, [1.02, 1.01, 1.05],
+                            [True] * 3, 0.09, 1.0, 1.0)
+
+    deeper = _profile_line(profile([1.05, 0.98, 1.2]))
+    assert "fixed at 0.150 s its det R is 2.0% below the free fit's" in deeper
+    assert "local optimum" in deeper and "fixed at 0 s the RMSE is +2.00%" in deeper
+    assert "no grid point fits better" in _profile_line(profile([1.05, 1.01, 1.2]))

@@ -175,10 +175,17 @@ def _delays_line(estimate, dropped: tuple[str, ...]) -> str:
 
 
 def _profile_line(profile) -> str:
-    """Progress line of one delay profile: where its det R is lowest, the RMSE cost of τ = 0."""
-    lowest = profile.grid[int(profile.cost.argmin())]
-    line = (f"profile of {profile.delay} (free fit {profile.free_value:.3f} s): lowest det R "
-            f"on the grid at {lowest:.3f} s")
+    """Progress line of one delay profile: whether a grid point fits better than the free fit
+    (then the free fit is a local optimum), the RMSE cost of τ = 0."""
+    best = int(profile.cost.argmin())
+    line = (f"profile of {profile.delay} (free fit {profile.free_value:.3f} s, "
+            f"{profile.grid.size} grid points): ")
+    if profile.cost[best] < profile.free_cost:
+        line += (f"fixed at {profile.grid[best]:.3f} s its det R is "
+                 f"{1.0 - profile.cost[best] / profile.free_cost:.1%} below the free fit's, "
+                 f"which is a local optimum (more [delays] starts may find the lower one)")
+    else:
+        line += "no grid point fits better than the free fit"
     if profile.grid[0] == 0.0:
         line += f"; fixed at 0 s the RMSE is {profile.relative_rmse[0]:+.2%}"
     return line
