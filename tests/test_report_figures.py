@@ -207,7 +207,16 @@ def test_a_report_about_measured_data_only(hover, tmp_path):
     result = attrs.evolve(hover, case=case, identification=identification,
                           verification=verification, truth_derivatives=None,
                           truth_delays=None, hybrid_comparison=hybrid)
-    page = write_case_outputs(result, tmp_path / "own").read_text(encoding="utf-8")
+    heard = []
+    page = write_case_outputs(result, tmp_path / "own", heard.append).read_text(
+        encoding="utf-8")
+    # Progress: a line per group of figures, counting up to every figure written.
+    written = len(list((tmp_path / "own" / "figures").glob("*.png")))
+    assert [line.split(" [")[0] for line in heard] == [
+        "figures: reduction and delay profiles", "figures: time histories of 2 maneuvers",
+        "figures: errors and frequency responses of 1 pair",
+        f"figures: the hybrid's errors of {len(hybrid.verification['hybrid'].pairs)} pairs"]
+    assert f"] {written}/{written}, about 0 s left" in heard[-1]
     assert 'id="hybrid"' in page and "(flap-coupled)" not in page
     for word in ("paper's claims", "Bo-105", "Helisim", "Padfield", "truth"):
         assert word not in page, word

@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from rotorid.progress import counted
 from rotorid.units import unit_system
 
 #: Maneuver names listed in a set's one-line summary before "…".
@@ -32,10 +33,6 @@ def _number(value, digits: int = 4) -> str:
     return "–" if value is None or not math.isfinite(value) else f"{value:.{digits}g}"
 
 
-def _count(n: int, noun: str) -> str:
-    return f"{n} {noun}{'s' * (n != 1)}"
-
-
 def _pct(value) -> str:
     return "inf" if not math.isfinite(value) else f"{value:.1f}"
 
@@ -47,8 +44,8 @@ def estimate_summary(estimate) -> str:
     delays = int(np.sum(estimate.is_delay))
     state = "converged" if estimate.converged else f"not converged ({estimate.stop_reason})"
     return (f"Estimate({estimate.estimator}, {len(estimate.parameter_names)} parameters"
-            + (f" incl. {_count(delays, 'delay')}" if delays else "")
-            + f", {state} after {_count(estimate.iterations, 'iteration')}, RMSE "
+            + (f" incl. {counted(delays, 'delay')}" if delays else "")
+            + f", {state} after {counted(estimate.iterations, 'iteration')}, RMSE "
               f"{_number(estimate.rmse)}, det R {_number(estimate.cost, 3)})")
 
 
@@ -93,7 +90,7 @@ def maneuver_set_summary(maneuvers) -> str:
     """``ManeuverSet(4 maneuvers: a, b, c, d; 2000 samples, zoh hold, flight-test units)``."""
     names = list(maneuvers.names)
     listed = ", ".join(names[:LISTED_NAMES]) + (", …" if len(names) > LISTED_NAMES else "")
-    return (f"ManeuverSet({_count(len(names), 'maneuver')}: {listed}; "
+    return (f"ManeuverSet({counted(len(names), 'maneuver')}: {listed}; "
             f"{maneuvers.n_samples} samples, {maneuvers.hold} hold, {maneuvers.units} units)")
 
 

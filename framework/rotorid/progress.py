@@ -15,6 +15,11 @@ def duration_text(seconds: float) -> str:
     return f"{seconds:.0f} s" if seconds < 99.5 else f"{seconds / 60:.0f} min"
 
 
+def counted(n: int, noun: str) -> str:
+    """``"1 pair"``, ``"3 pairs"``: a count with its noun (regular plural)."""
+    return f"{n} {noun}{'s' * (n != 1)}"
+
+
 class Countdown:
     """Counts finished steps out of ``total`` and estimates the time left from the mean time
     of the steps finished since it was made.

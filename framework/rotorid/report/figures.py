@@ -8,11 +8,12 @@ pair (PNG and SVG each); titles name the flight condition ("hover", "70 kt").
 from __future__ import annotations
 
 import html
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import attrs
 
+from rotorid.progress import Countdown, counted
 from rotorid.report.plots.case import plot_rmse_path, plot_time_histories, save_figure
 from rotorid.report.plots.frequency import RELAXED_THRESHOLD, plot_bode, plot_error
 from rotorid.report.plots.profiles import plot_delay_profiles
@@ -115,23 +116,53 @@ def _muad_range(envelopes) -> str:
     return f"{low:g}–{high:g} rad/s"
 
 
-def case_figures(result, figures_dir: Path) -> dict[str, list[ReportFigure]]:
+class FigureTally:
+    """Saves a case's figures and counts them; after each group of figures it reports how
+    many of ``total`` are written and the time left (``progress(message)``, optional)."""
+
+    def __init__(self, total: int, progress: Callable[[str], None] | None = None):
+        self._countdown = Countdown(total)
+        self._progress = progress
+        self._line = ""
+
+    def save(self, figure, stem: Path) -> None:
+        save_figure(figure, stem)
+        self._line = self._countdown.step()
+
+    def group_done(self, what: str) -> None:
+        if self._progress is not None:
+            self._progress(f"figures: {what} {self._line}")
+
+
+def case_figure_count(result) -> int:
+    """How many figures :func:`case_figures` writes for ``result``."""
+    reference = result.verification.get("with delays")
+    pairs = 0 if reference is None else len(reference.pairs)
+    return (1 + bool(result.delay_profiles) + len(result.identification) + 2 * pairs
+            + len(_hybrid_pairs(result)))
+
+
+def case_figures(result, figures_dir: Path,
+                 progress: Callable[[str], None] | None = None) -> dict[str, list[ReportFigure]]:
     """Write the case's figures; returns section → figures (PNG file name and caption).
 
-    Every identification maneuver gets a time-history figure, whatever its kind."""
+    Every identification maneuver gets a time-history figure, whatever its kind. With
+    ``progress``, a line after each group of figures says how many are written."""
     figures_dir.mkdir(parents=True, exist_ok=True)
+    tally = FigureTally(case_figure_count(result), progress)
     written = {"reduction": [], "delays": [], "time": [], "frequency": [], "bode": []}
     signals = result.structures["with delays"].signals
     flight = flight_label(result.condition)
     figure = plot_rmse_path(result.path, title=f"{flight}: RMSE versus removed parameters")
-    save_figure(figure, figures_dir / "rmse")
+    tally.save(figure, figures_dir / "rmse")
     written["reduction"].append(ReportFigure("rmse.png", rmse_caption(result.path)))
     if result.delay_profiles:
         figure = plot_delay_profiles(result.delay_profiles,
                                      title=f"{flight}: delay profiles (model with delays)")
-        save_figure(figure, figures_dir / "delay_profiles")
+        tally.save(figure, figures_dir / "delay_profiles")
         written["delays"].append(ReportFigure("delay_profiles.png",
                                               _profiles_caption(result.delay_profiles)))
+    tally.group_done("reduction" + (" and delay profiles" if result.delay_profiles else ""))
     maneuvers = list(result.identification)
     outputs = {label: result.simulated(label) for label in MODELS}
     for index, maneuver in enumerate(maneuvers):
@@ -142,8 +173,9 @@ def case_figures(result, figures_dir: Path) -> dict[str, list[ReportFigure]]:
                                      title=f"{flight}: {what or 'maneuver'} ({maneuver.name})",
                                      signals=signals)
         name = f"time_{file_stem(maneuver.name)}"
-        save_figure(figure, figures_dir / name)
+        tally.save(figure, figures_dir / name)
         written["time"].append(ReportFigure(f"{name}.png", _time_caption(maneuver, MODELS)))
+    tally.group_done(f"time histories of {counted(len(maneuvers), 'maneuver')}")
     by_name = envelopes_by_name(result.case.envelopes, band=result.case.band)
     envelopes = [e for e in by_name.values() if e.kind == "bounds"]
     reference = result.verification.get("with delays")
@@ -155,7 +187,7 @@ def case_figures(result, figures_dir: Path) -> dict[str, list[ReportFigure]]:
         figure = plot_error(errors, envelopes,
                             title=f"{flight}: {item.pair} error ε = H_model/H_measured")
         stem = f"error_{output}_{control}"
-        save_figure(figure, figures_dir / stem)
+        tally.save(figure, figures_dir / stem)
         written["frequency"].append(ReportFigure(f"{stem}.png",
                                                  _error_caption(item.pair, muad_range,
                                                                 item.band),
@@ -164,30 +196,44 @@ def case_figures(result, figures_dir: Path) -> dict[str, list[ReportFigure]]:
                            title=f"{flight}: {item.pair} frequency responses "
                                  f"(model with delays)")
         stem = f"bode_{output}_{control}"
-        save_figure(figure, figures_dir / stem)
+        tally.save(figure, figures_dir / stem)
         written["bode"].append(ReportFigure(f"{stem}.png", _bode_caption(item.pair, item),
                                             item.pair))
-    written["hybrid"] = hybrid_figures(result, figures_dir, flight, signals)
+    if reference is not None:
+        tally.group_done("errors and frequency responses of "
+                         f"{counted(len(reference.pairs), 'pair')}")
+    written["hybrid"] = hybrid_figures(result, figures_dir, flight, signals, tally)
     return written
 
 
-def hybrid_figures(result, figures_dir: Path, flight: str, signals) -> list[ReportFigure]:
-    """With ``[compare] hybrid``: per verified pair, ε of the three models over 1–20 rad/s."""
+def _hybrid_pairs(result) -> tuple:
+    """The verified pairs of ``[compare] hybrid`` (none without it)."""
     comparison = result.hybrid_comparison
     if comparison is None or not comparison.verification:
-        return []
+        return ()
+    return tuple(comparison.verification["hybrid"].pairs)
+
+
+def hybrid_figures(result, figures_dir: Path, flight: str, signals,
+                   tally: FigureTally | None = None) -> list[ReportFigure]:
+    """With ``[compare] hybrid``: per verified pair, ε of the three models over 1–20 rad/s
+    (saved through ``tally`` when given)."""
+    tally = tally or FigureTally(len(_hybrid_pairs(result)))
+    comparison = result.hybrid_comparison
     written = []
-    for item in comparison.verification["hybrid"].pairs:
+    for item in _hybrid_pairs(result):
         output, control = parse_pair(item.pair, signals.outputs.names, signals.inputs.names)
         errors = {label: verification[item.pair]
                   for label, verification in comparison.verification.items()}
         figure = plot_error(errors, title=f"{flight}: {item.pair} error ε = "
                                           f"H_model/H_measured, three models")
         stem = f"hybrid_error_{output}_{control}"
-        save_figure(figure, figures_dir / stem)
+        tally.save(figure, figures_dir / stem)
         written.append(ReportFigure(
             f"{stem}.png",
             f"{item.pair}: magnitude and phase of ε = H_model/H_measured for the models without "
             f"and with delays and the hybrid model; filled markers are the points J counts "
             f"({item.band.describe()}); 0 dB and 0° is a perfect match.", item.pair))
+    if written:
+        tally.group_done(f"the hybrid's errors of {counted(len(written), 'pair')}")
     return written

@@ -29,7 +29,7 @@ import csv
 import html
 import io
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -775,11 +775,13 @@ def case_table_names(result, claims) -> list[str]:
               if result.hybrid_comparison is not None else ())]
 
 
-def write_case_outputs(result, directory: str | Path) -> Path:
+def write_case_outputs(result, directory: str | Path,
+                       progress: Callable[[str], None] | None = None) -> Path:
     """Write the figures, tables and ``report.html`` of one case; returns the report path.
-    A case about measured data only (no truth model) gets the guidelines as its claims."""
+    A case about measured data only (no truth model) gets the guidelines as its claims.
+    ``progress(message)`` hears how many figures are written (:func:`case_figures`)."""
     directory = Path(directory)
-    figures = case_figures(result, directory / "figures")
+    figures = case_figures(result, directory / "figures", progress)
     tables = directory / "tables"
     tables.mkdir(exist_ok=True)
     claims = case_claims(result)
@@ -821,8 +823,9 @@ class StudyReport:
     """The study pipeline's report writer (:class:`rotorid.study.pipeline.ReportWriter`):
     figures, tables and HTML per case, and the study's overview page."""
 
-    def write_case(self, result, directory: str | Path) -> Path:
-        return write_case_outputs(result, directory)
+    def write_case(self, result, directory: str | Path,
+                   progress: Callable[[str], None] | None = None) -> Path:
+        return write_case_outputs(result, directory, progress)
 
     def write_study(self, results: Mapping[str, object], out_dir: str | Path) -> Path:
         return write_study_report(results, out_dir)

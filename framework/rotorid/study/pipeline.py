@@ -78,8 +78,10 @@ class ReportWriter(Protocol):
     """What writes figures and reports from results (:class:`rotorid.report.html.StudyReport`);
     the pipeline calls it and never imports it."""
 
-    def write_case(self, result: CaseResult, directory: Path) -> object:
-        """Figures, tables and the report of one case, in its results ``directory``."""
+    def write_case(self, result: CaseResult, directory: Path,
+                   progress: Callable[[str], None] | None = None) -> object:
+        """Figures, tables and the report of one case, in its results ``directory``;
+        ``progress(message)`` takes progress lines of the case (optional)."""
 
     def write_study(self, results: Mapping[str, CaseResult], out_dir: Path) -> object:
         """The study's overview report in ``out_dir``."""
@@ -380,7 +382,8 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     save_result(directory, result)
     if report_writer is not None:
         report(case.name, "figures and report")
-        report_writer.write_case(result, directory)
+        report_writer.write_case(result, directory,
+                                 progress=lambda message: report(case.name, message))
     notify("rotorid_case_finished", case=case, result=result)
     report(case.name, f"done in {time.perf_counter() - clock['start']:.0f} s → {directory}")
     return result
