@@ -20,12 +20,19 @@ repository root::
 
     python docs/examples/turbulence_hover.py [--turbulence light|moderate] [--seed N] [--quick]
                                              [--from-still] [--cutoff HZ [--decimate N]]
+                                             [--hold zoh|foh] [--cyclic-delay S] [--two-stage]
 
 ``--quick`` shortens the records to 60 %. ``--cutoff HZ`` fits both estimators to the records
 low-passed at HZ (zero phase) and kept at every N-th sample (:mod:`rotorid.resampling`; N by
 default the largest whose Nyquist frequency is at least HZ, which keeps the sensor noise
 white): the band the hybrid describes, without the coning, inflow and actuator dynamics above
-it that the filter's one-step innovations otherwise weigh.
+it that the filter's one-step innovations otherwise weigh. ``--hold foh`` interpolates the
+(decimated) inputs linearly between samples instead of holding them. ``--cyclic-delay S`` fixes
+a delay of S s on the hybrid's four cyclic flap derivatives (:data:`FLAP_CONTROL_DELAYS`).
+``--two-stage`` replaces every input by its least-squares projection on the recorded multistep
+of its maneuver's axis (:func:`two_stage_inputs`), which removes the stabilising loops' answer
+to the turbulence from the inputs (a diagnostic of closed-loop bias). docs/estimation.md,
+"Hover in moderate turbulence", gives what each setting measured.
 """
 
 from __future__ import annotations
@@ -34,13 +41,17 @@ import argparse
 import time
 import warnings
 
+import attrs
 import numpy as np
 import rotorid
 from rotorid import FlightCondition, ModelStructure
 from rotorid.errors import IdentifiabilityWarning
-from rotorid.model.hybrid import hybrid_from_six_dof, quasi_steady_derivatives
+from rotorid.estimation.profiles import fixing_delay
+from rotorid.model.hybrid import (FLAP_CONTROL_DELAYS, hybrid_from_six_dof,
+                                  quasi_steady_derivatives)
 from rotorid.resampling import decimated
 from rotorid.study.truth import truth_derivatives
+from rotorid_signals.signals import Multistep
 
 KEY = ("L_p", "M_q", "L_lat", "M_long", "N_r", "N_ped", "Z_w", "Z_coll")
 #: The filter-error noise model: gusts through the derivatives, rotational disturbances.
@@ -85,6 +96,58 @@ def fit(name: str, structure, maneuvers, start=None, **options):
     return estimate
 
 
+#: The two-stage projection's filter spans the excitation this far back and ahead, s.
+PROJECTION_SPAN = (3.0, 0.5)
+
+
+def with_cyclic_delay(hybrid: ModelStructure, delay: float) -> ModelStructure:
+    """``hybrid`` with every one of :data:`FLAP_CONTROL_DELAYS` delayed by ``delay`` s,
+    fixed."""
+    structure = hybrid.with_delays(FLAP_CONTROL_DELAYS, initial=delay)
+    for name in FLAP_CONTROL_DELAYS:
+        structure = fixing_delay(structure, f"tau_{name}", delay)
+    return structure
+
+
+def _excitation(maneuver) -> np.ndarray:
+    """The multistep the pilot model flew in ``maneuver`` (its metadata), at its samples."""
+    settings = {k: v for k, v in maneuver.metadata["signal"].items() if k != "type"}
+    return Multistep(**settings)(maneuver.time - maneuver.time[0])
+
+
+def _shifted(signal: np.ndarray, back: int, ahead: int) -> np.ndarray:
+    """(N, back + ahead + 1): ``signal`` delayed by −ahead … back samples, zero outside."""
+    columns = np.zeros((signal.size, back + ahead + 1))
+    for column, shift in enumerate(range(-ahead, back + 1)):
+        if shift >= 0:
+            columns[shift:, column] = signal[:signal.size - shift]
+        else:
+            columns[:shift, column] = signal[-shift:]
+    return columns
+
+
+def two_stage_inputs(maneuvers):
+    """``maneuvers`` with each input replaced by its projection on the excitation: per
+    excited axis, one least-squares FIR filter (:data:`PROJECTION_SPAN`) from that axis's
+    multistep to every input, over all the axis's records; each record starts at its own
+    first input sample."""
+    dt = float(np.mean(np.diff(maneuvers[0].time)))
+    back, ahead = (round(span / dt) for span in PROJECTION_SPAN)
+    by_axis = {}
+    for index, maneuver in enumerate(maneuvers):
+        by_axis.setdefault(maneuver.metadata["axis"], []).append(index)
+    projected = list(maneuvers)
+    for indices in by_axis.values():
+        regressors = np.vstack([_shifted(_excitation(maneuvers[i]), back, ahead)
+                                for i in indices])
+        inputs = np.vstack([maneuvers[i].inputs - maneuvers[i].inputs[0] for i in indices])
+        fitted = regressors @ np.linalg.lstsq(regressors, inputs, rcond=None)[0]
+        for i, part in zip(indices, np.split(fitted, np.cumsum(
+                [maneuvers[i].n_samples for i in indices])[:-1])):
+            projected[i] = attrs.evolve(maneuvers[i], inputs=maneuvers[i].inputs[0] + part)
+    return attrs.evolve(maneuvers, maneuvers=projected)
+
+
 def quasi_steady(six_dof: ModelStructure, hybrid: ModelStructure, estimate):
     """The key derivatives of the hybrid estimate with its flap tilts residualised, and their
     Cramér-Rao bounds (the estimate's covariance through the residualisation)."""
@@ -103,15 +166,26 @@ def main(argv=None) -> dict:
     parser.add_argument("--decimate", type=int,
                         help="samples per kept sample, with --cutoff (default: the white-noise "
                              "factor, rotorid.resampling.white_noise_factor)")
+    parser.add_argument("--hold", choices=("zoh", "foh"), default="zoh",
+                        help="the inputs between samples: held (zoh) or interpolated (foh)")
+    parser.add_argument("--cyclic-delay", type=float,
+                        help="s: a fixed delay on the hybrid's four cyclic flap derivatives")
+    parser.add_argument("--two-stage", action="store_true",
+                        help="inputs projected on the recorded multisteps (closed-loop check)")
     args = parser.parse_args(argv)
 
     still, turbulent, condition, source = data_sets(args.turbulence, args.seed, args.quick)
     six_dof = ModelStructure.six_dof(condition)
     truth = truth_derivatives(source, condition, six_dof)
     hybrid = hybrid_from_six_dof(six_dof, fit("output-error", six_dof, still).values)
+    if args.cyclic_delay is not None:
+        hybrid = with_cyclic_delay(hybrid, args.cyclic_delay)
+    if args.two_stage:
+        still, turbulent = (two_stage_inputs(data) for data in (still, turbulent))
     if args.cutoff is not None:
         still, turbulent = (decimated(data, args.decimate, args.cutoff)
                             for data in (still, turbulent))
+    still, turbulent = (attrs.evolve(data, hold=args.hold) for data in (still, turbulent))
     columns, noise = {}, {}
     still_solution = None
     for air, data in (("still", still), (args.turbulence, turbulent)):
