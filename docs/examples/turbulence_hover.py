@@ -50,6 +50,7 @@ from rotorid.estimation.profiles import fixing_delay
 from rotorid.model.hybrid import (FLAP_CONTROL_DELAYS, hybrid_from_six_dof,
                                   quasi_steady_derivatives)
 from rotorid.resampling import decimated
+from rotorid.simulation.simulator import lagged_sources
 from rotorid.study.truth import truth_derivatives
 from rotorid_signals.signals import Multistep
 
@@ -117,13 +118,8 @@ def _excitation(maneuver) -> np.ndarray:
 
 def _shifted(signal: np.ndarray, back: int, ahead: int) -> np.ndarray:
     """(N, back + ahead + 1): ``signal`` delayed by −ahead … back samples, zero outside."""
-    columns = np.zeros((signal.size, back + ahead + 1))
-    for column, shift in enumerate(range(-ahead, back + 1)):
-        if shift >= 0:
-            columns[shift:, column] = signal[:signal.size - shift]
-        else:
-            columns[:shift, column] = signal[-shift:]
-    return columns
+    taps = [(lag, 0) for lag in range(-ahead, back + 1)]
+    return lagged_sources(signal[:, None, None], taps)[:, 0, :]
 
 
 def two_stage_inputs(maneuvers):

@@ -148,4 +148,3 @@ def decimated(maneuvers: ManeuverSet, factor: int | None, cutoff_hz: float) -> M
     derivatives wrong (docs/estimation.md, the hover key derivatives)."""
     return attrs.evolve(maneuvers, maneuvers=[decimated_maneuver(m, factor, cutoff_hz)
                                               for m in maneuvers])
-

@@ -103,19 +103,20 @@ def _names(value) -> tuple[str, ...] | None:
 
 
 def process_noise_states(structure: ModelStructure, names: tuple[str, ...] | None,
-                         option: str = "process_noise") -> tuple[str, ...]:
+                         option: str = "process_noise",
+                         accelerations: bool = False) -> tuple[str, ...]:
     """The states the process noise (or the disturbances) enter, in the structure's state
     order: ``names``, or by default the states of the structure's force and moment equations
     that the outputs see (:func:`seen_states`; noise on a state they cannot see changes no
     innovation, and leaves the filter without a steady state when that state's mode is not
-    stable); ``option`` names the setting in errors. A disturbance (an acceleration of its
-    state's equation) may also name a state no output sees if an accelerometer reads that
-    equation (az reads the w equation's disturbance when a reduction has removed every
-    derivative of w)."""
+    stable); ``option`` names the setting in errors. With ``accelerations`` (disturbances:
+    accelerations of their states' equations) a state no output sees may also be named if an
+    accelerometer reads its equation (az reads the w equation's disturbance when a reduction
+    has removed every derivative of w)."""
     seen = seen_states(structure)
     if names is None:
         return tuple(structure.states[i] for i in structure.equation_rows if seen[i])
-    if option == "disturbances":
+    if accelerations:
         seen = seen | np.any(structure.known_terms().measured != 0, axis=0)
     unknown = [s for s in names if s not in structure.states]
     if unknown:
@@ -466,7 +467,8 @@ class FilterErrorEstimator:
                                 shorten_steps=False)
             problem = FilterErrorProblem(
                 structure, maneuvers, process_noise_states(structure, self.process_noise),
-                settings, process_noise_states(structure, self.disturbances, "disturbances"),
+                settings, process_noise_states(structure, self.disturbances, "disturbances",
+                                               accelerations=True),
                 gust_states(structure, self.gusts), self.initial_states, self.output_biases)
             values, note, given = self._start_values(problem, maneuvers, start)
             values = matched_measurement_noise(problem, matched_biases(problem, values, given),

@@ -218,7 +218,8 @@ def hybrid_figures(result, figures_dir: Path, flight: str, signals,
                    tally: FigureTally | None = None) -> list[ReportFigure]:
     """With ``[compare] hybrid``: per verified pair, ε of the three models over 1–20 rad/s
     (saved through ``tally`` when given)."""
-    tally = tally or FigureTally(len(_hybrid_pairs(result)))
+    if tally is None:
+        tally = FigureTally(len(_hybrid_pairs(result)))
     comparison = result.hybrid_comparison
     written = []
     for item in _hybrid_pairs(result):

@@ -3,8 +3,8 @@
 A case's final estimation (the selected structure with its delays, its parameters from the
 study's start) is repeated on data sets that differ only in their measurement-noise seed.
 Per parameter the runs give the sample mean and standard deviation; each run also reports its
-own Cramér-Rao bound. If the bounds are honest, the standard deviation equals the mean bound (ratio ≈ 1) and
-the ±2·CR interval of a run contains the centre in about 95 % of the runs. See
+own Cramér-Rao bound. If the bounds are honest, the standard deviation equals the mean bound
+(ratio ≈ 1) and the ±2·CR interval of a run contains the centre in about 95 % of the runs. See
 docs/montecarlo.md for what the numbers mean, and why bounds from coloured residuals are
 optimistic.
 
