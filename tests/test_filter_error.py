@@ -305,22 +305,29 @@ def test_output_error_is_biased_on_the_same_data():
     assert error.max() > 5.0
 
 
-def test_in_still_air_filter_error_reduces_to_output_error():
-    """Without process noise the output-error solution (F = 0) is where filter error ends:
-    started from output error's derivatives (F and R from their default starts), it stays
-    within 1 CR of them and the process noise it finds is small."""
+def _still_air_fit_from_output_error(**options):
+    """(structure, filter-error estimate) on still-air data, started from output error's
+    derivatives; asserts that the derivatives stay within 1 CR of output error's."""
     data = noisy_data({})
     model = structure()
     output_error = rotorid.create("estimators", "output-error", noise="diagonal").estimate(
         model, data)
     start = dict(zip(model.parameter_names, output_error.values))
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", IdentifiabilityWarning)      # F → 0: flat in F
-        filtered = estimator().estimate(model, data, start=start)
+        warnings.simplefilter("ignore", IdentifiabilityWarning)   # noise sizes → 0: flat
+        filtered = estimator(**options).estimate(model, data, start=start)
     k = model.n_parameters
     difference = np.abs(filtered.values[:k] - output_error.values) / output_error.cramer_rao
     assert np.all(difference < 1.0), dict(zip(model.parameter_names, difference.round(2)))
-    f = filtered.values[k:k + 6]
+    return model, filtered
+
+
+def test_in_still_air_filter_error_reduces_to_output_error():
+    """Without process noise the output-error solution (F = 0) is where filter error ends:
+    started from output error's derivatives (F and R from their default starts), it stays
+    within 1 CR of them and the process noise it finds is small."""
+    model, filtered = _still_air_fit_from_output_error()
+    f = filtered.values[model.n_parameters:model.n_parameters + 6]
     assert np.all(f < 0.2 * np.array([0.03, 0.03, 0.05, 0.02, 0.1, 0.05]))
 
 
@@ -328,18 +335,8 @@ def test_with_gusts_in_still_air_filter_error_reduces_to_output_error():
     """The gust and disturbance states find nothing to follow in data without model error or
     process noise: started from output error's derivatives, the derivatives stay within 1 CR
     of output error's and the yaw disturbance and the v gust go to their floors."""
-    data = noisy_data({})
-    model = structure()
-    output_error = rotorid.create("estimators", "output-error", noise="diagonal").estimate(
-        model, data)
-    start = dict(zip(model.parameter_names, output_error.values))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", IdentifiabilityWarning)      # sizes → floor: flat
-        filtered = estimator(process_noise=(), disturbances=("r",), gusts=("w", "v")).estimate(
-            model, data, start=start)
-    k = model.n_parameters
-    difference = np.abs(filtered.values[:k] - output_error.values) / output_error.cramer_rao
-    assert np.all(difference < 1.0), dict(zip(model.parameter_names, difference.round(2)))
+    _, filtered = _still_air_fit_from_output_error(process_noise=(), disturbances=("r",),
+                                                   gusts=("w", "v"))
     assert filtered.value("D_r") < 0.01 and filtered.value("G_v") < 0.01
 
 

@@ -9,7 +9,22 @@ from rotorid.estimation.models import finite_difference_sensitivities, measured_
 from rotorid.simulation.simulator import Simulator
 
 
-class WithOutputBiases:
+class _AppendedParameters:
+    """The part both wrappers share: the wrapped model's parameters (``n_base`` of them)
+    followed by per-maneuver ones that start at zero and are unbounded."""
+
+    def initial_values(self) -> np.ndarray:
+        extra = len(self.parameter_names) - self.n_base
+        return np.concatenate([self.model.initial_values(), np.zeros(extra)])
+
+    def bounds(self):
+        lower, upper = self.model.bounds()
+        extra = len(self.parameter_names) - self.n_base
+        return (np.concatenate([lower, np.full(extra, -np.inf)]),
+                np.concatenate([upper, np.full(extra, np.inf)]))
+
+
+class WithOutputBiases(_AppendedParameters):
     """A model plus one constant bias per maneuver and output (``bias_<maneuver>_<output>``).
 
     The biases are appended to the wrapped model's parameters and start at zero.
@@ -27,16 +42,6 @@ class WithOutputBiases:
         self.parameter_units.update(
             {f"bias_{m}_{o}": unit for m in self.maneuver_names
              for o, unit in zip(self.output_names, self.output_units)})
-
-    def initial_values(self) -> np.ndarray:
-        extra = len(self.parameter_names) - self.n_base
-        return np.concatenate([self.model.initial_values(), np.zeros(extra)])
-
-    def bounds(self):
-        lower, upper = self.model.bounds()
-        extra = len(self.parameter_names) - self.n_base
-        return (np.concatenate([lower, np.full(extra, -np.inf)]),
-                np.concatenate([upper, np.full(extra, np.inf)]))
 
     def measured(self, maneuvers):
         return measured_outputs(self.model, maneuvers)
@@ -65,7 +70,7 @@ class WithOutputBiases:
         return outputs, full
 
 
-class WithInitialStates:
+class WithInitialStates(_AppendedParameters):
     """A linear model plus the initial perturbation state of every maneuver
     (``x0_<maneuver>_<state>``, 8 per maneuver, structure units, states ``u w q θ v p φ r``).
 
@@ -97,16 +102,6 @@ class WithInitialStates:
         """Each maneuver's initial state of the structure's states
         (:meth:`rotorid.data.Maneuver.initial_values`), flattened to (n·M,)."""
         return np.concatenate([m.initial_values(self.structure.states) for m in maneuvers])
-
-    def initial_values(self) -> np.ndarray:
-        extra = len(self.parameter_names) - self.n_base
-        return np.concatenate([self.model.initial_values(), np.zeros(extra)])
-
-    def bounds(self):
-        lower, upper = self.model.bounds()
-        extra = len(self.parameter_names) - self.n_base
-        return (np.concatenate([lower, np.full(extra, -np.inf)]),
-                np.concatenate([upper, np.full(extra, np.inf)]))
 
     def _simulator(self, values, maneuvers) -> Simulator:
         states = np.asarray(values[self.n_base:], dtype=float).reshape(len(maneuvers),
