@@ -45,6 +45,7 @@ import attrs
 import numpy as np
 import rotorid
 from rotorid import FlightCondition, ModelStructure
+from rotorid.data import HOLDS
 from rotorid.errors import IdentifiabilityWarning
 from rotorid.estimation.profiles import fixing_delay
 from rotorid.model.hybrid import (FLAP_CONTROL_DELAYS, hybrid_from_six_dof,
@@ -127,7 +128,7 @@ def two_stage_inputs(maneuvers):
     excited axis, one least-squares FIR filter (:data:`PROJECTION_SPAN`) from that axis's
     multistep to every input, over all the axis's records; each record starts at its own
     first input sample."""
-    dt = float(np.mean(np.diff(maneuvers[0].time)))
+    dt = maneuvers[0].dt
     back, ahead = (round(span / dt) for span in PROJECTION_SPAN)
     by_axis = {}
     for index, maneuver in enumerate(maneuvers):
@@ -162,7 +163,7 @@ def main(argv=None) -> dict:
     parser.add_argument("--decimate", type=int,
                         help="samples per kept sample, with --cutoff (default: the white-noise "
                              "factor, rotorid.resampling.white_noise_factor)")
-    parser.add_argument("--hold", choices=("zoh", "foh"), default="zoh",
+    parser.add_argument("--hold", choices=HOLDS, default="zoh",
                         help="the inputs between samples: held (zoh) or interpolated (foh)")
     parser.add_argument("--cyclic-delay", type=float,
                         help="s: a fixed delay on the hybrid's four cyclic flap derivatives")
