@@ -20,7 +20,10 @@ Keep the decimated records' Nyquist frequency at or just above the cutoff
 (:func:`white_noise_factor`). With more samples kept, the measurement noise, white before, is
 band-limited below their Nyquist frequency and so correlated from one kept sample to the next
 (:func:`noise_correlation`: 0.51 for a 4 Hz cutoff kept at every 4th of 50 Hz samples, 0.14 at
-every 6th). Every estimator here takes the measurement noise as white, and its Cramér-Rao
+every 6th). The filter-error estimator can instead keep every sample
+(:func:`low_passed`) and form its innovations at every N-th only (its ``update_every``): its
+model then steps through the samples between with their recorded inputs, where decimated
+records hold or interpolate the inputs over the kept interval. Every estimator here takes the measurement noise as white, and its Cramér-Rao
 bounds come out too small by as much as √(1 + 2·Σ correlations) (×1.31 for the 4th sample,
 ×1.06 for the 6th); :func:`decimated_maneuver` warns when the neighbours' correlation exceeds
 :data:`NOISE_CORRELATION_LIMIT`.
@@ -123,12 +126,19 @@ def decimated_maneuver(maneuver: Maneuver, factor: int | None, cutoff_hz: float)
             f"{_ordinal(factor)} sample is correlated {correlation:.2f} from one kept sample "
             f"to the next; the estimators take it as white, so their Cramér-Rao bounds come "
             f"out too small: {fix}"), stacklevel=2)
+    return _filtered(maneuver, dt, cutoff_hz, int(factor))
+
+
+def _filtered(maneuver: Maneuver, dt: float, cutoff_hz: float, factor: int) -> Maneuver:
+    """``maneuver`` low-passed at ``cutoff_hz`` (checked by the caller), every ``factor``-th
+    sample kept."""
+    time = maneuver.time
     sections = _sections(dt, cutoff_hz)
     padding = 3 * (2 * len(sections) + 1)          # sosfiltfilt's default edge padding
     if time.size <= padding:
         raise DataError(f"maneuver {maneuver.name!r}: {time.size} samples are too few to "
                         f"filter (more than {padding} needed)")
-    kept = slice(None, None, int(factor))
+    kept = slice(None, None, factor)
     return attrs.evolve(
         maneuver, time=time[kept], inputs=_low_pass(maneuver.inputs, sections)[kept],
         outputs=_low_pass(maneuver.outputs, sections)[kept],
@@ -148,3 +158,20 @@ def decimated(maneuvers: ManeuverSet, factor: int | None, cutoff_hz: float) -> M
     derivatives wrong (docs/estimation.md, the hover key derivatives)."""
     return attrs.evolve(maneuvers, maneuvers=[decimated_maneuver(m, factor, cutoff_hz)
                                               for m in maneuvers])
+
+
+def low_passed(maneuvers: ManeuverSet, cutoff_hz: float) -> ManeuverSet:
+    """Every record of ``maneuvers`` low-passed at ``cutoff_hz`` (Hz) as
+    :func:`decimated_maneuver` does it, every sample kept: for the filter-error estimator's
+    ``update_every`` (its innovations formed at every N-th sample only, N the white-noise
+    factor, so their sensor noise stays white while the model steps through every sample with
+    its recorded input). Output error weighs every sample, whose noise is then correlated:
+    give it :func:`decimated` records instead."""
+    filtered = []
+    for maneuver in maneuvers:
+        dt = float(np.mean(np.diff(maneuver.time)))
+        if not 0.0 < cutoff_hz < 0.5 / dt:
+            raise DataError(f"maneuver {maneuver.name!r}: cutoff {cutoff_hz!r} Hz must lie "
+                            f"between 0 and the records' Nyquist frequency {0.5 / dt:.4g} Hz")
+        filtered.append(_filtered(maneuver, dt, cutoff_hz, 1))
+    return attrs.evolve(maneuvers, maneuvers=filtered)

@@ -73,7 +73,7 @@ from .starts import (
     process_noise_start,
     with_start,
 )
-from .system import companion_system, seen_states, with_disturbances
+from .system import companion_system, lifted, seen_states, with_disturbances
 
 NAME = "filter-error"
 #: Lower bound of a measurement-noise variance relative to its start value (a standard
@@ -86,9 +86,9 @@ VARIANCE_FLOOR = 1e-4
 _SIZE_FLOOR = 1e-4
 #: Longest correlation time of a disturbance, s (a random walk for the record lengths flown).
 _LONGEST_CORRELATION = 1000.0
-#: Shortest correlation time of a gust, in samples: the outputs reading a gust's derivative
-#: terms (the accelerometers) see it directly, so a gust of a few samples' correlation is their
-#: measurement noise; with one sample allowed the linear tests' fit went there (Tg_w 0.027 s,
+#: Shortest correlation time of a gust, in measurement updates (samples unless ``update_every``):
+#: the outputs reading a gust's derivative terms (the accelerometers) see it directly, so a gust
+#: of a few updates' correlation is their measurement noise; with one sample allowed the linear tests' fit went there (Tg_w 0.027 s,
 #: R_az at its floor) and the filter's covariance overflowed.
 _SHORTEST_GUST_SAMPLES = 10
 
@@ -173,6 +173,12 @@ def _equation_columns(structure: ModelStructure, states: tuple[str, ...]) -> lis
     return [equations.index(s) for s in states]
 
 
+def _whole_number(instance, attribute, value):
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise EstimationError(f"{attribute.name} must be a whole number ≥ 1 (samples per "
+                              f"measurement update), got {value!r}")
+
+
 def _start_choice(instance, attribute, value):
     if value not in ("auto", "initial", "equation-error"):
         raise EstimationError(f"start must be 'auto', 'initial' or 'equation-error', "
@@ -200,10 +206,15 @@ class FilterErrorProblem(InnovationLikelihood):
     def __init__(self, structure: ModelStructure, maneuvers: ManeuverSet,
                  process_noise: tuple[str, ...], settings: Settings,
                  disturbances: tuple[str, ...] = (), gusts: tuple[str, ...] = (),
-                 initial_states=False, output_biases: bool = False):
+                 initial_states=False, output_biases: bool = False, update_every: int = 1):
         self.structure = structure
         self.hold = maneuvers.hold
-        self.records = Records.from_maneuvers(maneuvers, structure)
+        records = Records.from_maneuvers(maneuvers, structure)
+        #: sample time of the records (s): the model and the disturbances step at it
+        self.sample_time = records.dt
+        self.update_every = update_every
+        #: the records at the filter's measurement updates (every ``update_every``-th sample)
+        self.records = records.lifted(update_every)
         self.settings = settings
         self.n_samples = self.records.n_samples
         self.process_noise = process_noise
@@ -275,7 +286,7 @@ class FilterErrorProblem(InnovationLikelihood):
         f, sigma, tau, r = (parts.process, parts.disturbance, parts.correlation_time,
                             parts.measurement)
         n_f, n_d = f.size, sigma.size
-        system = companion_system(self.structure, parts.structure, self.records.dt, self.hold,
+        system = companion_system(self.structure, parts.structure, self.sample_time, self.hold,
                                   n_f + 2 * n_d + r.size if directions else None)
         n_dir = system.transition.shape[0]
         dtype = system.transition.dtype
@@ -289,7 +300,7 @@ class FilterErrorProblem(InnovationLikelihood):
             q_dir[k + np.arange(n_f), np.arange(n_f)] += 2j * COMPLEX_STEP * f
             tau_dir[k + n_f + n_d + np.arange(n_d), np.arange(n_d)] += 1j * COMPLEX_STEP
             r_dir[k + n_f + 2 * n_d + np.arange(r.size), np.arange(r.size)] += 1j * COMPLEX_STEP
-        decay = np.exp(-self.records.dt / tau_dir)
+        decay = np.exp(-self.sample_time / tau_dir)
         # stationary standard deviation D: driving variance D²(1 − a²), its D-derivative
         # 2D(1 − a²) added the same way as F's
         d_dir = (sigma**2 * (1 - decay**2)).astype(dtype)
@@ -301,6 +312,7 @@ class FilterErrorProblem(InnovationLikelihood):
         process[:, self.noise_rows, self.noise_rows] = q_dir
         extra = system.size - n_d + np.arange(n_d)
         process[:, extra, extra] = d_dir
+        system, process = lifted(system, process, self.update_every, self.structure.n_controls)
         return system, steady_state_filter(system.transition, system.output, process, r_dir)
 
     def _coloured_inputs(self, system) -> tuple[np.ndarray, np.ndarray]:
@@ -427,6 +439,14 @@ class FilterErrorEstimator:
         output_biases: estimate one constant bias per maneuver and output
             (``bias_<maneuver>_<output>``).
         enforce_signs: use the sign priors as bounds.
+        update_every: take the filter's measurement update at every N-th sample only
+            (default 1, every sample): the model and the disturbances still step through every
+            sample with its recorded input (:func:`.system.lifted`), the innovations are formed
+            at samples 0, N, 2N, …. For records low-passed to the band the structure describes
+            (:func:`rotorid.resampling.low_passed`) with N their white-noise factor
+            (:func:`rotorid.resampling.white_noise_factor`): the filter then weighs that band
+            only, its innovations' sensor noise stays white, and the inputs between updates
+            need no hold assumption, as decimated records' do. Linear structures only.
         start: ``"auto"`` (equation error when every derivative's initial value is zero, else
             the initial values), ``"initial"`` or ``"equation-error"`` for the derivatives and delays.
         callback: called with ``(stage, progress record)`` after every accepted iteration.
@@ -444,6 +464,7 @@ class FilterErrorEstimator:
                                                          converter=initial_state_option)
     output_biases: bool = False
     enforce_signs: bool = False
+    update_every: int = attrs.field(default=1, validator=_whole_number)
     start: str = attrs.field(default="auto", validator=_start_choice)
     callback: Callable | None = None
 
@@ -457,6 +478,11 @@ class FilterErrorEstimator:
         mapping of some of them.
         """
         if not isinstance(structure, ModelStructure):
+            if self.update_every != 1:
+                raise EstimationError(f"update_every = {self.update_every} is for linear "
+                                      f"structures; a nonlinear model's filter updates at "
+                                      f"every sample: give it decimated records instead "
+                                      f"(rotorid.resampling.decimated)")
             from .nonlinear import fit_nonlinear
 
             return fit_nonlinear(self, structure, maneuvers, start)
@@ -469,7 +495,8 @@ class FilterErrorEstimator:
                 structure, maneuvers, process_noise_states(structure, self.process_noise),
                 settings, process_noise_states(structure, self.disturbances, "disturbances",
                                                accelerations=True),
-                gust_states(structure, self.gusts), self.initial_states, self.output_biases)
+                gust_states(structure, self.gusts), self.initial_states, self.output_biases,
+                self.update_every)
             values, note, given = self._start_values(problem, maneuvers, start)
             values = matched_measurement_noise(problem, matched_biases(problem, values, given),
                                                given)
@@ -494,7 +521,7 @@ class FilterErrorEstimator:
         states = problem.process_noise
         given = given_process_noise_start(self.process_noise_start, states)
         missing = tuple(s for s in states if f"F_{s}" not in given)
-        dt = problem.records.dt
+        dt = problem.sample_time
         steps = {**process_noise_start(structure, missing, variance, dt),
                  **{name[2:]: float(value) for name, value in given.items()}}
         # default starts only where none is given (a state no output measures has none)
@@ -519,9 +546,9 @@ class FilterErrorEstimator:
         lower, upper = problem.structure.bounds(enforce_signs=self.enforce_signs)
         parts = problem.split(values)
         n_f, n_d = parts.process.size, parts.disturbance.size
-        dt = problem.records.dt
-        shortest = np.concatenate([np.full(len(problem.disturbances), dt),
-                                   np.full(len(problem.gusts), _SHORTEST_GUST_SAMPLES * dt)])
+        shortest = np.concatenate([np.full(len(problem.disturbances), problem.sample_time),
+                                   np.full(len(problem.gusts),
+                                           _SHORTEST_GUST_SAMPLES * problem.records.dt)])
         free = np.full(problem.maneuver_parameters.size, np.inf)
         return (np.concatenate([lower, np.zeros(n_f), _SIZE_FLOOR * parts.disturbance, shortest,
                                 VARIANCE_FLOOR * parts.measurement, -free]),

@@ -75,6 +75,22 @@ class Records:
         return cls(float(np.mean(dts)), inputs, outputs, mask,
                    _initial_states(maneuvers, structure.states), lengths)
 
+    def lifted(self, every: int) -> "Records":
+        """The records as the filter with a measurement update at every ``every``-th sample
+        sees them (:func:`.system.lifted`): the outputs at samples 0, N, 2N, … and per such
+        sample the inputs of the N samples from it on, (N_c, M, N·m), column r·m + c being
+        control c at offset r; dt N times longer."""
+        if every == 1:
+            return self
+        steps, count, m = self.inputs.shape
+        blocks = -(-steps // every)
+        inputs = np.zeros((blocks * every, count, m))
+        inputs[:steps] = self.inputs
+        inputs = inputs.reshape(blocks, every, count, m).swapaxes(1, 2).reshape(
+            blocks, count, every * m)
+        return Records(self.dt * every, inputs, self.outputs[::every], self.mask[::every],
+                       self.x0, tuple(-(-n // every) for n in self.lengths))
+
     @property
     def n_samples(self) -> int:
         """Recorded samples over all maneuvers."""

@@ -14,6 +14,11 @@ an unobserved mode that is not stable would leave the filter without a steady st
 
 For sensitivities the system is built for complex parameter vectors θ + i·h·e_k, one per
 direction k, from the maps' derivatives (the complex step of the discretisation itself).
+
+A filter that takes its measurement update at every N-th sample only (records low-passed to a
+band N times narrower than their Nyquist frequency) runs on the system lifted over N samples
+(:func:`lifted`): one step of it is N steps of the system with every recorded input, so the
+inputs between the updates need no hold assumption.
 """
 
 from __future__ import annotations
@@ -162,3 +167,47 @@ def with_disturbances(system: CompanionSystem, inputs: np.ndarray, reading: np.n
         axis=1)
     return CompanionSystem(system.states, transition, output, system.taps, state_forcing,
                            system.output_forcing, equation_forcing)
+
+
+def lifted(system: CompanionSystem, process: np.ndarray, every: int,
+           n_controls: int) -> tuple[CompanionSystem, np.ndarray]:
+    """``system`` and its process-noise covariance ``process`` Q (D, S, S) over ``every`` = N
+    samples: the system of the samples 0, N, 2N, … whose inputs are the records' inputs in
+    blocks of N (:meth:`.kalman.Records.lifted`: column r·m + c of block k is control c at
+    sample kN + r, m = ``n_controls``).
+
+    Φ_N = Φᴺ, Q_N = Σ_j Φʲ Q Φʲᵀ (j < N), and a tap (lag l, control c) of step j within the
+    block forces the lifted state through Φᴺ⁻¹⁻ʲ, read from block −⌊(j − l)/N⌋ back at column
+    ((j − l) mod N)·m + c; the outputs' direct taps are read at the block's first sample. The
+    equation forcing stays the one-sample map (the disturbances are states of ``system``).
+    """
+    if every == 1:
+        return system, process
+    transition = system.transition
+    powers = [np.broadcast_to(np.eye(system.size), transition.shape).astype(transition.dtype)]
+    for _ in range(every):
+        powers.append(transition @ powers[-1])
+    process = sum(power @ process @ np.swapaxes(power, 1, 2) for power in powers[:every])
+    state_forcing: dict = {}
+    output_forcing: dict = {}
+
+    def tap(offset: int, control: int) -> tuple[int, int]:
+        return -(offset // every), (offset % every) * n_controls + control
+
+    for t, (lag, control) in enumerate(system.taps):
+        for step in range(every):
+            key = tap(step - lag, control)
+            row = np.einsum("ds,dis->di", system.state_forcing[:, t],
+                            powers[every - 1 - step])
+            state_forcing[key] = state_forcing.get(key, 0) + row
+        key = tap(-lag, control)
+        output_forcing[key] = output_forcing.get(key, 0) + system.output_forcing[:, t]
+    taps = sorted(set(state_forcing) | set(output_forcing))
+    n_dir, n_y = transition.shape[0], system.output.shape[1]
+    states = np.zeros((n_dir, len(taps), system.size), transition.dtype)
+    outputs = np.zeros((n_dir, len(taps), n_y), system.output_forcing.dtype)
+    for k, key in enumerate(taps):
+        states[:, k] = state_forcing.get(key, 0)
+        outputs[:, k] = output_forcing.get(key, 0)
+    return CompanionSystem(system.states, powers[every], system.output, tuple(taps), states,
+                           outputs, system.equation_forcing), process
