@@ -21,6 +21,9 @@ repository root::
     python docs/examples/turbulence_hover.py [--turbulence light|moderate] [--seed N] [--quick]
                                              [--from-still] [--cutoff HZ [--decimate N]]
                                              [--hold zoh|foh] [--cyclic-delay S] [--two-stage]
+                                             [--update-every] [--truth T]
+                                             [--structure hybrid|six-dof]
+                                             [--heave-disturbance]
 
 ``--quick`` shortens the records to 60 %. ``--cutoff HZ`` fits both estimators to the records
 low-passed at HZ (zero phase) and kept at every N-th sample (:mod:`rotorid.resampling`; N by
@@ -29,6 +32,16 @@ white): the band the hybrid describes, without the coning, inflow and actuator d
 it that the filter's one-step innovations otherwise weigh. ``--hold foh`` interpolates the
 (decimated) inputs linearly between samples instead of holding them. ``--cyclic-delay S`` fixes
 a delay of S s on the hybrid's four cyclic flap derivatives (:data:`FLAP_CONTROL_DELAYS`).
+``--update-every`` (with ``--cutoff``) keeps every low-passed sample
+(:func:`rotorid.resampling.low_passed`) for filter error, which takes its measurement update at
+every N-th sample only (its ``update_every``) and steps its model through the samples between
+with their recorded inputs: no hold assumption; output error still fits the decimated records.
+``--truth linear`` or ``linear-rotor`` flies the maneuvers with the truth model's linearisation
+(the rotor, inflow and actuator states residualised, or kept;
+:func:`rotorid_helisim.linear_truth.source_flown_by`) through the same loops, gusts and sensors:
+a truth without the nonlinearity, and for ``linear`` one the six-dof structure
+(``--structure six-dof``) represents exactly. ``--heave-disturbance`` gives filter error a
+Gauss-Markov acceleration on the w equation in place of the w gust.
 ``--two-stage`` replaces every input by its least-squares projection on the recorded multistep
 of its maneuver's axis (:func:`two_stage_inputs`), which removes the stabilising loops' answer
 to the turbulence from the inputs (a diagnostic of closed-loop bias). docs/estimation.md,
@@ -50,8 +63,9 @@ from rotorid.errors import IdentifiabilityWarning
 from rotorid.estimation.profiles import fixing_delay
 from rotorid.model.hybrid import (FLAP_CONTROL_DELAYS, hybrid_from_six_dof,
                                   quasi_steady_derivatives)
-from rotorid.resampling import decimated
+from rotorid.resampling import decimated, low_passed, white_noise_factor
 from rotorid.simulation.simulator import lagged_sources
+from rotorid_helisim.linear_truth import TRUTHS, source_flown_by
 from rotorid.study.truth import truth_derivatives
 from rotorid_signals.signals import Multistep
 
@@ -73,10 +87,11 @@ def declared(turbulence: str) -> dict[str, float]:
             for name, value in DECLARED.items()}
 
 
-def data_sets(turbulence: str, seed: int, quick: bool):
-    """(still air, turbulent) identification sets, the hover trim condition and the data
-    source."""
-    source = rotorid.create("data-sources", "helisim")
+def data_sets(turbulence: str, seed: int, quick: bool, truth: str = "nonlinear"):
+    """(still air, turbulent) identification sets flown by ``truth``
+    (:data:`rotorid_helisim.linear_truth.TRUTHS`), the hover trim condition and the truth
+    model's data source."""
+    source = source_flown_by(truth)
     settings = {"condition": "hover", "kinds": ["3211", "2311"], "seed": seed,
                 "duration_scale": 0.6 if quick else 1.0}
     still = source.generate(settings)
@@ -84,7 +99,7 @@ def data_sets(turbulence: str, seed: int, quick: bool):
     first = still[0].metadata
     condition = FlightCondition.from_airspeed(0.0, first["trim_theta_deg"],
                                               first["trim_phi_deg"])
-    return still, turbulent, condition, source
+    return still, turbulent, condition, rotorid.create("data-sources", "helisim")
 
 
 def fit(name: str, structure, maneuvers, start=None, **options):
@@ -145,11 +160,12 @@ def two_stage_inputs(maneuvers):
     return attrs.evolve(maneuvers, maneuvers=projected)
 
 
-def quasi_steady(six_dof: ModelStructure, hybrid: ModelStructure, estimate):
-    """The key derivatives of the hybrid estimate with its flap tilts residualised, and their
-    Cramér-Rao bounds (the estimate's covariance through the residualisation)."""
-    return estimate.propagated(lambda values: quasi_steady_derivatives(hybrid, values, six_dof,
-                                                                       KEY))
+def quasi_steady(six_dof: ModelStructure, structure: ModelStructure, estimate):
+    """The key derivatives of the estimate of ``structure`` (a hybrid's with its flap tilts
+    residualised, a six-dof one's as they are) and their Cramér-Rao bounds (the estimate's
+    covariance through the residualisation)."""
+    return estimate.propagated(lambda values: quasi_steady_derivatives(structure, values,
+                                                                       six_dof, KEY))
 
 
 def main(argv=None) -> dict:
@@ -169,36 +185,69 @@ def main(argv=None) -> dict:
                         help="s: a fixed delay on the hybrid's four cyclic flap derivatives")
     parser.add_argument("--two-stage", action="store_true",
                         help="inputs projected on the recorded multisteps (closed-loop check)")
+    parser.add_argument("--truth", default="nonlinear",
+                        choices=tuple(t for t in TRUTHS if t != "linear-longitudinal"),
+                        help="what flies the maneuvers: the truth model or its linearisation "
+                             "(rotor states residualised, or kept)")
+    parser.add_argument("--structure", default="hybrid", choices=("hybrid", "six-dof"),
+                        help="the structure fitted (six-dof: the rigid body alone)")
+    parser.add_argument("--heave-disturbance", action="store_true",
+                        help="filter error with a Gauss-Markov acceleration on the w equation "
+                             "in place of the w gust")
+    parser.add_argument("--update-every", action="store_true",
+                        help="with --cutoff: filter error on the low-passed records at full "
+                             "rate, updating at every N-th sample (N as --decimate)")
     args = parser.parse_args(argv)
+    if args.update_every and args.cutoff is None:
+        parser.error("--update-every needs --cutoff")
 
-    still, turbulent, condition, source = data_sets(args.turbulence, args.seed, args.quick)
+    still, turbulent, condition, source = data_sets(args.turbulence, args.seed, args.quick,
+                                                    args.truth)
     six_dof = ModelStructure.six_dof(condition)
     truth = truth_derivatives(source, condition, six_dof)
-    hybrid = hybrid_from_six_dof(six_dof, fit("output-error", six_dof, still).values)
-    if args.cyclic_delay is not None:
-        hybrid = with_cyclic_delay(hybrid, args.cyclic_delay)
+    if args.structure == "six-dof":
+        if args.cyclic_delay is not None:
+            parser.error("--cyclic-delay acts on the hybrid's flap equations")
+        structure = six_dof
+    else:
+        structure = hybrid_from_six_dof(six_dof, fit("output-error", six_dof, still).values)
+        if args.cyclic_delay is not None:
+            structure = with_cyclic_delay(structure, args.cyclic_delay)
     if args.two_stage:
         still, turbulent = (two_stage_inputs(data) for data in (still, turbulent))
+    unfiltered, filter_options = (still, turbulent), dict(FILTER_ERROR)
+    starts = declared(args.turbulence)
+    if args.heave_disturbance:
+        filter_options.update(gusts=("u", "v"), disturbances=("q", "p", "r", "w"))
+        starts = {name: value for name, value in starts.items() if not name.endswith("_w")}
     if args.cutoff is not None:
         still, turbulent = (decimated(data, args.decimate, args.cutoff)
                             for data in (still, turbulent))
-    still, turbulent = (attrs.evolve(data, hold=args.hold) for data in (still, turbulent))
+    if args.update_every:
+        filter_options["update_every"] = (args.decimate
+                                          or white_noise_factor(unfiltered[0][0].dt, args.cutoff))
+        for_filter = tuple(low_passed(data, args.cutoff) for data in unfiltered)
+    else:
+        for_filter = (still, turbulent)
+    still, turbulent, *for_filter = (attrs.evolve(data, hold=args.hold)
+                                     for data in (still, turbulent, *for_filter))
     columns, noise = {}, {}
     still_solution = None
-    for air, data in (("still", still), (args.turbulence, turbulent)):
-        output_error = fit("output-error", hybrid, data)
-        columns[f"OE {air}"] = quasi_steady(six_dof, hybrid, output_error)
-        start = declared(args.turbulence)
+    for (air, data), filtered in zip((("still", still), (args.turbulence, turbulent)),
+                                     for_filter):
+        output_error = fit("output-error", structure, data)
+        columns[f"OE {air}"] = quasi_steady(six_dof, structure, output_error)
+        start = starts
         if air == "still":
-            still_solution = dict(zip(hybrid.parameter_names, output_error.values))
+            still_solution = dict(zip(structure.parameter_names, output_error.values))
         elif args.from_still:
             start = {**still_solution, **start}
-        filter_error = fit("filter-error", hybrid, data, start=start, **FILTER_ERROR)
-        columns[f"FE {air}"] = quasi_steady(six_dof, hybrid, filter_error)
+        filter_error = fit("filter-error", structure, filtered, start=start, **filter_options)
+        columns[f"FE {air}"] = quasi_steady(six_dof, structure, filter_error)
         noise[air] = {n: filter_error.value(n) for n in filter_error.parameter_names
                       if n.split("_")[0] in ("D", "G", "T", "Tg", "R")}
         noise[air].update({f"OE R_{o}": r for o, r in
-                           zip(hybrid.outputs, np.diag(output_error.noise_covariance))})
+                           zip(structure.outputs, np.diag(output_error.noise_covariance))})
     print(f"\n{'':8}{'truth':>8}" + "".join(f"{name:>30}" for name in columns))
     table = {}
     for i, key in enumerate(KEY):

@@ -44,8 +44,7 @@ from rotorid import FlightCondition, ManeuverSet, ModelStructure
 from rotorid.resampling import decimated
 from rotorid.study.montecarlo import PreparedRealisations, monte_carlo
 from rotorid.study.truth import truth_derivatives
-from rotorid_helisim.linear_truth import LinearisedPlant, linearised_trim
-from rotorid_helisim.source import HelisimSource
+from rotorid_helisim.linear_truth import TRUTHS, source_flown_by
 
 KEY = ("M_q", "M_long", "Z_w", "Z_coll")
 #: Estimators and their options: filter error with a coloured disturbance on each equation
@@ -54,7 +53,6 @@ KEY = ("M_q", "M_long", "Z_w", "Z_coll")
 ESTIMATORS = {"output-error": {},
               "filter-error": {"process_noise": (), "disturbances": ("u", "w", "q"),
                                "max_iterations": 200}}
-TRUTHS = ("nonlinear", "linear", "linear-longitudinal", "linear-rotor")
 
 
 @attrs.frozen
@@ -72,20 +70,10 @@ class StartInTrim:
                            hold=flown.hold)
 
 
-def truth_source(truth: str):
-    """The helisim source flying the nonlinear truth model or its linearisation."""
-    source = rotorid.create("data-sources", "helisim")
-    if truth == "nonlinear":
-        return source
-    plant = LinearisedPlant.about(source.plant, source.trim(0.0), rotor=truth == "linear-rotor")
-    return HelisimSource(plant=plant.longitudinal() if truth == "linear-longitudinal"
-                         else plant, trimmer=linearised_trim)
-
-
 def flights(turbulence: str, duration_scale: float, directory: Path, truth: str = "nonlinear"):
     """``data(seed)`` of the longitudinal identification maneuvers flown by ``truth`` and the
     trim condition."""
-    source = truth_source(truth)
+    source = source_flown_by(truth)
     settings = {"condition": "hover", "axes": ["long", "coll"], "turbulence": turbulence,
                 "identification": ["3211", "2311"], "verification": [],
                 "duration_scale": duration_scale}

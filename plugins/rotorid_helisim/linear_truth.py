@@ -161,3 +161,26 @@ def linearised_trim(plant: LinearisedPlant, airspeed_kt: float) -> _Trim:
         raise DataError(f"the linearised plant holds at {plant.airspeed_kt:g} kt, not at "
                         f"{airspeed_kt:g} kt; linearise the truth model at that airspeed")
     return _Trim(plant.trim_state, plant.trim_stick)
+
+
+#: What flies the maneuvers in :func:`source_flown_by`: the truth model or a linearisation.
+TRUTHS = ("nonlinear", "linear", "linear-longitudinal", "linear-rotor")
+
+
+def source_flown_by(truth: str, airspeed_kt: float = 0.0):
+    """A :class:`~.source.HelisimSource` whose maneuvers (same loops, gusts and sensors) are
+    flown by ``truth`` (:data:`TRUTHS`): the truth model (``"nonlinear"``), its linearisation
+    at ``airspeed_kt`` with the rotor, inflow and actuator states residualised (``"linear"``),
+    that linearisation's longitudinal part alone (``"linear-longitudinal"``) or the
+    linearisation with those states kept (``"linear-rotor"``)."""
+    from .source import HelisimSource
+
+    if truth not in TRUTHS:
+        raise DataError(f"unknown truth {truth!r}; choose one of {', '.join(TRUTHS)}")
+    source = HelisimSource()
+    if truth == "nonlinear":
+        return source
+    plant = LinearisedPlant.about(source.plant, source.trim(airspeed_kt),
+                                  rotor=truth == "linear-rotor")
+    return HelisimSource(plant=plant.longitudinal() if truth == "linear-longitudinal"
+                         else plant, trimmer=linearised_trim)
