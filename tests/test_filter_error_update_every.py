@@ -126,6 +126,7 @@ def test_updating_at_every_second_sample_recovers_derivatives_and_noise_within_3
     error = np.abs(result.values - truth) / result.cramer_rao
     assert np.all(error < 3.0), dict(zip(result.parameter_names, error.round(2)))
     assert result.n_samples == sum(-(-m.n_samples // 2) for m in data)
+    assert any("one measurement update per 2 samples" in n for n in result.notes)
 
 
 def test_update_every_is_checked():

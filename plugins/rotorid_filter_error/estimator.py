@@ -567,6 +567,10 @@ def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
     notes = ([note] if note else []) + [
         "cost exp(2L/N) = det B·exp(mean νᵀB⁻¹ν); RMSE of the innovations; "
         "noise_covariance is the measurement noise R"]
+    every = getattr(problem, "update_every", 1)
+    if every > 1:
+        notes.append(f"one measurement update per {every} samples (update_every = "
+                     f"{every}): {problem.n_samples} innovations per output")
     names = problem.parameter_names
     measurement = values[[names.index(f"R_{o}") for o in problem.output_names]]
     return Estimate.from_fit(
