@@ -80,3 +80,29 @@ def test_rotorid_montecarlo_runs_the_turbulence_case_file(tmp_path, capsys):
     assert record["converged"] == 4 and record["failed"] == 0
     study = json.loads((tmp_path / "hover-turbulence-longitudinal" / "result.json").read_text())
     assert study["case"]["cutoff_hz"] == 3.0
+
+
+FILTER_EVERY = {"name": "filter-error", "update_every": 6}
+
+
+def test_with_update_every_the_records_keep_every_sample():
+    """With the filter-error estimator's update_every the low-passed records are not
+    decimated (the filter steps through every sample and updates once per six)."""
+    from test_filter_error import noisy_data
+
+    case = FlightCase.from_mapping({**CASE, "estimator": FILTER_EVERY,
+                                    "resampling": {"cutoff_hz": 4.0}})
+    raw = noisy_data({})
+    records = case.identification_records(raw)
+    assert [m.n_samples for m in records] == [m.n_samples for m in raw]
+    assert records[0].dt == raw[0].dt
+    assert not np.allclose(records[0].outputs, raw[0].outputs)
+    decimated_case = FlightCase.from_mapping({**CASE, "resampling": {"cutoff_hz": 4.0}})
+    assert decimated_case.identification_records(raw)[0].dt == pytest.approx(6 * raw[0].dt)
+
+
+def test_decimate_and_update_every_together_are_refused():
+    with pytest.raises(DataFileError, match=r"give \[resampling\] decimate or \[estimator\] "
+                                            r"update_every, not both"):
+        FlightCase.from_mapping({**CASE, "estimator": FILTER_EVERY,
+                                 "resampling": {"cutoff_hz": 4.0, "decimate": 6}}, "case.toml")

@@ -33,7 +33,7 @@ from rotorid.errors import DataFileError, MissingFileError, VerificationError
 from rotorid.io import require_file
 from rotorid.model.structure import PAPER_DELAYED
 from rotorid.plugin.manager import create
-from rotorid.resampling import decimated
+from rotorid.resampling import decimated, low_passed
 from rotorid.study.checks import check_case, check_registered
 from rotorid.study.hybrid_comparison import HYBRID_OMEGA_MAX
 from rotorid.study.reference import ReferenceValue, parse_reference
@@ -176,8 +176,12 @@ class FlightCase:
     def identification_records(self, maneuvers):
         """The identification ``maneuvers`` as the fits see them: low-passed at ``cutoff_hz``
         and decimated (:func:`rotorid.resampling.decimated`), with ``identification_hold``;
-        unchanged without those settings."""
-        if self.cutoff_hz is not None:
+        unchanged without those settings. With the filter-error estimator's ``update_every``
+        the low-passed records keep every sample (:func:`rotorid.resampling.low_passed`): the
+        filter then updates once per that many."""
+        if self.cutoff_hz is not None and self.estimator_options.get("update_every", 1) != 1:
+            maneuvers = low_passed(maneuvers, self.cutoff_hz)
+        elif self.cutoff_hz is not None:
             maneuvers = decimated(maneuvers, self.decimate, self.cutoff_hz)
         if self.identification_hold is not None:
             maneuvers = attrs.evolve(maneuvers, hold=self.identification_hold)

@@ -91,6 +91,11 @@ def _check_band_limit(case, where: str) -> None:
         if case.decimate < 1:
             raise DataFileError(f"{where}: [resampling] decimate must be a whole number "
                                 f"≥ 1 (samples per kept sample), got {case.decimate!r}")
+        if case.estimator_options.get("update_every", 1) != 1:
+            raise DataFileError(f"{where}: give [resampling] decimate or [estimator] "
+                                f"update_every, not both: with update_every the low-passed "
+                                f"records keep every sample and the filter updates once per "
+                                f"update_every of them")
 
 
 def _check_compare(case, where: str) -> None:

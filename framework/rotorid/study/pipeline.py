@@ -331,7 +331,10 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     clock["data"] = time.perf_counter()
     report(case.name, f"{len(ident)} identification and {0 if verif is None else len(verif)} "
                       f"verification maneuvers; trim {condition.describe()}")
-    if case.cutoff_hz is not None:
+    if case.cutoff_hz is not None and ident[0].dt == data.identification[0].dt:
+        report(case.name, f"identification records low-passed at {case.cutoff_hz:g} Hz, "
+                          f"every sample kept ({ident[0].dt:g} s)")
+    elif case.cutoff_hz is not None:
         report(case.name, f"identification records low-passed at {case.cutoff_hz:g} Hz, "
                           f"sample time {data.identification[0].dt:g} → {ident[0].dt:g} s")
     structure = base_structure(case, condition, ident.units)
