@@ -40,12 +40,13 @@ def _whitened_difference(problem, values, k, whiten, step=1e-6) -> np.ndarray:
     return (problem.innovations(up)[0] - problem.innovations(down)[0]) @ whiten / (2 * step)
 
 
-def test_gradient_and_information_of_the_maneuvers_parameters_match_finite_differences():
+@pytest.mark.parametrize("every", [1, 3])
+def test_gradient_and_information_of_the_maneuvers_parameters_match_finite_differences(every):
     """The exact gradient of L against central differences of L, and the information's
     cross terms of a derivative with each maneuver parameter against products of the
     whitened innovations' central differences, for an initial velocity, rate and gust and
-    two biases."""
-    problem, values = _problem(initial_states=True, output_biases=True)
+    two biases; also with a measurement update at every third sample only."""
+    problem, values = _problem(initial_states=True, output_biases=True, update_every=every)
     assert problem.parameter_names[problem.n_global:problem.n_global + 12] == tuple(
         f"x0_long+1_{s}" for s in ("u", "w", "q", "theta", "v", "p", "phi", "r", "d_r",
                                    "g_w", "g_v")) + ("bias_long+1_ax",)
