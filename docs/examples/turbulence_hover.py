@@ -23,7 +23,7 @@ repository root::
                                              [--hold zoh|foh] [--cyclic-delay S] [--two-stage]
                                              [--update-every] [--truth T]
                                              [--structure hybrid|six-dof]
-                                             [--heave-disturbance]
+                                             [--heave-disturbance] [--sigma SU SV SW]
 
 ``--quick`` shortens the records to 60 %. ``--cutoff HZ`` fits both estimators to the records
 low-passed at HZ (zero phase) and kept at every N-th sample (:mod:`rotorid.resampling`; N by
@@ -41,7 +41,9 @@ with their recorded inputs: no hold assumption; output error still fits the deci
 :func:`rotorid_helisim.linear_truth.source_flown_by`) through the same loops, gusts and sensors:
 a truth without the nonlinearity, and for ``linear`` one the six-dof structure
 (``--structure six-dof``) represents exactly. ``--heave-disturbance`` gives filter error a
-Gauss-Markov acceleration on the w equation in place of the w gust.
+Gauss-Markov acceleration on the w equation in place of the w gust. ``--sigma SU SV SW``
+flies the translational gusts at those intensities (m/s, the preset's scale lengths) with the
+rotational gusts made negligible (a 1000 m span), to see one gust component at a time.
 ``--two-stage`` replaces every input by its least-squares projection on the recorded multistep
 of its maneuver's axis (:func:`two_stage_inputs`), which removes the stabilising loops' answer
 to the turbulence from the inputs (a diagnostic of closed-loop bias). docs/estimation.md,
@@ -77,6 +79,8 @@ FILTER_ERROR = {"process_noise": (), "gusts": ("u", "v", "w"), "disturbances": (
 #: L/(5 m/s); the rotational disturbances a few deg/s² with the rotational gusts' 2.5 s.
 DECLARED = {"G_u": 8.7, "Tg_u": 31.0, "G_v": 8.7, "Tg_v": 31.0, "G_w": 5.0, "Tg_w": 6.0,
             "D_p": 12.0, "T_p": 2.5, "D_q": 3.0, "T_q": 2.5, "D_r": 3.0, "T_r": 2.5}
+#: Rotor span (m) of ``--sigma``'s gust field: rotational gusts scale down with the span.
+NO_ROTATION_SPAN = 1000.0
 #: Size of each setting's gusts relative to moderate turbulence (docs/truth-model.md).
 INTENSITY = {"light": 0.5, "moderate": 1.0}
 
@@ -87,10 +91,11 @@ def declared(turbulence: str) -> dict[str, float]:
             for name, value in DECLARED.items()}
 
 
-def data_sets(turbulence: str, seed: int, quick: bool, truth: str = "nonlinear"):
+def data_sets(turbulence, seed: int, quick: bool, truth: str = "nonlinear"):
     """(still air, turbulent) identification sets flown by ``truth``
-    (:data:`rotorid_helisim.linear_truth.TRUTHS`), the hover trim condition and the truth
-    model's data source."""
+    (:data:`rotorid_helisim.linear_truth.TRUTHS`) in ``turbulence`` (a preset name or a
+    table of the helisim source's turbulence settings), the hover trim condition and the
+    truth model's data source."""
     source = source_flown_by(truth)
     settings = {"condition": "hover", "kinds": ["3211", "2311"], "seed": seed,
                 "duration_scale": 0.6 if quick else 1.0}
@@ -194,6 +199,9 @@ def main(argv=None) -> dict:
     parser.add_argument("--heave-disturbance", action="store_true",
                         help="filter error with a Gauss-Markov acceleration on the w equation "
                              "in place of the w gust")
+    parser.add_argument("--sigma", type=float, nargs=3, metavar=("SU", "SV", "SW"),
+                        help="m/s: the translational gusts' intensities in place of the "
+                             "preset's, rotational gusts made negligible (1000 m span)")
     parser.add_argument("--update-every", action="store_true",
                         help="with --cutoff: filter error on the low-passed records at full "
                              "rate, updating at every N-th sample (N as --decimate)")
@@ -201,7 +209,9 @@ def main(argv=None) -> dict:
     if args.update_every and args.cutoff is None:
         parser.error("--update-every needs --cutoff")
 
-    still, turbulent, condition, source = data_sets(args.turbulence, args.seed, args.quick,
+    turbulence = args.turbulence if args.sigma is None else {
+        "preset": args.turbulence, "sigma": list(args.sigma), "span": NO_ROTATION_SPAN}
+    still, turbulent, condition, source = data_sets(turbulence, args.seed, args.quick,
                                                     args.truth)
     six_dof = ModelStructure.six_dof(condition)
     truth = truth_derivatives(source, condition, six_dof)
