@@ -20,11 +20,11 @@ Keep the decimated records' Nyquist frequency at or just above the cutoff
 (:func:`white_noise_factor`). With more samples kept, the measurement noise, white before, is
 band-limited below their Nyquist frequency and so correlated from one kept sample to the next
 (:func:`noise_correlation`: 0.51 for a 4 Hz cutoff kept at every 4th of 50 Hz samples, 0.14 at
-every 6th). The filter-error estimator can instead keep every sample
-(:func:`low_passed`) and form its innovations at every N-th only (its ``update_every``): its
-model then steps through the samples between with their recorded inputs, where decimated
-records hold or interpolate the inputs over the kept interval. Every estimator here takes the measurement noise as white, and its Cramér-Rao
-bounds come out too small by as much as √(1 + 2·Σ correlations) (×1.31 for the 4th sample,
+every 6th). The filter-error estimator can instead keep every sample (:func:`low_passed`) and
+form its innovations at every N-th only (its ``update_every``): its model then steps through
+the samples between with their recorded inputs, where decimated records hold or interpolate
+the inputs over the kept interval. Every estimator here takes the measurement noise as white,
+and its Cramér-Rao bounds come out too small by as much as √(1 + 2·Σ correlations) (×1.31 for the 4th sample,
 ×1.06 for the 6th); :func:`decimated_maneuver` warns when the neighbours' correlation exceeds
 :data:`NOISE_CORRELATION_LIMIT`.
 """

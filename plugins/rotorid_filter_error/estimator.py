@@ -88,8 +88,9 @@ _SIZE_FLOOR = 1e-4
 _LONGEST_CORRELATION = 1000.0
 #: Shortest correlation time of a gust, in measurement updates (samples unless ``update_every``):
 #: the outputs reading a gust's derivative terms (the accelerometers) see it directly, so a gust
-#: of a few updates' correlation is their measurement noise; with one sample allowed the linear tests' fit went there (Tg_w 0.027 s,
-#: R_az at its floor) and the filter's covariance overflowed.
+#: of a few updates' correlation is their measurement noise; with one sample allowed the linear
+#: tests' fit went there (Tg_w 0.027 s, R_az at its floor) and the filter's covariance
+#: overflowed.
 _SHORTEST_GUST_SAMPLES = 10
 
 

@@ -169,6 +169,12 @@ class FlightCase:
         return self.data["source"]
 
     @property
+    def keeps_every_sample(self) -> bool:
+        """True when the estimator updates once per several samples (the filter-error
+        estimator's ``update_every``): the low-passed records are then not decimated."""
+        return self.estimator_options.get("update_every", 1) != 1
+
+    @property
     def data_settings(self) -> dict:
         """The data source's settings: ``[data]`` without ``source``."""
         return {k: v for k, v in self.data.items() if k != "source"}
@@ -179,7 +185,7 @@ class FlightCase:
         unchanged without those settings. With the filter-error estimator's ``update_every``
         the low-passed records keep every sample (:func:`rotorid.resampling.low_passed`): the
         filter then updates once per that many."""
-        if self.cutoff_hz is not None and self.estimator_options.get("update_every", 1) != 1:
+        if self.cutoff_hz is not None and self.keeps_every_sample:
             maneuvers = low_passed(maneuvers, self.cutoff_hz)
         elif self.cutoff_hz is not None:
             maneuvers = decimated(maneuvers, self.decimate, self.cutoff_hz)

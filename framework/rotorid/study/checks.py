@@ -91,7 +91,7 @@ def _check_band_limit(case, where: str) -> None:
         if case.decimate < 1:
             raise DataFileError(f"{where}: [resampling] decimate must be a whole number "
                                 f"≥ 1 (samples per kept sample), got {case.decimate!r}")
-        if case.estimator_options.get("update_every", 1) != 1:
+        if case.keeps_every_sample:
             raise DataFileError(f"{where}: give [resampling] decimate or [estimator] "
                                 f"update_every, not both: with update_every the low-passed "
                                 f"records keep every sample and the filter updates once per "

@@ -331,7 +331,7 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     clock["data"] = time.perf_counter()
     report(case.name, f"{len(ident)} identification and {0 if verif is None else len(verif)} "
                       f"verification maneuvers; trim {condition.describe()}")
-    if case.cutoff_hz is not None and ident[0].dt == data.identification[0].dt:
+    if case.cutoff_hz is not None and case.keeps_every_sample:
         report(case.name, f"identification records low-passed at {case.cutoff_hz:g} Hz, "
                           f"every sample kept ({ident[0].dt:g} s)")
     elif case.cutoff_hz is not None:
