@@ -54,6 +54,15 @@ def test_a_parameter_estimated_at_zero_has_infinite_normalised_measures():
     assert estimate.cramer_rao_pct[1] == pytest.approx(100.0)
 
 
+def test_a_non_finite_information_matrix_names_its_parameters():
+    f = np.diag([4.0, np.inf, 1.0])
+    with pytest.raises(EstimationError, match="not finite in the rows of M_u: the "
+                                              "sensitivities overflow"):
+        statistics(f, ("M_q", "M_u", "L_p"))
+    with pytest.raises(EstimationError, match=r"must be a 3×3 array, got shape \(2, 2\)"):
+        statistics(np.eye(2), ("M_q", "M_u", "L_p"))
+
+
 @pytest.mark.parametrize("gap, flagged", [(1e-9, False), (1e-11, True)])
 def test_nearly_dependent_parameters_are_named_and_get_infinite_bounds(gap, flagged):
     # F = [[1, 1 − gap, 0], [1 − gap, 1, 0], [0, 0, 1]]: eigenvalues 2 − gap, gap and 1, so a

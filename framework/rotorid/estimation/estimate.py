@@ -59,9 +59,14 @@ def statistics(information: np.ndarray, names) -> ParameterStatistics:
     """
     f = np.asarray(information, dtype=float)
     names = tuple(names)
-    if f.shape != (len(names), len(names)) or not np.all(np.isfinite(f)):
-        raise EstimationError(f"information matrix must be a finite {len(names)}×{len(names)} "
-                              f"array, got shape {f.shape}")
+    if f.shape != (len(names), len(names)):
+        raise EstimationError(f"information matrix must be a {len(names)}×{len(names)} array, "
+                              f"got shape {f.shape}")
+    if not np.all(np.isfinite(f)):
+        unfinished = sorted({names[i] for i in np.argwhere(~np.isfinite(f))[:, 0]})
+        raise EstimationError(f"the information matrix is not finite in the rows of "
+                              f"{', '.join(unfinished)}: the sensitivities overflow at the "
+                              f"estimate; check the model's stability there")
     diag = np.diag(f).copy()
     insensitivity = np.where(diag > 0, 1.0 / np.sqrt(np.maximum(diag, 1e-300)), np.inf)
     scale = np.where(diag > 0, np.sqrt(np.maximum(diag, 1e-300)), 1.0)
