@@ -10,7 +10,7 @@ import rotorid
 import scipy.linalg
 from rotorid import Derivative, FlightCondition, ModelStructure
 from rotorid.errors import DataError, EstimationError, IdentifiabilityWarning
-from rotorid_filter_error.estimator import FilterErrorProblem
+from rotorid_filter_error.estimator import FilterErrorProblem, unmeasured_gusts
 from rotorid_filter_error.kalman import innovation_blocks
 from rotorid_filter_error import riccati
 from rotorid_filter_error.riccati import steady_state_filter
@@ -166,6 +166,24 @@ def test_slow_gust_on_an_unstable_hover_model_is_fitted():
     error = np.abs(result.values[derivatives] - model.as_vector(SMALL_TRUTH)) / (
         result.cramer_rao[derivatives])
     assert np.all(error < 3.0), dict(zip(model.parameter_names, error.round(2)))
+    assert any(n.startswith("no output measures v: each such gust's size") for n in
+               result.notes)
+
+
+def test_gusts_no_output_measures_are_named():
+    """The hover outputs read no velocity; the fixed-wing ones read u and, as alpha, w."""
+    hover = FilterErrorProblem(structure(), noisy_data({}), (), Settings(), (), ("u", "v"))
+    assert unmeasured_gusts(hover) == ("u", "v")
+    condition = FlightCondition(u0=50.0, w0=2.0, theta0=math.atan2(2.0, 50.0))
+    wing = ModelStructure.populated(condition, "fixed-wing-longitudinal", "si")
+    t = np.arange(0.0, 2.0, 0.02)
+    channels = {name: np.zeros(t.size) for name in wing.controls + wing.outputs}
+    record = rotorid.Maneuver("level", t, np.zeros((t.size, 0)), np.zeros((t.size, 0)),
+                              input_names=(), output_names=(), units="si",
+                              extra_channels=channels)
+    problem = FilterErrorProblem(wing, rotorid.ManeuverSet([record]), (), Settings(), (),
+                                 ("u", "w"))
+    assert unmeasured_gusts(problem) == ()
 
 
 def test_filtered_output_sensitivities_match_finite_differences():

@@ -558,6 +558,15 @@ class FilterErrorEstimator:
                                 np.full(parts.measurement.size, np.inf), free]))
 
 
+def unmeasured_gusts(problem) -> tuple[str, ...]:
+    """The gust states of ``problem`` that no output reads directly (none named like them)."""
+    reading = getattr(problem, "gust_known_reading", None)
+    if reading is None:
+        return ()
+    return tuple(state for state, column in zip(problem.gusts, reading.T)
+                 if not np.any(column != 0))
+
+
 def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
     """The :class:`Estimate` of a filter-error fit ``result`` of ``problem`` (a linear or a
     nonlinear one: parameters ``R_<output>`` hold the measurement noise)."""
@@ -572,6 +581,12 @@ def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
     if every > 1:
         notes.append(f"one measurement update per {every} samples (update_every = "
                      f"{every}): {problem.n_samples} innovations per output")
+    unmeasured = unmeasured_gusts(problem)
+    if unmeasured:
+        notes.append(f"no output measures {', '.join(unmeasured)}: each such gust's size G "
+                     f"trades with its velocity's derivatives (a ridge; G's Cramér-Rao bound "
+                     f"shows it), so those derivatives, and through them other axes, rest on "
+                     f"the structure being right (docs/estimation.md, the lateral gust)")
     names = problem.parameter_names
     measurement = values[[names.index(f"R_{o}") for o in problem.output_names]]
     return Estimate.from_fit(
