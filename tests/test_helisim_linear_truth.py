@@ -2,11 +2,14 @@
 
 import numpy as np
 import pytest
+from rotorid import FlightCondition, ModelStructure
 from rotorid.errors import DataError
+from rotorid.study.truth import truth_derivatives
 from rotorid_helisim.linear_truth import LinearisedPlant, linearised_trim
 from rotorid_helisim.linearize import PADFIELD_STATES, linearize
 from rotorid_helisim.loops import BODY
 from rotorid_helisim.model import Bo105Model
+from rotorid_helisim.source import HelisimSource
 from rotorid_helisim.trim import trim
 
 
@@ -108,3 +111,32 @@ def test_truth_derivatives_of_a_template_with_fewer_controls_read_their_own_colu
         # the coll and ped columns reach the body without the flap: as in the six-dof model
         for name in ("Z_coll", "N_ped"):
             assert reduced[name] == pytest.approx(six_dof[name], rel=0.05), name
+
+
+def test_a_structure_at_the_truths_derivatives_flies_as_the_linearised_truth(hover):
+    """The six-dof structure at the truth model's derivatives (read in flight-test units),
+    flown as a plant, has the residualised linearisation's A, B, C, D and translational gust
+    columns back in SI (the heading row from the Euler kinematics alike)."""
+    model, point, plant = hover
+    index = {name: i for i, name in enumerate(model.state_names)}
+    condition = FlightCondition.from_airspeed(0.0, np.degrees(point.state[index["theta"]]),
+                                              np.degrees(point.state[index["phi"]]))
+    six_dof = ModelStructure.six_dof(condition)
+    source = HelisimSource()
+    values = six_dof.as_vector(truth_derivatives(source, condition, six_dof))
+    flown = LinearisedPlant.of_structure(six_dof, values, point.stick)
+    assert flown.state_names == BODY
+    for mine, truths in ((flown.a, plant.a), (flown.b, plant.b), (flown.c, plant.c),
+                         (flown.d, plant.d), (flown.g[:, :3], plant.g[:, :3]),
+                         (flown.h[:, :3], plant.h[:, :3])):
+        np.testing.assert_allclose(mine, truths, rtol=1e-6, atol=1e-9 * np.abs(truths).max())
+    assert not np.any(flown.g[:, 3:])
+    np.testing.assert_array_equal(flown.trim_state[[BODY.index("theta"), BODY.index("phi")]],
+                                  [condition.theta0, condition.phi0])
+
+
+def test_a_structure_without_the_six_dof_outputs_is_refused():
+    lateral = ModelStructure.populated(FlightCondition.from_airspeed(0.0), "lateral")
+    with pytest.raises(DataError, match="needs the six-dof states and outputs; 'lateral' "
+                                        "lacks u, w, q, theta, ax, az"):
+        LinearisedPlant.of_structure(lateral, lateral.initial_values(), np.zeros(4))

@@ -40,7 +40,10 @@ with their recorded inputs: no hold assumption; output error still fits the deci
 (the rotor, inflow and actuator states residualised, or kept;
 :func:`rotorid_helisim.linear_truth.source_flown_by`) through the same loops, gusts and sensors:
 a truth without the nonlinearity, and for ``linear`` one the six-dof structure
-(``--structure six-dof``) represents exactly. ``--heave-disturbance`` gives filter error a
+(``--structure six-dof``) represents exactly. ``--truth hybrid`` flies the hybrid that output
+error fits to the ``linear-rotor`` truth's still-air records (:func:`hybrid_truth`): one the
+hybrid structure represents exactly, as near the rotor as it gets; its key derivatives are that
+hybrid's own. ``--heave-disturbance`` gives filter error a
 Gauss-Markov acceleration on the w equation in place of the w gust. ``--sigma SU SV SW``
 flies the translational gusts at those intensities (m/s, the preset's scale lengths) with the
 rotational gusts made negligible (a 1000 m span), to see one gust component at a time.
@@ -67,7 +70,9 @@ from rotorid.model.hybrid import (FLAP_CONTROL_DELAYS, hybrid_from_six_dof,
                                   quasi_steady_derivatives)
 from rotorid.resampling import decimated, low_passed, white_noise_factor
 from rotorid.simulation.simulator import lagged_sources
-from rotorid_helisim.linear_truth import TRUTHS, source_flown_by
+from rotorid_helisim.linear_truth import (TRUTHS, LinearisedPlant, linearised_trim,
+                                          source_flown_by)
+from rotorid_helisim.source import HelisimSource
 from rotorid.study.truth import truth_derivatives
 from rotorid_signals.signals import Multistep
 
@@ -81,6 +86,8 @@ DECLARED = {"G_u": 8.7, "Tg_u": 31.0, "G_v": 8.7, "Tg_v": 31.0, "G_w": 5.0, "Tg_
             "D_p": 12.0, "T_p": 2.5, "D_q": 3.0, "T_q": 2.5, "D_r": 3.0, "T_r": 2.5}
 #: Rotor span (m) of ``--sigma``'s gust field: rotational gusts scale down with the span.
 NO_ROTATION_SPAN = 1000.0
+#: What ``--truth hybrid`` fits its hybrid to (in still air) before flying it.
+HYBRID_TRUTH_OF = "linear-rotor"
 #: Size of each setting's gusts relative to moderate turbulence (docs/truth-model.md).
 INTENSITY = {"light": 0.5, "moderate": 1.0}
 
@@ -91,12 +98,12 @@ def declared(turbulence: str) -> dict[str, float]:
             for name, value in DECLARED.items()}
 
 
-def data_sets(turbulence, seed: int, quick: bool, truth: str = "nonlinear"):
-    """(still air, turbulent) identification sets flown by ``truth``
-    (:data:`rotorid_helisim.linear_truth.TRUTHS`) in ``turbulence`` (a preset name or a
-    table of the helisim source's turbulence settings), the hover trim condition and the
-    truth model's data source."""
-    source = source_flown_by(truth)
+def data_sets(turbulence, seed: int, quick: bool, source=None):
+    """(still air, turbulent) identification sets flown by ``source`` (a helisim source; by
+    default the truth model) in ``turbulence`` (a preset name or a table of the helisim
+    source's turbulence settings), the hover trim condition and the truth model's data
+    source."""
+    source = source_flown_by("nonlinear") if source is None else source
     settings = {"condition": "hover", "kinds": ["3211", "2311"], "seed": seed,
                 "duration_scale": 0.6 if quick else 1.0}
     still = source.generate(settings)
@@ -105,6 +112,21 @@ def data_sets(turbulence, seed: int, quick: bool, truth: str = "nonlinear"):
     condition = FlightCondition.from_airspeed(0.0, first["trim_theta_deg"],
                                               first["trim_phi_deg"])
     return still, turbulent, condition, rotorid.create("data-sources", "helisim")
+
+
+def hybrid_truth(seed: int, quick: bool):
+    """A helisim source flying the hybrid structure that output error fits to still-air
+    records of :data:`HYBRID_TRUTH_OF` (a truth of exactly the hybrid's form, delays dropped,
+    as near that rotor as the hybrid gets; :meth:`LinearisedPlant.of_structure`), and that
+    hybrid's quasi-steady key derivatives by name."""
+    rotor = source_flown_by(HYBRID_TRUTH_OF)
+    still, _, condition, _ = data_sets("still", seed, quick, rotor)
+    six_dof = ModelStructure.six_dof(condition)
+    hybrid = hybrid_from_six_dof(six_dof, fit("output-error", six_dof, still).values)
+    values = fit("output-error", hybrid, still).values
+    plant = LinearisedPlant.of_structure(hybrid, values, rotor.trim(0.0).stick)
+    truth = quasi_steady_derivatives(hybrid, values, six_dof, KEY)
+    return HelisimSource(plant=plant, trimmer=linearised_trim), dict(zip(KEY, truth))
 
 
 def fit(name: str, structure, maneuvers, start=None, **options):
@@ -191,9 +213,11 @@ def main(argv=None) -> dict:
     parser.add_argument("--two-stage", action="store_true",
                         help="inputs projected on the recorded multisteps (closed-loop check)")
     parser.add_argument("--truth", default="nonlinear",
-                        choices=tuple(t for t in TRUTHS if t != "linear-longitudinal"),
-                        help="what flies the maneuvers: the truth model or its linearisation "
-                             "(rotor states residualised, or kept)")
+                        choices=tuple(t for t in TRUTHS if t != "linear-longitudinal")
+                        + ("hybrid",),
+                        help="what flies the maneuvers: the truth model, its linearisation "
+                             "(rotor states residualised, or kept), or the hybrid fitted to "
+                             "the rotor-kept one in still air")
     parser.add_argument("--structure", default="hybrid", choices=("hybrid", "six-dof"),
                         help="the structure fitted (six-dof: the rigid body alone)")
     parser.add_argument("--heave-disturbance", action="store_true",
@@ -211,10 +235,13 @@ def main(argv=None) -> dict:
 
     turbulence = args.turbulence if args.sigma is None else {
         "preset": args.turbulence, "sigma": list(args.sigma), "span": NO_ROTATION_SPAN}
-    still, turbulent, condition, source = data_sets(turbulence, args.seed, args.quick,
-                                                    args.truth)
+    if args.truth == "hybrid":
+        flown, truth = hybrid_truth(args.seed, args.quick)
+    else:
+        flown, truth = source_flown_by(args.truth), None
+    still, turbulent, condition, source = data_sets(turbulence, args.seed, args.quick, flown)
     six_dof = ModelStructure.six_dof(condition)
-    truth = truth_derivatives(source, condition, six_dof)
+    truth = truth or truth_derivatives(source, condition, six_dof)
     if args.structure == "six-dof":
         if args.cyclic_delay is not None:
             parser.error("--cyclic-delay acts on the hybrid's flap equations")

@@ -13,15 +13,21 @@ coll, u_g w_g q_g, ax az q θ) from the lateral one, both ways. The plant has th
 flight harness flies (:mod:`.flight`), so the same maneuvers, loops, gusts and sensors give
 data from a truth that a linear structure represents exactly or up to a known part: a Monte
 Carlo on it separates the estimator's statistics from the model-structure error of the
-nonlinear truth.
+nonlinear truth. :meth:`LinearisedPlant.of_structure` flies a rotorid linear structure itself
+the same way: a truth of exactly the fitted structure's form.
 """
 
 from __future__ import annotations
 
+import hashlib
+import math
+
 import attrs
 import numpy as np
+from rotorid.data import OUTPUT_CHANNELS
 from rotorid.errors import DataError
 from rotorid.frozen import readonly_array
+from rotorid.units import SI, channel_scale
 
 from .linearize import _BLADE_STEP, _INFLOW_STEP, _STEPS
 from .loops import BODY
@@ -115,6 +121,59 @@ class LinearisedPlant:
         c, d, h = reduced(c, d, h)
         return cls(x0[kept], stick0, a, b, g, c, d, h, trim_measurements, trim.airspeed_kt,
                    config)
+
+    @classmethod
+    def of_structure(cls, structure, values, trim_stick) -> "LinearisedPlant":
+        """A rotorid linear ``structure`` at ``values`` (its delays dropped) as a plant about
+        its flight condition's attitude and ``trim_stick`` (4,) %: states :data:`.loops.BODY`
+        (the heading added, ψ̇ from the Euler kinematics) and the structure's others, SI;
+        translational gusts through −(A − A0)'s u, v, w columns and the accelerometers'
+        −(C − C0)'s, as the truth model's act (:mod:`rotorid_filter_error`'s ``gusts``);
+        rotational gusts act on nothing. The structure needs the six-dof states and outputs."""
+        missing = [n for n in BODY if n != "psi" and n not in structure.states] + [
+            y for y in OUTPUT_CHANNELS if y not in structure.outputs]
+        if missing:
+            raise DataError(f"a structure flown as a plant needs the six-dof states and "
+                            f"outputs; {structure.template.name!r} lacks {', '.join(missing)}")
+        a, b, c, d = structure.matrices(values)
+        a_known, c_known = structure.known_state_matrix(), structure.known_output_matrix()
+        names = BODY + tuple(s for s in structure.states if s not in BODY)
+        kept = [names.index(s) for s in structure.states]
+        rows = [structure.outputs.index(y) for y in OUTPUT_CHANNELS]
+        to_si = channel_scale(structure.states, SI, structure.units)
+        out_si = channel_scale(OUTPUT_CHANNELS, SI, structure.units)[:, None]
+        n = len(names)
+
+        def states_si(matrix):
+            full = np.zeros((n, n))
+            full[np.ix_(kept, kept)] = to_si[:, None] * matrix / to_si[None, :]
+            return full
+
+        def outputs_si(matrix):
+            full = np.zeros((len(OUTPUT_CHANNELS), n))
+            full[:, kept] = out_si * matrix[rows] / to_si[None, :]
+            return full
+
+        state, aero = states_si(a), states_si(a - a_known)
+        output, aero_output = outputs_si(c), outputs_si(c - c_known)
+        condition = structure.condition
+        tilt = 1.0 / math.cos(condition.theta0)
+        state[names.index("psi"), names.index("q")] = math.sin(condition.phi0) * tilt
+        state[names.index("psi"), names.index("r")] = math.cos(condition.phi0) * tilt
+        inputs = np.zeros((n, 4))
+        inputs[kept] = to_si[:, None] * b
+        gust, gust_reading = np.zeros((n, 6)), np.zeros((len(OUTPUT_CHANNELS), 6))
+        for column, velocity in enumerate(("u", "v", "w")):
+            gust[:, column] = -aero[:, names.index(velocity)]
+            gust_reading[:, column] = -aero_output[:, names.index(velocity)]
+        trim_state = np.zeros(n)
+        trim_state[names.index("theta")], trim_state[names.index("phi")] = (condition.theta0,
+                                                                           condition.phi0)
+        digest = hashlib.sha1(np.concatenate([state.ravel(), inputs.ravel(),
+                                              output.ravel()]).tobytes()).hexdigest()[:12]
+        return cls(trim_state, trim_stick, state, inputs, gust, output, out_si * d[rows],
+                   gust_reading, np.zeros(len(OUTPUT_CHANNELS)), condition.airspeed_kt,
+                   f"{structure.template.name} structure {digest}", names)
 
     def longitudinal(self) -> "LinearisedPlant":
         """This plant with the longitudinal motion cut from the lateral one, both ways (the
