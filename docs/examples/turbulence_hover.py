@@ -24,6 +24,7 @@ repository root::
                                              [--update-every] [--truth T]
                                              [--structure hybrid|six-dof]
                                              [--heave-disturbance] [--sigma SU SV SW]
+                                             [--actuator-lag S]
 
 ``--quick`` shortens the records to 60 %. ``--cutoff HZ`` fits both estimators to the records
 low-passed at HZ (zero phase) and kept at every N-th sample (:mod:`rotorid.resampling`; N by
@@ -47,7 +48,9 @@ hybrid's own. ``--heave-disturbance`` gives filter error a
 Gauss-Markov acceleration on the w equation in place of the w gust. ``--sigma SU SV SW``
 flies the translational gusts at those intensities (m/s, the preset's scale lengths) with the
 rotational gusts made negligible (a 1000 m span), to see one gust component at a time.
-``--two-stage`` replaces every input by its least-squares projection on the recorded multistep
+``--actuator-lag S`` passes every recorded input through a first-order lag of S s before the
+fits (:func:`rotorid.actuators.lagged_inputs`): the actuators' dynamics as known, in place of
+the stick. ``--two-stage`` replaces every input by its least-squares projection on the recorded multistep
 of its maneuver's axis (:func:`two_stage_inputs`), which removes the stabilising loops' answer
 to the turbulence from the inputs (a diagnostic of closed-loop bias). docs/estimation.md,
 "Hover in moderate turbulence", gives what each setting measured.
@@ -63,6 +66,7 @@ import attrs
 import numpy as np
 import rotorid
 from rotorid import FlightCondition, ModelStructure
+from rotorid.actuators import lagged_inputs
 from rotorid.data import HOLDS
 from rotorid.errors import IdentifiabilityWarning
 from rotorid.estimation.profiles import fixing_delay
@@ -226,6 +230,10 @@ def main(argv=None) -> dict:
     parser.add_argument("--sigma", type=float, nargs=3, metavar=("SU", "SV", "SW"),
                         help="m/s: the translational gusts' intensities in place of the "
                              "preset's, rotational gusts made negligible (1000 m span)")
+    parser.add_argument("--actuator-lag", type=float, metavar="S",
+                        help="s: every input through the actuators' first-order lag before "
+                             "the fits (rotorid.actuators.lagged_inputs; the truth model's "
+                             "actuators have 0.03 s)")
     parser.add_argument("--update-every", action="store_true",
                         help="with --cutoff: filter error on the low-passed records at full "
                              "rate, updating at every N-th sample (N as --decimate)")
@@ -240,6 +248,8 @@ def main(argv=None) -> dict:
     else:
         flown, truth = source_flown_by(args.truth), None
     still, turbulent, condition, source = data_sets(turbulence, args.seed, args.quick, flown)
+    if args.actuator_lag is not None:
+        still, turbulent = (lagged_inputs(data, args.actuator_lag) for data in (still, turbulent))
     six_dof = ModelStructure.six_dof(condition)
     truth = truth or truth_derivatives(source, condition, six_dof)
     if args.structure == "six-dof":
