@@ -29,6 +29,7 @@ from pathlib import Path
 
 import attrs
 
+from rotorid.actuators import lagged_inputs
 from rotorid.errors import DataFileError, MissingFileError, VerificationError
 from rotorid.io import require_file
 from rotorid.model.structure import PAPER_DELAYED
@@ -55,6 +56,7 @@ _TABLES = {
                 "hybrid_reduction"},
     "reference": None,
     "resampling": {"cutoff_hz", "decimate", "hold"},
+    "actuators": {"lag_s", "inputs"},
 }
 _TOP_LEVEL = {"name", "description", *_TABLES}
 #: Case settings by table and key: the :class:`FlightCase` field and its converter.
@@ -82,6 +84,8 @@ _FIELDS = {
     ("resampling", "cutoff_hz"): ("cutoff_hz", float),
     ("resampling", "decimate"): ("decimate", int),
     ("resampling", "hold"): ("identification_hold", str),
+    ("actuators", "lag_s"): ("actuator_lag_s", float),
+    ("actuators", "inputs"): ("actuator_inputs", tuple),
 }
 
 #: What each converter of :data:`_FIELDS` reads, for the error messages.
@@ -115,7 +119,11 @@ class FlightCase:
     identification records are low-passed there and kept at every ``decimate``-th sample
     before any fit (:meth:`identification_records`; ``decimate`` by default the factor that
     keeps the sensor noise white), in the study and in its Monte Carlo runs alike;
-    ``identification_hold`` (``[resampling] hold``) sets their input hold.
+    ``identification_hold`` (``[resampling] hold``) sets their input hold. With
+    ``actuator_lag_s`` (``[actuators] lag_s``) every record, identification and verification
+    alike, has its inputs (``actuator_inputs``, ``[actuators] inputs``; default all) passed
+    through the actuators' known first-order lag first (:func:`rotorid.actuators.lagged_inputs`):
+    the models then map the actuators' output, not the stick, to the response.
     """
 
     name: str
@@ -152,6 +160,8 @@ class FlightCase:
     cutoff_hz: float | None = None
     decimate: int | None = None
     identification_hold: str | None = None
+    actuator_lag_s: float | None = None
+    actuator_inputs: tuple[str, ...] | None = None
     quick_settings: Mapping = attrs.field(factory=dict, converter=dict)
     is_quick: bool = False
 
@@ -184,7 +194,9 @@ class FlightCase:
         and decimated (:func:`rotorid.resampling.decimated`), with ``identification_hold``;
         unchanged without those settings. With the filter-error estimator's ``update_every``
         the low-passed records keep every sample (:func:`rotorid.resampling.low_passed`): the
-        filter then updates once per that many."""
+        filter then updates once per that many. The actuators' lag (``actuator_lag_s``)
+        comes first."""
+        maneuvers = self.actuated(maneuvers)
         if self.cutoff_hz is not None and self.keeps_every_sample:
             maneuvers = low_passed(maneuvers, self.cutoff_hz)
         elif self.cutoff_hz is not None:
@@ -192,6 +204,13 @@ class FlightCase:
         if self.identification_hold is not None:
             maneuvers = attrs.evolve(maneuvers, hold=self.identification_hold)
         return maneuvers
+
+    def actuated(self, maneuvers):
+        """``maneuvers`` (or None) with the inputs through the actuators' known lag
+        (``[actuators]``), as every model of the case sees them; unchanged without it."""
+        if maneuvers is None or self.actuator_lag_s is None:
+            return maneuvers
+        return lagged_inputs(maneuvers, self.actuator_lag_s, self.actuator_inputs)
 
     @property
     def frequency_pairs(self) -> tuple[str, ...]:
@@ -256,12 +275,13 @@ class FlightCase:
 
     def as_dict(self) -> dict:
         """Plain settings, as recorded in ``result.json``; ``compare_estimators``,
-        ``compare_hybrid``, ``compare_hybrid_reduction`` and the ``[resampling]`` settings
-        only when set, so that cases without them keep the record they had before they
+        ``compare_hybrid``, ``compare_hybrid_reduction``, the ``[resampling]`` and the
+        ``[actuators]`` settings only when set, so that cases without them keep the record they had before they
         existed."""
         return attrs.asdict(self, filter=lambda a, v: not (
             a.name in ("compare_estimators", "compare_hybrid", "compare_hybrid_reduction",
-                       "cutoff_hz", "decimate", "identification_hold")
+                       "cutoff_hz", "decimate", "identification_hold", "actuator_lag_s",
+                       "actuator_inputs")
             and not v
             or a.name == "compare_hybrid_band_max" and not self.compare_hybrid))
 

@@ -41,6 +41,22 @@ def check_cases(cases: Sequence) -> None:
         check_case(case, f"case {case.name}")
 
 
+def _check_actuators(case, controls, where: str) -> None:
+    """``[actuators]``: a lag in s > 0, inputs the structure has (and only with a lag)."""
+    lag = case.actuator_lag_s
+    if lag is not None and not (math.isfinite(lag) and lag > 0):
+        raise DataFileError(f"{where}: [actuators] lag_s must be the actuators' first-order "
+                            f"time constant in s (> 0), got {lag!r}")
+    if case.actuator_inputs is not None:
+        if lag is None:
+            raise DataFileError(f"{where}: [actuators] inputs needs lag_s, the time constant "
+                                f"of their lag")
+        unknown = [name for name in case.actuator_inputs if name not in controls]
+        if unknown:
+            raise DataFileError(f"{where}: [actuators] inputs names {', '.join(unknown)}, not "
+                                f"an input of the structure ({', '.join(controls)})")
+
+
 def check_case(case, where: str) -> None:
     """Raise :class:`~rotorid.errors.DataFileError` naming ``where`` (the case file) and the
     key of the first setting of ``case`` that cannot work."""
@@ -55,6 +71,7 @@ def check_case(case, where: str) -> None:
                             f"are numbers in one unit system; say which in [data] units = "
                             f"\"si\" (or \"flight-test\"), so the data are read in it")
     _check_delays(case, structure.names, where)
+    _check_actuators(case, structure.controls, where)
     check_reference_names(case.reference, structure.names, where)
     for pair in case.pairs:
         _wrapped(lambda: parse_pair(pair, structure.outputs, structure.controls), where,

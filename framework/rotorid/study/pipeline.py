@@ -327,7 +327,8 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     clock = {"start": time.perf_counter()}
     report(case.name, f"data: {case.data_source} ({'quick' if case.is_quick else 'full'} set)")
     data, condition = load_data(case, directory / "data")
-    ident, verif = case.identification_records(data.identification), data.verification
+    ident = case.identification_records(data.identification)
+    verif = case.actuated(data.verification)
     clock["data"] = time.perf_counter()
     report(case.name, f"{len(ident)} identification and {0 if verif is None else len(verif)} "
                       f"verification maneuvers; trim {condition.describe()}")
@@ -337,6 +338,10 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     elif case.cutoff_hz is not None:
         report(case.name, f"identification records low-passed at {case.cutoff_hz:g} Hz, "
                           f"sample time {data.identification[0].dt:g} → {ident[0].dt:g} s")
+    if case.actuator_lag_s is not None:
+        lagged = ", ".join(case.actuator_inputs) if case.actuator_inputs else "every input"
+        report(case.name, f"{lagged} through the actuators' {case.actuator_lag_s:g} s "
+                          f"first-order lag")
     structure = base_structure(case, condition, ident.units)
     check_fit_data(ident, case.estimator_options.get("outputs"), structure)
     structure, data_warnings = checked_structure(case, structure, ident, report)
