@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from rotorid.actuators import lagged_inputs
 from rotorid.errors import DataFileError
+from rotorid.estimation.result_file import load_result
 from rotorid.study.case import FlightCase
 from rotorid.study.pipeline import run_case
 from test_reduction_study import data, files_case  # noqa: F401  (data: fixture)
@@ -59,3 +60,5 @@ def test_the_study_fits_the_actuated_records(tmp_path, data):  # noqa: F811
     assert record["case"]["actuator_lag_s"] == 0.02
     delays = record["estimates"]["with delays"]["delays"]
     assert delays["L_lat"]["value"] == pytest.approx(0.04, abs=0.01)
+    identified = load_result(tmp_path / "out" / "own" / "result.json")
+    assert (identified.actuator_lag_s, identified.actuator_inputs) == (0.02, ("lat",))

@@ -256,3 +256,25 @@ def test_trim_removal_before_the_fit(case, tmp_path, capsys):
     for name, entry in reference["parameters"].items():
         assert trimmed["parameters"][name]["value"] == pytest.approx(entry["value"], rel=1e-6,
                                                                      abs=1e-9), name
+
+
+def test_a_known_actuator_lag_takes_its_share_of_the_delay(case, tmp_path, capsys):
+    """The records carry a 0.06 s delay on L_lat; with the lateral stick through a known
+    0.02 s actuator lag the fitted delay is what is left of it, and the result records the
+    lag for rotorid verify (rotorid.estimation.result_file.load_result)."""
+    from rotorid.estimation.result_file import load_result
+
+    model, data, _ = case
+    out = tmp_path / "lagged.json"
+    status = cli.main(["identify", str(model), str(data), "--out", str(out), "--quiet",
+                       "--actuator-lag", "0.02", "--actuator-inputs", "lat"])
+    capsys.readouterr()
+    assert status == 0
+    record = json.loads(out.read_text(encoding="utf-8"))
+    assert (record["actuator_lag_s"], record["actuator_inputs"]) == (0.02, ["lat"])
+    assert record["delays"]["L_lat"]["value"] == pytest.approx(0.04, abs=0.01)
+    identified = load_result(out)
+    assert (identified.actuator_lag_s, identified.actuator_inputs) == (0.02, ("lat",))
+    assert cli.main(["identify", str(model), str(data), "--out", str(tmp_path / "x.json"),
+                     "--actuator-inputs", "lat"]) == ExitStatus.USAGE
+    assert "--actuator-inputs needs --actuator-lag" in capsys.readouterr().err

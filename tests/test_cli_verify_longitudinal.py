@@ -208,3 +208,22 @@ def test_verify_leaves_out_sweeps_of_controls_the_model_lacks(identified, tmp_pa
     assert summary["sweeps"] == ["sweep_long", "sweep_coll"]
     assert main(["verify", str(result), str(lateral), "--out", str(out)]) == ExitStatus.ERROR
     assert "no sweep excites a control of the model: sweep_lat" in capsys.readouterr().err
+
+
+def test_verify_lags_the_sweeps_as_the_identification_was(identified, tmp_path, capsys):
+    """A result that records an actuator lag (``actuator_lag_s``) has the sweeps' inputs put
+    through it: here a 0.1 s lag the data never had, so the model no longer matches."""
+    model, result, sweeps = identified
+    record = json.loads(Path(result).read_text(encoding="utf-8"))
+    record["structure"] = str(model)
+    record.update(actuator_lag_s=0.1, actuator_inputs=["long"])
+    lagged = tmp_path / "lagged.json"
+    lagged.write_text(json.dumps(record), encoding="utf-8")
+    out = tmp_path / "verification"
+    status = main(["verify", str(lagged), *sweeps, "--no-figures", "--out", str(out)])
+    printed = capsys.readouterr()
+    assert status == ExitStatus.OK, printed.err          # failed checks fail only with --strict
+    assert "sweep inputs through the identification's 0.1 s actuator lag" in printed.out
+    summary = json.loads((out / "verification.json").read_text(encoding="utf-8"))
+    checks = {p["pair"]: p["checks"]["muad"]["passed"] for p in summary["pairs"]}
+    assert checks == {"q/long": False, "az/coll": True}

@@ -59,6 +59,9 @@ class IdentifiedModel:
             noise ``F_<state>``, disturbances ``D_<state>`` and ``T_<state>``, gusts
             ``G_<state>`` and ``Tg_<state>``, measurement noise ``R_<output>``; units in the
             estimate's ``parameter_units``); empty for an output-error result.
+        actuator_lag_s, actuator_inputs: the actuators' first-order lag (s) the records' inputs
+            went through before the fit, and the inputs it acted on (None: every input);
+            None without one (:mod:`rotorid.actuators`): the model maps the lagged inputs.
     """
 
     structure: ModelStructure
@@ -67,6 +70,8 @@ class IdentifiedModel:
     source: str
     model: str | None = None
     noise: Mapping[str, float] = attrs.field(factory=dict, converter=dict)
+    actuator_lag_s: float | None = None
+    actuator_inputs: tuple[str, ...] | None = None
 
     def __repr__(self) -> str:
         label = f", model {self.model!r}" if self.model else ""
@@ -143,18 +148,22 @@ def load_result(path: str | os.PathLike, model: str | None = None,
                              f"{', '.join(map(repr, record['estimates']))}")
         entry = record["estimates"][chosen]
         declared = structure or _study_structure(record, entry, path)
+        settings = record.get("case") if isinstance(record.get("case"), Mapping) else {}
     else:
         if model is not None:
             raise UsageError(f"{path} is a `rotorid identify` result holding one model; "
                              f"choosing a model ({model!r}) applies to study results only")
-        chosen, entry = None, record
+        chosen, entry, settings = None, record, record
         declared = structure or _described_structure(record, path)
     if not isinstance(entry.get("parameters"), Mapping):
         raise DataFileError(f"{path}: no 'parameters' table; give a result written by "
                             f"`rotorid identify` or `rotorid study`")
     identified, values, noise = _identified(declared, entry, path)
     estimate = Estimate.from_dict(entry) if "parameter_names" in entry else None
-    return IdentifiedModel(identified, values, estimate, str(path), chosen, noise)
+    lag, inputs = settings.get("actuator_lag_s"), settings.get("actuator_inputs")
+    return IdentifiedModel(identified, values, estimate, str(path), chosen, noise,
+                           None if lag is None else float(lag),
+                           None if inputs is None else tuple(inputs))
 
 
 def named_model_file(path: str | os.PathLike) -> Path | None:

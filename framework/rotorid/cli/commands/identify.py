@@ -7,6 +7,7 @@ Usage::
                      [--enforce-signs] [--output-biases] [--initial-states]
                      [--hold zoh|foh] [--trim first-second|CH=VALUE,...]
                      [--resample linear|decimate] [--sample-time S]
+                     [--actuator-lag S [--actuator-inputs long,lat]]
                      [--quiet] [--strict] [--force]
 
 ``MODEL.toml`` is a model file (:mod:`rotorid.model.modelfile`); its initial values are the start
@@ -18,7 +19,9 @@ the file's own names, such as ``VTAS_mps``, that its channel map links to its si
 the model converts them from the units its map declares. DATA are
 maneuver files (CSV, NPZ, MAT), directories or glob patterns of the ``files`` data source; they
 are converted to the model's unit system, after the trim removal and resampling asked for
-(:mod:`rotorid.ingestion`). The report goes to stdout; stderr gets one line per
+(:mod:`rotorid.ingestion`), and through the actuators' known lag with ``--actuator-lag``
+(:mod:`rotorid.actuators`; recorded as ``actuator_lag_s``, ``rotorid verify`` then lags the
+sweeps alike). The report goes to stdout; stderr gets one line per
 accepted iteration (unless ``--quiet``; an observer plugin of the
 ``rotorid_estimation_iteration`` hook, so it works with any estimator that reports through
 it), the kinematic consistency fits and one line per warning: the sanity checks of the data
@@ -58,6 +61,25 @@ def _ingestion(args) -> dict:
     return {"trim": args.trim, "resample": args.resample, "sample_time": args.sample_time}
 
 
+def _actuator_inputs(args) -> list[str] | None:
+    """The inputs of ``--actuator-inputs``, or None (every input)."""
+    if args.actuator_inputs is None:
+        return None
+    return [name.strip() for name in args.actuator_inputs.split(",") if name.strip()]
+
+
+def _actuated(maneuvers, args):
+    """``maneuvers`` with the inputs through ``--actuator-lag`` (unchanged without it)."""
+    from rotorid.actuators import lagged_inputs
+    from rotorid.errors import UsageError
+
+    if args.actuator_lag is None:
+        if args.actuator_inputs is not None:
+            raise UsageError("--actuator-inputs needs --actuator-lag, the lag's time constant")
+        return maneuvers
+    return lagged_inputs(maneuvers, args.actuator_lag, _actuator_inputs(args))
+
+
 def add_arguments(parser) -> None:
     parser.add_argument("model", metavar="MODEL.toml", help="model file, or a model of one's own "
                         "by reference: package.module:Name or path/to/file.py:Name")
@@ -92,6 +114,12 @@ def add_arguments(parser) -> None:
     parser.add_argument("--sample-time", type=seconds, default=None, metavar="S",
                         help="the grid's interval in s for --resample (default: the median "
                              "step)")
+    parser.add_argument("--actuator-lag", type=seconds, default=None, metavar="S",
+                        help="the actuators' known first-order time constant in s: the inputs "
+                             "go through that lag before the fit (rotorid.actuators), and the "
+                             "result records it for rotorid verify")
+    parser.add_argument("--actuator-inputs", default=None, metavar="long,lat",
+                        help="the inputs --actuator-lag acts on (default every input)")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress lines on stderr (warnings stay)")
     parser.add_argument("--force", action="store_true",
@@ -225,6 +253,7 @@ def run(args) -> int:
                 ingestion["signals"] = model.signals
             maneuvers = load_maneuvers(args.data, args.hold,
                                        None if by_reference else model.units.name, ingestion)
+            maneuvers = _actuated(maneuvers, args)
             if not by_reference:
                 check_fit_data(maneuvers, options.get("outputs"), model)
             checked = check_before_fit(maneuvers, None if by_reference else model)
@@ -238,7 +267,11 @@ def run(args) -> int:
             estimate = estimator.estimate(model, maneuvers)
     _print_warnings(caught)
     data_warnings = [str(warning.message) for warning in found]
-    atomic_write(out, json.dumps(_record(estimate, args.model, out, data_warnings), indent=2))
+    record = _record(estimate, args.model, out, data_warnings)
+    if args.actuator_lag is not None:
+        record["actuator_lag_s"] = args.actuator_lag
+        record["actuator_inputs"] = _actuator_inputs(args)
+    atomic_write(out, json.dumps(record, indent=2))
     print(estimate.report())
     print(data_warnings_report(data_warnings))
     print(f"estimate written to {out}")

@@ -17,7 +17,9 @@ SWEEPS are maneuver files, directories or glob patterns, read through the model 
 metadata only the ``sweep`` ones are used. They need only the channels the model uses (a
 ``longitudinal`` model verifies on sweeps without lateral columns); a sweep of a control the
 model lacks (``axis`` metadata, or none of the model's controls moving in it) is left out with
-a line saying so, so a directory holding every axis's sweeps can be given.
+a line saying so, so a directory holding every axis's sweeps can be given. A result identified
+with the actuators' lag (``actuator_lag_s``, :mod:`rotorid.actuators`) has the sweeps' inputs
+put through the same lag.
 
 Pairs are ``OUTPUT/INPUT`` names of the model's signals; by default the paper's pairs the model
 has (q/long and az/coll for the ``longitudinal`` template), else every output over every input
@@ -188,6 +190,7 @@ def run(args) -> int:
 
     matplotlib.use("Agg")
 
+    from rotorid.actuators import lagged_inputs
     from rotorid.errors import ExitStatus, VerificationError
     from rotorid.estimation.result_file import load_result
     from rotorid.io import atomic_write, jsonable
@@ -209,6 +212,10 @@ def run(args) -> int:
     if model_file is not None:
         ingestion["channels"] = load_channel_map(model_file)
     sweeps, left_out = load_sweeps(locations, structure.units.name, ingestion)
+    if identified.actuator_lag_s is not None:
+        sweeps = lagged_inputs(sweeps, identified.actuator_lag_s, identified.actuator_inputs)
+        print(f"sweep inputs through the identification's {identified.actuator_lag_s:g} s "
+              f"actuator lag")
     for name, reason in left_out.items():
         print(f"left out {name}: {reason}")
     selection = producible_pairs(structure, values, sweeps,
