@@ -53,8 +53,14 @@ def _t(a):
 
 
 def _relative_change(new, old) -> float:
-    scale = np.max(np.abs(new), initial=0.0)
-    return float(np.max(np.abs(new - old)) / scale) if scale > 0 else 0.0
+    """The larger of the real and the imaginary parts' largest change, each relative to its
+    own size (the imaginary parts, the directions, are far smaller than the real ones)."""
+    change = 0.0
+    for part in (np.real, np.imag):
+        scale = np.max(np.abs(part(new)), initial=0.0)
+        if scale > 0:
+            change = max(change, np.max(np.abs(part(new) - part(old))) / scale)
+    return change
 
 
 #: Why a filter has no steady state.
@@ -154,10 +160,10 @@ def _directions(covariance, transition, output, process, measurement,
                + process_dot)
     size = closed.shape[-1]
     shared = np.array_equal(closed, closed[:1].repeat(closed.shape[0], axis=0))
-    kinds = [(closed[0], slice(None))] if shared else [
+    groups = [(closed[0], slice(None))] if shared else [
         (closed[d], slice(d, d + 1)) for d in range(closed.shape[0])]
     dot = np.empty_like(forcing)
-    for loop, rows in kinds:
+    for loop, rows in groups:
         stein = np.eye(size * size) - np.kron(loop, loop)
         try:
             factor = scipy.linalg.lu_factor(stein, check_finite=True)
