@@ -102,19 +102,28 @@ def declared(turbulence: str) -> dict[str, float]:
             for name, value in DECLARED.items()}
 
 
+def _settings(seed: int, quick: bool) -> dict:
+    """The helisim source's settings of the hover identification set."""
+    return {"condition": "hover", "kinds": ["3211", "2311"], "seed": seed,
+            "duration_scale": 0.6 if quick else 1.0}
+
+
+def still_air(source, seed: int, quick: bool):
+    """The still-air identification set flown by ``source`` and its hover trim condition."""
+    still = source.generate(_settings(seed, quick))
+    first = still[0].metadata
+    return still, FlightCondition.from_airspeed(0.0, first["trim_theta_deg"],
+                                                first["trim_phi_deg"])
+
+
 def data_sets(turbulence, seed: int, quick: bool, source=None):
     """(still air, turbulent) identification sets flown by ``source`` (a helisim source; by
     default the truth model) in ``turbulence`` (a preset name or a table of the helisim
     source's turbulence settings), the hover trim condition and the truth model's data
     source."""
     source = source_flown_by("nonlinear") if source is None else source
-    settings = {"condition": "hover", "kinds": ["3211", "2311"], "seed": seed,
-                "duration_scale": 0.6 if quick else 1.0}
-    still = source.generate(settings)
-    turbulent = source.generate({**settings, "turbulence": turbulence})
-    first = still[0].metadata
-    condition = FlightCondition.from_airspeed(0.0, first["trim_theta_deg"],
-                                              first["trim_phi_deg"])
+    still, condition = still_air(source, seed, quick)
+    turbulent = source.generate({**_settings(seed, quick), "turbulence": turbulence})
     return still, turbulent, condition, rotorid.create("data-sources", "helisim")
 
 
@@ -124,7 +133,7 @@ def hybrid_truth(seed: int, quick: bool):
     as near that rotor as the hybrid gets; :meth:`LinearisedPlant.of_structure`), and that
     hybrid's quasi-steady key derivatives by name."""
     rotor = source_flown_by(HYBRID_TRUTH_OF)
-    still, _, condition, _ = data_sets("still", seed, quick, rotor)
+    still, condition = still_air(rotor, seed, quick)
     six_dof = ModelStructure.six_dof(condition)
     hybrid = hybrid_from_six_dof(six_dof, fit("output-error", six_dof, still).values)
     values = fit("output-error", hybrid, still).values

@@ -87,25 +87,26 @@ def steady_state_filter(transition, output, process, measurement) -> SteadyState
 
 
 def _fallback(transition, output, process, measurement) -> np.ndarray:
-    """P (D, S, S) where the doubling of the (complex) systems fails: the real systems' P
-    (:func:`_real_solution`), and its directions from the differentiated DARE."""
+    """P (D, S, S) where the doubling of the systems fails: real systems' from the Schur
+    method; complex ones' real part from the doubling of the real parts alone (the Schur
+    method's where that fails too), its directions from the differentiated DARE."""
     parts = tuple(np.asarray(x) for x in (transition, output, process, measurement))
+    if not any(np.iscomplexobj(x) for x in parts):       # the doubling of these just failed
+        return _schur_solutions(*parts)
     real = tuple(x.real for x in parts)
     shared = all(np.array_equal(x, x[:1].repeat(x.shape[0], axis=0)) for x in real)
-    covariance = np.broadcast_to(_real_solution(*(x[:1] for x in real) if shared else real),
-                                 real[2].shape)
-    if not any(np.iscomplexobj(x) for x in parts):
-        return covariance
-    dots = tuple(x.imag if np.iscomplexobj(x) else np.zeros_like(x) for x in parts)
-    return covariance + 1j * _directions(covariance, *real, *dots)
-
-
-def _real_solution(transition, output, process, measurement) -> np.ndarray:
-    """P (D, S, S) of real systems: the doubling's, the Schur method's where it overflows."""
+    systems = tuple(x[:1] for x in real) if shared else real
     with np.errstate(over="ignore", invalid="ignore"):
-        doubled = _doubling(transition, output, process, measurement)
-    if doubled is not None:
-        return doubled
+        covariance = _doubling(*systems)
+    if covariance is None:
+        covariance = _schur_solutions(*systems)
+    covariance = np.broadcast_to(covariance, real[2].shape)
+    dots = tuple(x.imag if np.iscomplexobj(x) else np.zeros_like(x) for x in parts)
+    return covariance + 1j * _directions(covariance, shared, *real, *dots)
+
+
+def _schur_solutions(transition, output, process, measurement) -> np.ndarray:
+    """The stabilising P (D, S, S) of each real system (:func:`_schur_solution`)."""
     return np.stack([_schur_solution(*system)
                      for system in zip(transition, output, process, measurement)])
 
@@ -147,10 +148,10 @@ def _schur_solution(transition, output, process, measurement) -> np.ndarray:
     return 0.5 * (p + p.T)
 
 
-def _directions(covariance, transition, output, process, measurement,
+def _directions(covariance, shared: bool, transition, output, process, measurement,
                 transition_dot, output_dot, process_dot, measurement_dot) -> np.ndarray:
     """Ṗ (D, S, S) of every direction from the differentiated DARE (module docstring), at the
-    real P (D, S, S) of each direction's system."""
+    real P (D, S, S) of each direction's system (``shared``: the same for every direction)."""
     innovation = output @ covariance @ _t(output) + measurement[..., :, None] * np.eye(
         output.shape[-2])
     gain = transition @ covariance @ _t(output) @ np.linalg.inv(innovation)   # K̄
@@ -159,7 +160,6 @@ def _directions(covariance, transition, output, process, measurement,
     forcing = (moved + _t(moved) + gain @ (measurement_dot[..., :, None] * _t(gain))
                + process_dot)
     size = closed.shape[-1]
-    shared = np.array_equal(closed, closed[:1].repeat(closed.shape[0], axis=0))
     groups = [(closed[0], slice(None))] if shared else [
         (closed[d], slice(d, d + 1)) for d in range(closed.shape[0])]
     dot = np.empty_like(forcing)
