@@ -37,6 +37,7 @@ unstable model is identified directly, on the full records. Start values come fr
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Mapping
 from concurrent.futures import ThreadPoolExecutor
 
@@ -44,7 +45,7 @@ import attrs
 import numpy as np
 from rotorid import blas
 from rotorid.data import ManeuverSet
-from rotorid.errors import EstimationError, SimulationDivergedError
+from rotorid.errors import EstimationError, IdentifiabilityWarning, SimulationDivergedError
 from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.models import LinearModel
 from rotorid.model.parameter_units import rate_unit
@@ -499,6 +500,11 @@ class FilterErrorEstimator:
                 gust_states(structure, self.gusts), self.initial_states, self.output_biases,
                 self.update_every)
             values, note, given = self._start_values(problem, maneuvers, start)
+            if self._wants_equation_error(structure) and not any(
+                    name in given for name in structure.parameter_names):
+                first = self._gust_free_start(problem, maneuvers, start)
+                if first is not None:
+                    values[:problem.n_structure], note = first
             values = matched_measurement_noise(problem, matched_biases(problem, values, given),
                                                given)
             bounds = self._bounds(problem, values)
@@ -507,15 +513,50 @@ class FilterErrorEstimator:
             result = run_fit(problem, values, bounds, self.callback, held)
         return filter_error_estimate(problem, result, values, bounds, note)
 
+    def _wants_equation_error(self, structure: ModelStructure) -> bool:
+        """Whether the derivatives start from equation error (``start`` option, or "auto"
+        with every derivative's initial value zero)."""
+        derivatives = ~structure.is_delay()
+        return bool(structure.n_parameters) and (self.start == "equation-error" or (
+            self.start == "auto" and not np.any(structure.initial_values()[derivatives])))
+
+    def _gust_free_start(self, problem, maneuvers, start) -> tuple[np.ndarray, str] | None:
+        """Derivatives and delays (``problem.n_structure``,) from a first fit with a
+        Gauss-Markov acceleration on each gust's equation in place of the gust (itself from
+        equation error), and the start note; None without such gusts.
+
+        A gust acts only through its velocity's derivatives, so from an equation-error start
+        (which leaves the turbulence out, e.g. Z_w near 0 in hover) the fit can follow the
+        ridge where the gust grows as those derivatives shrink, to a poorer optimum: on the
+        small hover model's doublets with a 5 ft/s w gust, Z_w 0.005 and G_w 190 ft/s where
+        the truth's neighbourhood is likelier by 16 in ln L (docs/estimation.md, "A gust's
+        start"). An acceleration has no such ridge."""
+        structure = problem.structure
+        accelerated = tuple(s for s in problem.gusts
+                            if structure.states.index(s) in structure.equation_rows)
+        if not accelerated:
+            return None
+        initial = initial_state_option(self.initial_states)
+        if not isinstance(initial, bool):
+            initial = tuple(f"d_{n[2:]}" if n.startswith("g_") else n for n in initial)
+        first = attrs.evolve(self, gusts=(), initial_states=initial, disturbances=(
+            self.disturbances + tuple(s for s in accelerated if s not in self.disturbances)))
+        gust_names = tuple(f"_g_{s}" for s in problem.gusts)
+        kept = {n: v for n, v in (start or {}).items()
+                if not n.startswith(("G_", "Tg_")) and not n.endswith(gust_names)}
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", IdentifiabilityWarning)
+            fitted = first.estimate(structure, maneuvers, start=kept or None)
+        return (fitted.values[:problem.n_structure].copy(),
+                f"start values from a fit with accelerations in place of the gusts on "
+                f"{', '.join(accelerated)} ({fitted.iterations} iterations from equation error)")
+
     def _start_values(self, problem, maneuvers, start):
         structure = problem.structure
         names = problem.parameter_names
         initial = structure.initial_values()
         note = None
-        derivatives = ~structure.is_delay()
-        wants_ee = self.start == "equation-error" or (self.start == "auto"
-                                                      and not np.any(initial[derivatives]))
-        if wants_ee and structure.n_parameters:
+        if self._wants_equation_error(structure):
             initial = LinearModel(structure).start_values(maneuvers)
             note = "start values from equation error"
         variance = measurement_noise_start(problem.records)
