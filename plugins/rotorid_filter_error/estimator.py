@@ -451,6 +451,8 @@ class FilterErrorEstimator:
             need no hold assumption, as decimated records' do. Linear structures only.
         start: ``"auto"`` (equation error when every derivative's initial value is zero, else
             the initial values), ``"initial"`` or ``"equation-error"`` for the derivatives and delays.
+            With gusts, equation error starts a first fit with accelerations in place of the
+            gusts, whose derivatives and delays start the gust fit (:meth:`_gust_free_start`).
         callback: called with ``(stage, progress record)`` after every accepted iteration.
     """
 
