@@ -176,18 +176,24 @@ def test_a_gust_fitted_from_equation_error_starts_off_its_ridge():
     derivatives the fit follows the ridge where G_w grows as Z_w shrinks (Z_w near 0, G_w
     tens of ft/s); the default start, a first fit with a w acceleration in place of the gust,
     reaches the optimum of a fit started at the truth (the same cost), likelier than the
-    ridge's, with Z_w and G_w within 3 CR of the truth's."""
+    ridge's, with Z_w and G_w within 3 CR of the truth's; the first fit's iterations are
+    reported as its own stage."""
     data = noisy_data({}, gusts={"w": (5.0, 6.0)})
     model = structure()
     fit = estimator(process_noise=(), gusts=("w",))
+    stages = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IdentifiabilityWarning)
-        default = fit.estimate(model, data)
+        default = estimator(process_noise=(), gusts=("w",),
+                            callback=lambda stage, _: stages.append(stage)).estimate(model, data)
         ridge = fit.estimate(model, data, start=dict(zip(
             model.parameter_names, LinearModel(model).start_values(data))))
         at_truth = fit.estimate(model, data, start=SMALL_TRUTH)
     assert any(n.startswith("start values from a fit with accelerations in place of the "
                             "gusts on w") for n in default.notes)
+    first = stages.index("full")
+    assert first > 0 and set(stages[:first]) == {"gust-free start"} and set(
+        stages[first:]) == {"full"}
     assert default.cost == pytest.approx(at_truth.cost, rel=1e-6)
     assert abs(ridge.value("Z_w")) < 0.05 and ridge.value("G_w") > 20.0
     assert ridge.cost > default.cost * (1 + 1e-3)

@@ -82,6 +82,8 @@ NAME = "filter-error"
 #: R_az and R_r to 10⁻⁸ of their starts, where the filter trusts those outputs exactly and its
 #: Riccati equation stopped converging (docs/estimation.md).
 VARIANCE_FLOOR = 1e-4
+#: Stage name of the first fit of a gust fit started from equation error (its progress lines).
+GUST_FREE_STAGE = "gust-free start"
 #: Lower bound of a disturbance's size relative to its start: at zero its driving variance
 #: D²(1 − a²) has zero gradient in D, so a fit that reached zero could never leave it.
 _SIZE_FLOOR = 1e-4
@@ -491,28 +493,33 @@ class FilterErrorEstimator:
 
             return fit_nonlinear(self, structure, maneuvers, start)
         with blas.single_threaded():
-            # projected steps: in still air every F heads for its bound 0, and one F just above
-            # it would otherwise shorten every step (the fit then stalls far from the optimum)
-            settings = Settings(self.max_iterations, self.cost_tolerance, self.step_tolerance,
-                                shorten_steps=False)
-            problem = FilterErrorProblem(
-                structure, maneuvers, process_noise_states(structure, self.process_noise),
-                settings, process_noise_states(structure, self.disturbances, "disturbances",
-                                               accelerations=True),
-                gust_states(structure, self.gusts), self.initial_states, self.output_biases,
-                self.update_every)
-            values, note, given = self._start_values(problem, maneuvers, start)
-            if self._wants_equation_error(structure) and not any(
-                    name in given for name in structure.parameter_names):
-                first = self._gust_free_start(problem, maneuvers, start)
-                if first is not None:
-                    values[:problem.n_structure], note = first
-            values = matched_measurement_noise(problem, matched_biases(problem, values, given),
-                                               given)
-            bounds = self._bounds(problem, values)
-            held = (_noise_held(problem, values, bounds) if problem.maneuver_parameters.size
-                    else None)
-            result = run_fit(problem, values, bounds, self.callback, held)
+            return self._fit_linear(structure, maneuvers, start)
+
+    def _fit_linear(self, structure: ModelStructure, maneuvers: ManeuverSet, start,
+                    stage: str = "") -> Estimate:
+        """The fit of a linear ``structure``; its iterations are reported as ``stage``."""
+        # projected steps: in still air every F heads for its bound 0, and one F just above
+        # it would otherwise shorten every step (the fit then stalls far from the optimum)
+        settings = Settings(self.max_iterations, self.cost_tolerance, self.step_tolerance,
+                            shorten_steps=False)
+        problem = FilterErrorProblem(
+            structure, maneuvers, process_noise_states(structure, self.process_noise),
+            settings, process_noise_states(structure, self.disturbances, "disturbances",
+                                           accelerations=True),
+            gust_states(structure, self.gusts), self.initial_states, self.output_biases,
+            self.update_every)
+        values, note, given = self._start_values(problem, maneuvers, start)
+        if self._wants_equation_error(structure) and not any(
+                name in given for name in structure.parameter_names):
+            first = self._gust_free_start(problem, maneuvers, start)
+            if first is not None:
+                values[:problem.n_structure], note = first
+        values = matched_measurement_noise(problem, matched_biases(problem, values, given),
+                                           given)
+        bounds = self._bounds(problem, values)
+        held = (_noise_held(problem, values, bounds) if problem.maneuver_parameters.size
+                else None)
+        result = run_fit(problem, values, bounds, self.callback, held, stage)
         return filter_error_estimate(problem, result, values, bounds, note)
 
     def _wants_equation_error(self, structure: ModelStructure) -> bool:
@@ -548,7 +555,7 @@ class FilterErrorEstimator:
                 if not n.startswith(("G_", "Tg_")) and not n.endswith(gust_names)}
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", IdentifiabilityWarning)
-            fitted = first.estimate(structure, maneuvers, start=kept or None)
+            fitted = first._fit_linear(structure, maneuvers, kept or None, GUST_FREE_STAGE)
         return (fitted.values[:problem.n_structure].copy(),
                 f"start values from a fit with accelerations in place of the gusts on "
                 f"{', '.join(accelerated)} ({fitted.iterations} iterations from equation error)")
@@ -642,17 +649,17 @@ def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
         notes=tuple(notes))
 
 
-def run_fit(problem, values, bounds, callback=None, held=None):
+def run_fit(problem, values, bounds, callback=None, held=None, stage: str = ""):
     """Levenberg-Marquardt on ``problem`` from ``values`` within ``bounds``, first within
-    ``held`` bounds when given, reporting every accepted iteration (the
-    ``rotorid_estimation_iteration`` hook and ``callback``)."""
+    ``held`` bounds when given, reporting every accepted iteration as ``stage`` (the
+    ``rotorid_estimation_iteration`` hook; ``callback`` gets "full" for the plain fit)."""
 
     def progress(record):
-        notify("rotorid_estimation_iteration", estimator=NAME, stage="",
+        notify("rotorid_estimation_iteration", estimator=NAME, stage=stage,
                iteration=record.iteration, cost=record.cost, rmse=record.rmse,
                lm_lambda=record.lm_lambda)
         if callback is not None:
-            callback("full", record)
+            callback(stage or "full", record)
 
     try:
         if held is not None:
