@@ -358,8 +358,7 @@ class FilterErrorProblem(InnovationLikelihood):
         docstring); ``b`` and ``residuals`` are B and the innovations there."""
         system, steady = self.filter(values, directions=True)
         p = self.n_global
-        b_inv = np.linalg.inv(b)
-        whiten = np.linalg.cholesky(b_inv)                           # B⁻¹ = W Wᵀ
+        whiten = np.linalg.inv(np.linalg.cholesky(b)).T              # B⁻¹ = W Wᵀ, W = L⁻ᵀ
         terms = self.record_terms(values, system)
         patterns = self._whitened_patterns(system, steady, whiten) if terms else None
 

@@ -26,6 +26,8 @@ class InnovationLikelihood:
             innovations, b = self.innovations(values)
         except (EstimationError, np.linalg.LinAlgError):
             return np.inf, None, None, np.inf
+        if not _positive_definite(b):
+            return np.inf, None, None, np.inf
         sign, log_det = np.linalg.slogdet(b)
         with np.errstate(over="ignore", invalid="ignore"):
             scatter = np.einsum("nmi,nmj->ij", innovations, innovations)
@@ -45,7 +47,23 @@ class InnovationLikelihood:
             return f"the Kalman filter does not exist ({error})"
         if not np.all(np.isfinite(innovations)):
             return "the innovations overflow (the model diverges at these values)"
+        if np.all(np.isfinite(b)) and not _positive_definite(b):
+            return (f"the innovation covariance B is not positive definite (smallest "
+                    f"eigenvalue {np.linalg.eigvalsh(b).min():.3g}): the filter's Riccati "
+                    f"solution is not a covariance at these values")
         return f"the innovation covariance B is singular (det B = {np.linalg.det(b):.3g})"
+
+
+def _positive_definite(b: np.ndarray) -> bool:
+    """Whether the symmetric matrix ``b`` (its lower triangle) is positive definite. A
+    determinant's sign cannot tell: B with two negative eigenvalues has det B > 0 (seen on a
+    hover fit whose steady-state solution P had gone indefinite, B's eigenvalues down to
+    −8.6·10⁸)."""
+    try:
+        np.linalg.cholesky(b)
+    except np.linalg.LinAlgError:
+        return False
+    return True
 
 
 def covariance_terms(d_covariance: np.ndarray, b: np.ndarray, residuals, n_samples: int):
