@@ -153,6 +153,32 @@ def test_steady_state_filter_where_the_doubling_overflows():
     assert steady.gain[0] == pytest.approx(gain, rel=1e-9, abs=1e-12)
 
 
+def test_steady_state_filter_where_the_doubling_ends_indefinite(monkeypatch):
+    """A doubling that converges to a P with a negative eigenvalue (lost precision) is not
+    used: the filter has scipy's stabilising P, for a real system and for the real part of
+    a complex-step direction, whose imaginary part still matches central differences."""
+    phi = np.array([[0.95, 0.1], [0.0, 0.8]])
+    h, q, r = np.eye(2), np.diag([0.02, 0.01]), np.array([0.05, 0.1])
+    indefinite = np.diag([1.0, -0.5])
+    monkeypatch.setattr(riccati, "_doubling", lambda *system: np.broadcast_to(
+        indefinite, system[2].shape).astype(system[2].dtype))
+
+    def dare(entry):
+        moved = phi.copy()
+        moved[0, 1] = entry
+        return scipy.linalg.solve_discrete_are(moved.T, h.T, q, np.diag(r))
+
+    steady = steady_state_filter(phi[None], h[None], q[None], r[None])
+    assert steady.covariance[0] == pytest.approx(dare(0.1), rel=1e-9, abs=1e-12)
+    stepped = phi.astype(complex)
+    stepped[0, 1] += 1j * COMPLEX_STEP
+    steady = steady_state_filter(stepped[None], h[None], q[None].astype(complex),
+                                 r[None].astype(complex))
+    assert steady.covariance[0].real == pytest.approx(dare(0.1), rel=1e-9, abs=1e-12)
+    assert steady.covariance[0].imag / COMPLEX_STEP == pytest.approx(
+        (dare(0.1 + 1e-6) - dare(0.1 - 1e-6)) / 2e-6, rel=1e-5, abs=1e-9)
+
+
 def test_slow_gust_on_an_unstable_hover_model_is_fitted():
     """A 31 s gust on v, the small hover model's only process noise: the doubling overflows
     on some steps of the fit; the fit completes with finite Cramér-Rao bounds and its

@@ -14,7 +14,8 @@ derivatives of P, B and K follow by the complex step, and it converges quadratic
 
 The doubling also iterates the dual equation, which diverges when the process noise leaves an
 unstable mode unexcited. Where that overflows before P has converged (a hover model whose only
-process noise is a slow gust, say), the real system's P comes from the doubling run on the real
+process noise is a slow gust, say), or converges to a P that is not positive semi-definite
+(lost precision), the real system's P comes from the doubling run on the real
 parts alone or, where that overflows too, is the stabilising solution of the generalised Schur
 method (``scipy.linalg.solve_discrete_are``); the directions (dots) then follow from the DARE
 differentiated at the predictor gain K̄ = ΦPHᵀB⁻¹, A_c = Φ − K̄H (the gain's own variation
@@ -78,7 +79,7 @@ def steady_state_filter(transition, output, process, measurement) -> SteadyState
     """
     with np.errstate(over="ignore", invalid="ignore"):
         covariance = _doubling(transition, output, process, measurement)
-    if covariance is None:
+    if not _is_covariance(covariance):
         covariance = _fallback(transition, output, process, measurement)
     innovation = output @ covariance @ _t(output) + measurement[..., :, None] * np.eye(
         output.shape[-2])
@@ -98,11 +99,27 @@ def _fallback(transition, output, process, measurement) -> np.ndarray:
     systems = tuple(x[:1] for x in real) if shared else real
     with np.errstate(over="ignore", invalid="ignore"):
         covariance = _doubling(*systems)
-    if covariance is None:
+    if not _is_covariance(covariance):
         covariance = _schur_solutions(*systems)
     covariance = np.broadcast_to(covariance, real[2].shape)
     dots = tuple(x.imag if np.iscomplexobj(x) else np.zeros_like(x) for x in parts)
     return covariance + 1j * _directions(covariance, shared, *real, *dots)
+
+
+#: Most negative eigenvalue of a covariance P, relative to its largest, that counts as rounding.
+_NEGATIVE_EIGENVALUE = 1e-9
+
+
+def _is_covariance(covariance) -> bool:
+    """Whether ``covariance`` (D, S, S, or None) is a covariance: every real part positive
+    semi-definite up to rounding. The doubling can converge to an indefinite P when its
+    iterates lose precision (seen on a hover fit with 350 s gusts: B's eigenvalues down to
+    −8.6·10⁸); the Schur method's solution is then the one to use."""
+    if covariance is None:
+        return False
+    values = np.linalg.eigvalsh(np.real(covariance))
+    largest = np.max(np.abs(values), axis=-1, keepdims=True)
+    return bool(np.all(values >= -_NEGATIVE_EIGENVALUE * largest))
 
 
 def _schur_solutions(transition, output, process, measurement) -> np.ndarray:
