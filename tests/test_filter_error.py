@@ -227,6 +227,23 @@ def test_a_gust_fitted_from_equation_error_starts_off_its_ridge():
         assert abs(default.value(name) - truth) < 3 * default[name].cramer_rao, name
 
 
+def test_the_gust_free_first_fit_estimates_the_named_initial_gust_as_an_acceleration():
+    """``initial_states = ("g_w",)`` on a w-gust fit from equation error: the first fit (an
+    acceleration on w in place of the gust) estimates each record's initial ``d_w``, the
+    gust fit its ``g_w``; both run."""
+    data = noisy_data({}, gusts={"w": (5.0, 6.0)})
+    stages = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
+        result = estimator(process_noise=(), gusts=("w",), initial_states=("g_w",),
+                           max_iterations=5, callback=lambda stage, _: stages.append(
+                               stage)).estimate(structure(), data)
+    assert "gust-free start" in stages
+    assert any(n.startswith("start values from a fit with accelerations") for n in result.notes)
+    initial = [n for n in result.parameter_names if n.startswith("x0_")]
+    assert initial and all(n.endswith("_g_w") for n in initial)
+
+
 def test_gusts_no_output_measures_are_named():
     """The hover outputs read no velocity; the fixed-wing ones read u and, as alpha, w."""
     hover = FilterErrorProblem(structure(), noisy_data({}), (), Settings(), (), ("u", "v"))

@@ -537,7 +537,7 @@ class FilterErrorEstimator:
         (which leaves the turbulence out, e.g. Z_w near 0 in hover) the fit can follow the
         ridge where the gust grows as those derivatives shrink, to a poorer optimum: on the
         small hover model's doublets with a 5 ft/s w gust, Z_w 0.005 and G_w 190 ft/s where
-        the truth's neighbourhood is likelier by 16 in ln L (docs/estimation.md, "A gust's
+        the truth's neighbourhood is likelier by up to 16 in ln L (docs/estimation.md, "A gust's
         start"). An acceleration has no such ridge."""
         structure = problem.structure
         accelerated = tuple(s for s in problem.gusts
@@ -545,12 +545,13 @@ class FilterErrorEstimator:
         if not accelerated:
             return None
         initial = initial_state_option(self.initial_states)
-        if not isinstance(initial, bool):
-            initial = tuple(f"d_{n[2:]}" if n.startswith("g_") else n for n in initial)
+        if not isinstance(initial, bool):     # a gust's initial value becomes its acceleration's
+            initial = tuple(f"d_{n[2:]}" if n[2:] in accelerated else n for n in initial
+                            if not n.startswith("g_") or n[2:] in accelerated)
         first = attrs.evolve(self, gusts=(), initial_states=initial, disturbances=(
             self.disturbances + tuple(s for s in accelerated if s not in self.disturbances)))
         gust_names = tuple(f"_g_{s}" for s in problem.gusts)
-        kept = {n: v for n, v in (start or {}).items()
+        kept = {n: v for n, v in (start if isinstance(start, Mapping) else {}).items()
                 if not n.startswith(("G_", "Tg_")) and not n.endswith(gust_names)}
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", IdentifiabilityWarning)
