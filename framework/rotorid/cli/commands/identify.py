@@ -8,6 +8,8 @@ Usage::
                      [--hold zoh|foh] [--trim first-second|CH=VALUE,...]
                      [--resample linear|decimate] [--sample-time S]
                      [--actuator-lag S [--actuator-inputs long,lat]]
+                     [--process-noise w,q|none] [--disturbances p,q,r] [--gusts u,v,w]
+                     [--update-every N]
                      [--quiet] [--strict] [--force]
 
 ``MODEL.toml`` is a model file (:mod:`rotorid.model.modelfile`); its initial values are the start
@@ -21,7 +23,9 @@ maneuver files (CSV, NPZ, MAT), directories or glob patterns of the ``files`` da
 are converted to the model's unit system, after the trim removal and resampling asked for
 (:mod:`rotorid.ingestion`), and through the actuators' known lag with ``--actuator-lag``
 (:mod:`rotorid.actuators`; recorded as ``actuator_lag_s``, ``rotorid verify`` then lags the
-sweeps alike). The report goes to stdout; stderr gets one line per
+sweeps alike). ``--process-noise``, ``--disturbances``, ``--gusts`` and ``--update-every`` set
+the ``filter-error`` estimator's noise model (docs/estimation.md, "Filter error"); another
+estimator refuses them. The report goes to stdout; stderr gets one line per
 accepted iteration (unless ``--quiet``; an observer plugin of the
 ``rotorid_estimation_iteration`` hook, so it works with any estimator that reports through
 it), the kinematic consistency fits and one line per warning: the sanity checks of the data
@@ -120,6 +124,19 @@ def add_arguments(parser) -> None:
                              "result records it for rotorid verify")
     parser.add_argument("--actuator-inputs", default=None, metavar="long,lat",
                         help="the inputs --actuator-lag acts on (default every input)")
+    parser.add_argument("--process-noise", default=None, metavar="w,q|none",
+                        help="filter error: the states white process noise enters (default "
+                             "those of the force and moment equations; none for no white "
+                             "noise)")
+    parser.add_argument("--disturbances", default=None, metavar="p,q,r",
+                        help="filter error: states whose equations get a Gauss-Markov "
+                             "acceleration (turbulence's rotational gusts, say)")
+    parser.add_argument("--gusts", default=None, metavar="u,v,w",
+                        help="filter error: velocities that get a Gauss-Markov gust acting "
+                             "through their derivatives")
+    parser.add_argument("--update-every", type=int, default=None, metavar="N",
+                        help="filter error: a measurement update at every N-th sample only "
+                             "(for records low-passed to the model's band)")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress lines on stderr (warnings stay)")
     parser.add_argument("--force", action="store_true",
@@ -151,7 +168,28 @@ def _options(args) -> dict:
         options["output_biases"] = True
     if args.initial_states:
         options["initial_states"] = True
+    for flag in ("process_noise", "disturbances", "gusts"):
+        value = getattr(args, flag)
+        if value is not None:
+            options[flag] = _states(value, flag)
+    if args.update_every is not None:
+        if args.update_every < 1:
+            raise UsageError(f"--update-every must be at least 1, got {args.update_every}")
+        options["update_every"] = args.update_every
     return options
+
+
+def _states(value: str, flag: str) -> tuple[str, ...]:
+    """The states of a comma-separated ``--process-noise``-style list; ``none`` is none."""
+    from rotorid.errors import UsageError
+
+    if value.strip().lower() == "none":
+        return ()
+    states = tuple(name.strip() for name in value.split(",") if name.strip())
+    if not states:
+        option = "--" + flag.replace("_", "-")
+        raise UsageError(f"{option} names no state; give e.g. {option} w,q, or none")
+    return states
 
 
 class ProgressPrinter:
