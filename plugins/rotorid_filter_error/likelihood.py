@@ -28,12 +28,12 @@ class InnovationLikelihood:
             return np.inf, None, None, np.inf
         if not _positive_definite(b):
             return np.inf, None, None, np.inf
-        sign, log_det = np.linalg.slogdet(b)
+        log_det = np.linalg.slogdet(b)[1]                  # B is positive definite here
         with np.errstate(over="ignore", invalid="ignore"):
             scatter = np.einsum("nmi,nmj->ij", innovations, innovations)
             quadratic = np.trace(np.linalg.solve(b, scatter)) / self.n_samples
             cost = float(np.exp(quadratic + log_det))
-        if sign <= 0 or not np.isfinite(cost):
+        if not np.isfinite(cost):
             return np.inf, None, None, np.inf
         rmse = float(np.sqrt(np.sum((innovations * self.rmse_scale)**2)
                              / (len(self.output_names) * self.n_samples)))

@@ -83,6 +83,11 @@ def trim(text: str) -> str | dict[str, float]:
     return values
 
 
+def names(text: str) -> list[str]:
+    """The names of a comma-separated option (``q,theta,p``), blanks dropped, in order."""
+    return [name.strip() for name in text.split(",") if name.strip()]
+
+
 def seconds(text: str) -> float:
     """A positive time in s."""
     return _number(text, parse_number, lambda value: value > 0,

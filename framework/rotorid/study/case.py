@@ -276,8 +276,8 @@ class FlightCase:
     def as_dict(self) -> dict:
         """Plain settings, as recorded in ``result.json``; ``compare_estimators``,
         ``compare_hybrid``, ``compare_hybrid_reduction``, the ``[resampling]`` and the
-        ``[actuators]`` settings only when set, so that cases without them keep the record they had before they
-        existed."""
+        ``[actuators]`` settings only when set, so that cases without them keep the record
+        they had before those settings existed."""
         return attrs.asdict(self, filter=lambda a, v: not (
             a.name in ("compare_estimators", "compare_hybrid", "compare_hybrid_reduction",
                        "cutoff_hz", "decimate", "identification_hold", "actuator_lag_s",

@@ -48,7 +48,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from rotorid.cli.arguments import output_file, seconds, trim
+from rotorid.cli.arguments import names, output_file, seconds, trim
 from rotorid.plugin.hookspecs import hookimpl
 
 NAME = "identify"
@@ -69,7 +69,7 @@ def _actuator_inputs(args) -> list[str] | None:
     """The inputs of ``--actuator-inputs``, or None (every input)."""
     if args.actuator_inputs is None:
         return None
-    return [name.strip() for name in args.actuator_inputs.split(",") if name.strip()]
+    return names(args.actuator_inputs)
 
 
 def _actuated(maneuvers, args):
@@ -152,7 +152,7 @@ def _options(args) -> dict:
 
     options: dict = {}
     if args.outputs is not None:
-        outputs = tuple(o.strip() for o in args.outputs.split(",") if o.strip())
+        outputs = tuple(names(args.outputs))
         if not outputs:
             raise UsageError("--outputs names no output; give e.g. --outputs q,theta,p")
         options["outputs"] = outputs
@@ -185,7 +185,7 @@ def _states(value: str, flag: str) -> tuple[str, ...]:
 
     if value.strip().lower() == "none":
         return ()
-    states = tuple(name.strip() for name in value.split(",") if name.strip())
+    states = tuple(names(value))
     if not states:
         option = "--" + flag.replace("_", "-")
         raise UsageError(f"{option} names no state; give e.g. {option} w,q, or none")

@@ -40,7 +40,7 @@ import json
 import logging
 from pathlib import Path
 
-from rotorid.cli.arguments import output_directory
+from rotorid.cli.arguments import names, output_directory
 
 NAME = "verify"
 HELP = ("verify an identified model on frequency sweeps: ε = H_model/H_truth against the "
@@ -146,7 +146,7 @@ def chosen_pairs(option: str | None, sweeps, outputs, inputs) -> list[str]:
     from rotorid.verification.pairs import default_pairs, parse_pair, primary_axis
 
     if option:
-        pairs = [p.strip() for p in option.split(",") if p.strip()]
+        pairs = names(option)
         for pair in pairs:
             parse_pair(pair, outputs, inputs)
         return pairs
@@ -224,8 +224,7 @@ def run(args) -> int:
     if not selection.pairs:
         raise VerificationError("no pair can be verified: " + "; ".join(
             f"{pair}: {reason}" for pair, reason in selection.skipped.items()))
-    envelopes = envelopes_by_name([e.strip() for e in args.envelopes.split(",") if e.strip()],
-                                  band=band)
+    envelopes = envelopes_by_name(names(args.envelopes), band=band)
     log = logging.getLogger("rotorid.verify")
     log.info("verifying %s on %d sweep(s)", ", ".join(selection.pairs), len(sweeps))
     compared = Countdown(len(selection.pairs))
