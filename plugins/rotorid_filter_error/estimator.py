@@ -77,8 +77,9 @@ from .starts import (
 from .system import companion_system, lifted, seen_states, with_disturbances
 
 NAME = "filter-error"
-#: Lower bound of a measurement-noise variance relative to its start value (a standard
-#: deviation of 1 % of the start's). Lower, a still-air fit on decimated hover records drove
+#: Lower bound of a measurement-noise variance relative to its start value, or to half the
+#: output's mean square first difference where that is larger (a standard deviation of 1 % of
+#: the start's). Lower, a still-air fit on decimated hover records drove
 #: R_az and R_r to 10⁻⁸ of their starts, where the filter trusts those outputs exactly and its
 #: Riccati equation stopped converging (docs/estimation.md).
 VARIANCE_FLOOR = 1e-4
@@ -601,8 +602,12 @@ class FilterErrorEstimator:
                                    np.full(len(problem.gusts),
                                            _SHORTEST_GUST_SAMPLES * problem.records.dt)])
         free = np.full(problem.maneuver_parameters.size, np.inf)
+        # R's floor from its start, but never below the data's own first differences' (the
+        # nonlinear path's floor): a fit continued from one whose R sat at its floor would
+        # otherwise start a floor 10⁻⁴ lower (rotorid.estimation.continuation)
+        variance = np.maximum(parts.measurement, measurement_noise_start(problem.records))
         return (np.concatenate([lower, np.zeros(n_f), _SIZE_FLOOR * parts.disturbance, shortest,
-                                VARIANCE_FLOOR * parts.measurement, -free]),
+                                VARIANCE_FLOOR * variance, -free]),
                 np.concatenate([upper, np.full(n_f + n_d, np.inf),
                                 np.full(n_d, _LONGEST_CORRELATION),
                                 np.full(parts.measurement.size, np.inf), free]))

@@ -3,7 +3,9 @@
 A profile likelihood shows how well the data determine a delay: a deep, narrow minimum means
 the delay is fixed by the data; a shallow one means other parameters trade against it (a
 gain/delay trade), whatever its Cramér-Rao bound says. Each grid point refits every other
-parameter from the free fit's values, so the profile is a sequence of ordinary fits.
+parameter from the free fit's values (the estimator's own ones included,
+:func:`~rotorid.estimation.continuation.continued_start`), so the profile is a sequence of
+ordinary fits.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import attrs
 import numpy as np
 
 from rotorid.errors import EstimationError
+from rotorid.estimation.continuation import continued_start
 from rotorid.estimation.estimate import Estimate
 from rotorid.model.derivatives import Delay, delayed_derivative
 from rotorid.model.structure import ModelStructure
@@ -84,14 +87,14 @@ def delay_profile(structure: ModelStructure, estimate: Estimate, maneuvers, esti
         delay: the delay parameter, e.g. ``"tau_M_q"``.
         grid: delay values ≥ 0 s.
     """
-    values = estimate.as_mapping()
     cost, rmse, converged = [], [], []
     for value in grid:
         fixed = fixing_delay(structure, delay, float(value))
         fit = estimator.estimate(fixed, maneuvers,
-                                 start={n: values[n] for n in fixed.parameter_names})
+                                 start=continued_start(estimate, structure, fixed))
         cost.append(fit.cost)
         rmse.append(fit.rmse)
         converged.append(fit.converged)
     return DelayProfile(delay, np.asarray(grid, dtype=float), cost, rmse, converged,
-                        float(values[delay]), float(estimate.cost), float(estimate.rmse))
+                        float(estimate[delay].value), float(estimate.cost),
+                        float(estimate.rmse))

@@ -29,6 +29,7 @@ import attrs
 import numpy as np
 
 from rotorid.errors import EstimationError
+from rotorid.estimation.continuation import continued_start
 from rotorid.estimation.estimate import Estimate
 from rotorid.model.structure import ModelStructure
 from rotorid.plugin.contracts import Removal
@@ -190,8 +191,7 @@ def reduce(structure: ModelStructure, maneuvers, estimator, criteria: Sequence, 
             reduced = last.structure.without(removal.parameter)
             start = None
             if warm_start:
-                previous = last.estimate.as_mapping()
-                start = {n: previous[n] for n in reduced.parameter_names}
+                start = continued_start(last.estimate, last.structure, reduced)
             estimate = (estimator.estimate(reduced, maneuvers, start=start)
                         if reduced.parameter_names else _empty_estimate(reduced, maneuvers))
             record(ReductionStep(len(steps), removal, estimate, reduced))

@@ -17,6 +17,7 @@ import numpy as np
 
 from rotorid.data import ManeuverSet
 from rotorid.errors import IdentifiabilityWarning, SimulationDivergedError
+from rotorid.estimation.continuation import continued_start
 from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.reduction import ReductionStep
 from rotorid.model.derivatives import delayed_derivative
@@ -39,7 +40,7 @@ def with_delays(case: FlightCase, selected: ReductionStep, ident: ManeuverSet, e
         for name in dropped:
             delayed = delayed.without_delay(name)
         return delayed, estimate, dropped
-    values = selected.estimate.as_mapping()
+    values = continued_start(selected.estimate, structure, delayed)
     dropped: list[str] = []
     while True:
         estimate = best_delayed_fit(case, estimator, delayed, ident, values)
@@ -47,24 +48,25 @@ def with_delays(case: FlightCase, selected: ReductionStep, ident: ManeuverSet, e
         if worst is None:
             break
         dropped.append(worst)
-        delayed = delayed.without_delay(worst)
-        values = estimate.as_mapping()
+        fitted, delayed = delayed, delayed.without_delay(worst)
+        values = continued_start(estimate, fitted, delayed)
     save_delays(directory, selected.index, tuple(dropped), estimate)
     return delayed, estimate, tuple(dropped)
 
 
 def best_delayed_fit(case: FlightCase, estimator, delayed: ModelStructure, ident: ManeuverSet,
                      values: Mapping[str, float]) -> Estimate:
-    """The delayed structure fitted from ``values`` (derivatives) with the delays at the case's
-    initial value and, with ``[delays] starts = N`` > 1, from N − 1 more delay vectors drawn
-    uniformly in [0, upper] (generator seeded with ``[delays] seed``); the fit with the lowest
-    det R is kept and its notes say which start it came from.
+    """The delayed structure fitted from ``values`` (derivatives, and the estimator's own
+    parameters: :func:`~rotorid.estimation.continuation.continued_start`) with the delays at
+    the case's initial value and, with ``[delays] starts = N`` > 1, from N − 1 more delay
+    vectors drawn uniformly in [0, upper] (generator seeded with ``[delays] seed``); the fit
+    with the lowest det R is kept and its notes say which start it came from.
 
     Delays make the cost multi-modal: one start can settle in a local minimum that another
     avoids (docs/study.md, quick 70 kt run).
     """
     names = [d.delay_name for d in delayed.free_delays]
-    base = {n: values[n] for n in delayed.parameter_names if n in values}
+    base = {n: value for n, value in values.items() if n not in names}
     best, best_index = None, 0
     for index, delays in enumerate(_delay_starts(case, len(names))):
         try:
