@@ -8,6 +8,7 @@ import rotorid
 from rotorid.cli import main as cli
 from rotorid.errors import ExitStatus
 from rotorid.model.modelfile import load_model
+from rotorid.progress import counted
 from rotorid_files.formats import read_maneuver, write_maneuver
 
 MODEL = """
@@ -128,9 +129,12 @@ def test_options_reach_the_estimator(case, tmp_path, capsys):
     assert status == 0, captured.err
     assert "] iteration" not in captured.err                  # --quiet: no progress lines
     record = json.loads(out.read_text(encoding="utf-8"))
+    limit = (f"iteration limit reached after {counted(record['iterations'], 'iteration')}; "
+             f"--max-iterations raises it")
+    reason = limit if record["stop_reason"] == "iteration limit reached" else record["stop_reason"]
     assert captured.err == ("" if record["converged"] else
                             f"rotorid identify: warning: the fit did not converge "
-                            f"({record['stop_reason']}); --strict makes this an error\n")
+                            f"({reason}); --strict makes this an error\n")
     assert record["outputs"] == ["q", "theta", "p", "phi", "r", "ax", "ay", "az"]
     covariance = np.array(record["noise_covariance"])
     assert np.array_equal(covariance, np.diag(np.diag(covariance)))
@@ -157,7 +161,8 @@ def test_a_fit_that_does_not_converge_warns_and_strict_makes_it_an_error(case, t
             "--max-iterations", "1", "--noise", "diagonal"]
     assert cli.main(argv) == ExitStatus.OK
     assert json.loads(out.read_text(encoding="utf-8"))["converged"] is False
-    assert "warning: the fit did not converge" in capsys.readouterr().err
+    assert ("warning: the fit did not converge (iteration limit reached after 1 iteration; "
+            "--max-iterations raises it)") in capsys.readouterr().err
     assert cli.main([*argv, "--strict", "--force"]) == ExitStatus.NOT_CONVERGED
     err = capsys.readouterr().err
     assert err.startswith("rotorid identify: error: the fit did not converge (")

@@ -50,6 +50,7 @@ from pathlib import Path
 
 from rotorid.cli.arguments import names, output_file, seconds, trim
 from rotorid.plugin.hookspecs import hookimpl
+from rotorid.progress import counted
 
 NAME = "identify"
 HELP = ("estimate the derivatives and delays of a model file from maneuver files; print the "
@@ -316,9 +317,17 @@ def run(args) -> int:
     if estimate.converged:
         return ExitStatus.OK
     if args.strict:
-        print(f"rotorid identify: error: the fit did not converge ({estimate.stop_reason})",
+        print(f"rotorid identify: error: the fit did not converge ({_why(estimate)})",
               file=sys.stderr)
         return ExitStatus.NOT_CONVERGED
-    print(f"rotorid identify: warning: the fit did not converge ({estimate.stop_reason}); "
+    print(f"rotorid identify: warning: the fit did not converge ({_why(estimate)}); "
           f"--strict makes this an error", file=sys.stderr)
     return ExitStatus.OK
+
+
+def _why(estimate) -> str:
+    """Why a fit stopped unconverged, with the option that lets it go on where one does."""
+    if estimate.stop_reason == "iteration limit reached":
+        return (f"iteration limit reached after {counted(estimate.iterations, 'iteration')}; "
+                f"--max-iterations raises it")
+    return estimate.stop_reason
