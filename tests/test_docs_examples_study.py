@@ -407,7 +407,7 @@ def test_filter_error_meets_the_criterion_on_a_hybrid_truth(capsys):
     the truth model's); filter error gets all eight key derivatives within 3 CR or 10 % of
     that hybrid's, output error misses Z_coll by more than 10 CR."""
     table = _load("turbulence_hover").main(["--quick", "--truth", "hybrid", "--cutoff", "4",
-                                            "--update-every"])
+                                            "--update-every", "--turbulent-only"])
     capsys.readouterr()
     _assert_meets_the_criterion(table, "FE moderate", KEY_DERIVATIVES)
     assert abs(table[("OE moderate", "Z_coll")]["cr_off"]) > 10.0
@@ -420,7 +420,8 @@ def test_the_known_actuator_lag_puts_the_hover_roll_axis_within_its_bounds(capsy
     derivatives within 3 CR or 10 %; on the sticks as recorded, L_p misses by more than 3 CR
     and 10 % (the hybrid's delays stand in for the lag, docs/estimation.md)."""
     example = _load("turbulence_hover")
-    options = ["--quick", "--cutoff", "4", "--update-every", "--heave-disturbance"]
+    options = ["--quick", "--cutoff", "4", "--update-every", "--heave-disturbance",
+               "--turbulent-only"]
     lagged = example.main(options + ["--actuator-lag", "0.03"])
     recorded = example.main(options)
     capsys.readouterr()

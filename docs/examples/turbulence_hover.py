@@ -24,7 +24,7 @@ repository root::
                                              [--update-every] [--truth T]
                                              [--structure hybrid|six-dof]
                                              [--heave-disturbance] [--sigma SU SV SW]
-                                             [--actuator-lag S]
+                                             [--actuator-lag S] [--turbulent-only]
 
 ``--quick`` shortens the records to 60 %. ``--cutoff HZ`` fits both estimators to the records
 low-passed at HZ (zero phase) and kept at every N-th sample (:mod:`rotorid.resampling`; N by
@@ -50,10 +50,12 @@ flies the translational gusts at those intensities (m/s, the preset's scale leng
 rotational gusts made negligible (a 1000 m span), to see one gust component at a time.
 ``--actuator-lag S`` passes every recorded input through a first-order lag of S s before the
 fits (:func:`rotorid.actuators.lagged_inputs`): the actuators' dynamics as known, in place of
-the stick. ``--two-stage`` replaces every input by its least-squares projection on the recorded multistep
-of its maneuver's axis (:func:`two_stage_inputs`), which removes the stabilising loops' answer
-to the turbulence from the inputs (a diagnostic of closed-loop bias). docs/estimation.md,
-"Hover in moderate turbulence", gives what each setting measured.
+the stick. ``--turbulent-only`` leaves the still-air fits out (the still-air records still
+give the hybrid its start). ``--two-stage`` replaces every input by its least-squares
+projection on the recorded multistep of its maneuver's axis (:func:`two_stage_inputs`), which
+removes the stabilising loops' answer to the turbulence from the inputs (a diagnostic of
+closed-loop bias). docs/estimation.md, "Hover in moderate turbulence", gives what each setting
+measured.
 """
 
 from __future__ import annotations
@@ -246,9 +248,14 @@ def main(argv=None) -> dict:
     parser.add_argument("--update-every", action="store_true",
                         help="with --cutoff: filter error on the low-passed records at full "
                              "rate, updating at every N-th sample (N as --decimate)")
+    parser.add_argument("--turbulent-only", action="store_true",
+                        help="fit the turbulent records only (the still-air ones still give "
+                             "the hybrid its start)")
     args = parser.parse_args(argv)
     if args.update_every and args.cutoff is None:
         parser.error("--update-every needs --cutoff")
+    if args.turbulent_only and args.from_still:
+        parser.error("--from-still starts from the still-air fit, which --turbulent-only skips")
 
     turbulence = args.turbulence if args.sigma is None else {
         "preset": args.turbulence, "sigma": list(args.sigma), "span": NO_ROTATION_SPAN}
@@ -291,6 +298,8 @@ def main(argv=None) -> dict:
     still_solution = None
     for (air, data), filtered in zip((("still", still), (args.turbulence, turbulent)),
                                      for_filter):
+        if air == "still" and args.turbulent_only:
+            continue
         output_error = fit("output-error", structure, data)
         columns[f"OE {air}"] = quasi_steady(six_dof, structure, output_error)
         start = starts
