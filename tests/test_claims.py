@@ -22,11 +22,17 @@ def _estimate(values: dict, bounds: dict, rmse: float = 0.3):
         value=lambda name: values[name])
 
 
-def _result(source="helisim", airspeed_kt=70.0, truth=None, **estimates):
+def _result(source="helisim", airspeed_kt=70.0, truth=None, simulated_rmse=None,
+            **estimates):
+    """A case result of ``estimates``; each model's simulation RMSE is its estimate's unless
+    ``simulated_rmse`` gives it (an estimator whose RMSE is not a simulation's)."""
     case = types.SimpleNamespace(data_source=source, band=DEFAULT_BAND)
+    metrics = {label: types.SimpleNamespace(
+        rmse=estimate.rmse if simulated_rmse is None else simulated_rmse)
+        for label, estimate in estimates.items()}
     return types.SimpleNamespace(
         case=case, condition=types.SimpleNamespace(airspeed_kt=airspeed_kt),
-        estimates=estimates, verification={}, truth_derivatives=truth)
+        estimates=estimates, time_metrics=metrics, verification={}, truth_derivatives=truth)
 
 
 def test_sign_claims_carry_the_truth_models_value_and_their_verdicts():
@@ -84,3 +90,14 @@ def test_an_rmse_that_would_mix_units_is_not_checked():
     claims = case_claims(_result(source="files", **{"no delays": model, "with delays": model}))
     assert [c.verdict for c in claims] == ["not checked"] * 2
     assert "reference unit" in claims[0].reason
+
+
+def test_the_rmse_guideline_is_checked_on_the_models_simulation():
+    """Filter error's own RMSE is that of its one-step predictions (0.56 on a turbulent case
+    whose simulation RMSE is 11.3): the guideline judges the simulation."""
+    model = _estimate({"M_w": -0.2}, {"M_w": 0.01}, rmse=0.56)
+    models = {"no delays": model, "with delays": model}
+    claims = case_claims(_result(source="files", simulated_rmse=11.3, **models))
+    assert [(c.evidence, c.verdict) for c in claims] == [("RMSE 11.300", "does not hold")] * 2
+    claims = case_claims(_result(source="files", simulated_rmse=1.2, **models))
+    assert [(c.evidence, c.verdict) for c in claims] == [("RMSE 1.200", "holds")] * 2
