@@ -1,5 +1,6 @@
 """The paper's claims measured on constructed results: verdicts, evidence, the truth model's
-value beside each sign; on a user's own data the guidelines instead."""
+value beside each sign; on a user's own data the guidelines instead; the models' RMSE as
+the summaries give it."""
 
 import types
 
@@ -101,3 +102,15 @@ def test_the_rmse_guideline_is_checked_on_the_models_simulation():
     assert [(c.evidence, c.verdict) for c in claims] == [("RMSE 11.300", "does not hold")] * 2
     claims = case_claims(_result(source="files", simulated_rmse=1.2, **models))
     assert [(c.evidence, c.verdict) for c in claims] == [("RMSE 1.200", "holds")] * 2
+
+
+def test_a_models_rmse_shows_its_simulations_where_the_estimators_own_differs():
+    """The study's summary lines: filter error's one-step RMSE with the simulation's beside
+    it; output error's, which is the simulation's, alone."""
+    from rotorid.study.result import CaseResult
+
+    model = _estimate({"M_w": -0.2}, {"M_w": 0.01}, rmse=0.5566)
+    models = {"no delays": model, "with delays": model}
+    filtered = _result(source="files", simulated_rmse=11.3451, **models)
+    assert CaseResult.rmse_text(filtered, "no delays") == "0.5566 (simulated 11.3451)"
+    assert CaseResult.rmse_text(_result(source="files", **models), "with delays") == "0.5566"

@@ -631,11 +631,11 @@ def _verification_verdicts(result) -> tuple[list[str], list[str]]:
 
 def summary_html(result, claims) -> str:
     """The case in a few lines: selected structure, verdicts, what fails and why."""
-    path, estimates = result.path, result.estimates
+    path = result.path
     items = [f"Selected structure: step {path.selected_index} of {len(path.steps) - 1} by rule "
              f"<code>{html.escape(path.rule)}</code>, {path.selected.n_parameters} parameters; "
-             f"RMSE {estimates['no delays'].rmse:.4f} without delays, "
-             f"{estimates['with delays'].rmse:.4f} with delays "
+             f"RMSE {result.rmse_text('no delays')} without delays, "
+             f"{result.rmse_text('with delays')} with delays "
              f"({html.escape(_delays_text(result).split('. ')[0])})."]
     passed, failed = _verification_verdicts(result)
     items.append(f"Frequency-domain verification, model with delays, in the verification band "
@@ -705,7 +705,7 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         "<h3>Removed parameters (Appendix B)</h3>", _html_table(removed_rows(result), 7),
         '<h2 id="delays">Time delays</h2>',
         f"<p>{html.escape(_delays_text(result))}. RMSE without delays "
-        f"{estimates['no delays'].rmse:.4f}, with delays {estimates['with delays'].rmse:.4f}.</p>",
+        f"{result.rmse_text('no delays')}, with delays {result.rmse_text('with delays')}.</p>",
         figures_html(figures.get("delays", [])),
         '<h2 id="parameters">Identified parameters (Appendix B)</h2>',
         "<p>CR: Cramér-Rao bound (in the parameter's unit); CR % and I %: Cramér-Rao bound and "

@@ -78,6 +78,18 @@ class CaseResult:
         """Each model's time-domain metrics on the identification data, by model label."""
         return {label: fit.metrics for label, fit in self.simulations.items()}
 
+    def rmse_text(self, model: str) -> str:
+        """The RMSE of ``model`` ("no delays", "with delays") as its estimator gives it, four
+        decimals, with the RMSE of its simulation of the identification maneuvers beside it
+        where the two differ by more than 0.1 % (filter error's is that of its one-step
+        predictions; output and record parameters such as biases are left out of the
+        simulation)."""
+        own, simulated = self.estimates[model].rmse, self.time_metrics[model].rmse
+        text = f"{own:.4f}"
+        if np.isfinite(simulated) and not np.isclose(own, simulated, rtol=1e-3, atol=0.0):
+            text += f" (simulated {simulated:.4f})"
+        return text
+
     def simulated(self, model: str) -> tuple[np.ndarray, ...]:
         """Outputs of one identified model on the identification data, one (N_i, n_o) array
         per maneuver (the simulation the metrics were taken from)."""

@@ -96,11 +96,10 @@ def run(args) -> int:
                         report_writer=None if args.no_figures else StudyReport()).run()
     for name, result in results.items():
         path = result.path
-        delayed = result.estimates["with delays"]
         print(f"{name}: {path.selected.n_parameters} parameters after removing "
               f"{len(path.removed)} (step {path.selected_index} of {len(path.steps) - 1}); "
-              f"RMSE without delays {result.estimates['no delays'].rmse:.4f}, "
-              f"with delays {delayed.rmse:.4f}")
+              f"RMSE without delays {result.rmse_text('no delays')}, "
+              f"with delays {result.rmse_text('with delays')}")
         print(f"  {claims_summary(result)}")
     if swept:
         points = sweep_points({n: results[n] for n in swept})
