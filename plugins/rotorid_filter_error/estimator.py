@@ -220,6 +220,9 @@ class FilterErrorProblem(InnovationLikelihood):
         self.update_every = update_every
         #: the records at the filter's measurement updates (every ``update_every``-th sample)
         self.records = records.lifted(update_every)
+        #: half each output's mean square first difference at the updates (p,), units²: the
+        #: measurement noise's start and the lower limit of its floor
+        self.first_difference_variance = measurement_noise_start(self.records)
         self.settings = settings
         self.n_samples = self.records.n_samples
         self.process_noise = process_noise
@@ -569,7 +572,7 @@ class FilterErrorEstimator:
         if self._wants_equation_error(structure):
             initial = LinearModel(structure).start_values(maneuvers)
             note = "start values from equation error"
-        variance = measurement_noise_start(problem.records)
+        variance = problem.first_difference_variance
         states = problem.process_noise
         given = given_process_noise_start(self.process_noise_start, states)
         missing = tuple(s for s in states if f"F_{s}" not in given)
@@ -605,7 +608,7 @@ class FilterErrorEstimator:
         # R's floor from its start, but never below the data's own first differences' (the
         # nonlinear path's floor): a fit continued from one whose R sat at its floor would
         # otherwise start a floor 10⁻⁴ lower (rotorid.estimation.continuation)
-        variance = np.maximum(parts.measurement, measurement_noise_start(problem.records))
+        variance = np.maximum(parts.measurement, problem.first_difference_variance)
         return (np.concatenate([lower, np.zeros(n_f), _SIZE_FLOOR * parts.disturbance, shortest,
                                 VARIANCE_FLOOR * variance, -free]),
                 np.concatenate([upper, np.full(n_f + n_d, np.inf),

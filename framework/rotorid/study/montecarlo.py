@@ -264,8 +264,8 @@ def case_monte_carlo(case, runs: int, out_dir: str | Path, *, seed: int | None =
     delays, from the study's start values of the structure's parameters; what an estimator
     starts from its data (filter error's noise parameters, output biases, initial states) each
     run starts from its own data, as the study's selected fit did (its final fit continued
-    from that one's noise model, :mod:`rotorid.estimation.continuation`). Writes ``montecarlo.json`` and the figure
-    ``montecarlo.png``/``.svg`` into ``out_dir/<case>``.
+    from that one's noise model, :mod:`rotorid.estimation.continuation`). Writes
+    ``montecarlo.json`` and the figure ``montecarlo.png``/``.svg`` into ``out_dir/<case>``.
     """
     from rotorid.study.pipeline import run_case
 

@@ -82,8 +82,7 @@ class CaseResult:
         """The RMSE of ``model`` ("no delays", "with delays") as its estimator gives it, four
         decimals, with the RMSE of its simulation of the identification maneuvers beside it
         where the two differ by more than 0.1 % (filter error's is that of its one-step
-        predictions; output and record parameters such as biases are left out of the
-        simulation)."""
+        predictions; biases and initial states estimated per record are not simulated)."""
         own, simulated = self.estimates[model].rmse, self.time_metrics[model].rmse
         text = f"{own:.4f}"
         if np.isfinite(simulated) and not np.isclose(own, simulated, rtol=1e-3, atol=0.0):
