@@ -77,8 +77,9 @@ def test_rotorids_integration_of_the_records_matches_the_independent_solver(exam
 
 @pytest.mark.parametrize("edit, fragment", [
     (('"VTAS_mps": ("V", "m/s")', '"VTAS_kt": ("V", "kt")'),
-     r"elevator_3211.csv: unknown channel\(s\) 'VTAS_mps'; channels are .*VTAS_kt.*; link "
-     r"the file's own column names to them in the model's channel map"),
+     r"maneuver 'elevator_3211' has no column 'VTAS_kt' \(linked to signal 'V' in "
+     r"fixed_wing_nonlinear.py\); columns: time, VTAS_mps, .*; correct the column name in "
+     r"fixed_wing_nonlinear.py"),
     (('"AOA_rad": ("alpha", "rad")', '"AOA_rad": ("alpha", "m/s")'),
      r"fixed_wing_nonlinear.py: column 'AOA_rad' has unit m/s, which does not fit signal "
      r"'alpha' \(angle in rad\)"),

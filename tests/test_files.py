@@ -10,6 +10,7 @@ import pytest
 import scipy.io
 from rotorid.data import ALL_CHANNELS, Maneuver, ManeuverSet
 from rotorid.errors import DataError, DataFileError, MissingFileError, StructureError
+from rotorid.ingestion import Ingestion
 from rotorid.io import atomic_write
 from rotorid.model.structure import OUTPUTS
 from rotorid.plugin.manager import create
@@ -251,6 +252,24 @@ def test_missing_and_unknown_csv_channels(tmp_path):
         read_maneuver(path)
     path.write_text("\n".join([",".join(ALL_CHANNELS + ("psi",))] + [",".join(["0"] * 14)] * 3))
     with pytest.raises(DataFileError, match=r"unknown channel\(s\) 'psi'"):
+        read_maneuver(path)
+
+
+def test_columns_a_channel_map_leaves_unlinked_travel_unused(tmp_path):
+    """Read for a model (through its channel map), a flight-test file's further columns are
+    no error: they travel as extra channels; read plainly, the same file is refused."""
+    path = tmp_path / "flight.csv"
+    header = ["time", "PITCH_RATE_degps", "ELEV_pct", "ALT_m"]
+    path.write_text("\n".join([",".join(header)]
+                              + [f"{0.1 * row},{row},{-row},{1000 + row}" for row in range(4)]))
+    channels = {"PITCH_RATE_degps": {"signal": "q", "unit": "deg/s"},
+                "ELEV_pct": {"signal": "long", "unit": "%"}}
+    maneuver = read_maneuver(path, Ingestion(channels=channels))
+    assert maneuver.input_names == ("long",) and maneuver.output_names == ("q",)
+    assert np.array_equal(maneuver.channel("ALT_m"), [1000.0, 1001.0, 1002.0, 1003.0])
+    assert np.allclose(maneuver.channel("q"), [0.0, 1.0, 2.0, 3.0])
+    with pytest.raises(DataFileError, match=r"unknown channel\(s\) 'PITCH_RATE_degps', "
+                                            r"'ELEV_pct', 'ALT_m'"):
         read_maneuver(path)
 
 

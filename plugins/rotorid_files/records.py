@@ -96,13 +96,20 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
     Args:
         columns: channel name → 1-D array, all of the same length: ``time`` and some of the
             channels of :data:`rotorid.data.ALL_CHANNELS` (at least one input and one
-            output; a model names the ones it uses and lacks).
+            output; a model names the ones it uses and lacks). Read for a model (``ingestion``
+            with its signals, channel map or kept columns), any further columns are kept as
+            unused extra channels; read plainly, they are refused as misspelt channels.
         header: flat header (see module docstring); ``name`` defaults to the file stem,
             ``units`` to ``"flight-test"``.
         ingestion: what to do to the columns first (:mod:`rotorid.ingestion`); the file's
             ``channel_units`` add to (and override) its ``channel_units``.
         row_note: appended to data errors, to say how rows map to lines of the file.
     """
+    # read for a model (its signals, its channel map or the columns it reads itself): the
+    # model says which columns matter, and a flight-test file's others travel unused as
+    # extra channels
+    for_model = bool(ingestion.signals is not None or ingestion.keep_columns
+                     or ingestion.channels.links)
     try:
         columns, ingestion = ingestion.mapped(columns, str(path))
     except DataError as error:
@@ -110,7 +117,7 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
     declared = () if ingestion.signals is None else ingestion.signals.all.names
     known = tuple(dict.fromkeys(ALL_CHANNELS + OPTIONAL_COLUMNS + declared + ingestion.keep_columns))
     unknown = [c for c in columns if c not in known]
-    if unknown:
+    if unknown and not for_model:
         raise DataFileError(f"{path}: unknown channel(s) {', '.join(map(repr, unknown))}; "
                             f"channels are {','.join(known)}; link the file's own column "
                             f"names to them in the model's channel map (a model file's "
