@@ -24,7 +24,7 @@ import pytest
 import rotorid
 from rotorid.cli.main import MESSAGE_LIMIT, main, one_line
 from rotorid.data import OUTPUT_CHANNELS
-from rotorid.errors import DataFileError, ExitStatus, SimulationDivergedError
+from rotorid.errors import DataFileError, EstimationError, ExitStatus, SimulationDivergedError
 from rotorid.estimation.models import LinearModel
 from rotorid.io import parse_number
 from rotorid.model.modelfile import load_model
@@ -589,6 +589,26 @@ def test_a_start_whose_noise_covariance_is_singular_names_the_exact_outputs(tmp_
             "are reproduced exactly (noise-free data?); use --noise diagonal") in str(caught.value)
 
 
+def test_residuals_dependent_to_working_precision_name_their_outputs(tmp_path):
+    """A fit whose residuals become linearly dependent (an output equation reproduced exactly
+    on noise-free data) stops with the outputs named and the fix, not a bare linear-algebra
+    failure."""
+    structure, maneuvers = _doublets(tmp_path)
+    measured = rotorid.simulate(structure, VALUES, maneuvers)
+    model, problem = _problem(structure, maneuvers, measured)
+    # residuals far above the outputs, so that R's floor (a fraction of the outputs' power)
+    # leaves the dependence at working precision
+    residuals = [1e4 * np.random.default_rng(3).normal(size=z.shape) for z in measured]
+    for e in residuals:
+        e[:, 7] = e[:, 5] - 2.0 * e[:, 6]                       # r's from p's and phi's
+    with pytest.raises(EstimationError) as caught:
+        problem.gauss_newton(structure.as_vector(VALUES), problem.noise(residuals), residuals)
+    assert str(caught.value) == (
+        "the noise covariance R became singular to working precision: the residuals of the "
+        "outputs p, phi, r are linearly dependent, the fit reproducing them almost exactly "
+        "(noise-free data?); use --noise diagonal or leave such outputs out with --outputs")
+
+
 def test_noise_free_outputs_are_a_warning_naming_them(tmp_path, capsys):
     structure, maneuvers = _doublets(tmp_path)
     data = tmp_path / "flight"
@@ -603,6 +623,11 @@ def test_noise_free_outputs_are_a_warning_naming_them(tmp_path, capsys):
                                   "'ax', 'az', 'q', 'theta', 'ay', 'p', 'phi', 'r' exactly "
                                   "(residual RMS at most ")
     assert "use --noise diagonal or leave them out with --outputs" in warnings[0]
+    assert _run(["identify", str(tmp_path / "model.toml"), str(data), "--quiet", "--force",
+                 "--noise", "diagonal", "--out", str(tmp_path / "result.json")]) == ExitStatus.OK
+    warnings = [line for line in capsys.readouterr().err.splitlines() if "exactly" in line]
+    assert len(warnings) == 1 and warnings[0].endswith(
+        "the Cramér-Rao bounds mean nothing; leave them out with --outputs"), warnings
 
 
 # ----------------------------------------------------------------- strict numbers, short errors

@@ -126,7 +126,7 @@ class OutputErrorEstimator:
             result = attrs.evolve(result, converged=True, stop_reason=(
                 "the earlier stages already reached the minimum of the full records"))
         _warn_exact_outputs(result, [z[:, columns] for z in measured_outputs(fitted, maneuvers)],
-                            weights, [fitted.output_names[c] for c in columns])
+                            weights, [fitted.output_names[c] for c in columns], self.noise)
         return self._estimate(fitted, base, result, start_values, notes,
                               sum(m.n_samples for m in maneuvers), columns)
 
@@ -343,9 +343,10 @@ def _problem(model, maneuvers, columns, weights, settings) -> Problem:
                    rmse_scale=rmse_reference_factors(selected.output_units))
 
 
-def _warn_exact_outputs(result, measured, weights, names) -> None:
+def _warn_exact_outputs(result, measured, weights, names, noise: str) -> None:
     """A :class:`DataWarning` naming the outputs the fit reproduces exactly (residual RMS
-    below :data:`EXACT_FRACTION` of the output's RMS) and the largest such ratio."""
+    below :data:`EXACT_FRACTION` of the output's RMS) and the largest such ratio; its fix
+    suits the ``noise`` setting (``"full"`` or ``"diagonal"``)."""
     n = sum(z.shape[0] for z in measured)
     signal = np.sqrt(sum(np.sum((z * weights) ** 2, axis=0) for z in measured) / n)
     ratio = np.sqrt(np.diag(result.noise_covariance)) / np.maximum(signal, 1e-300)
@@ -354,8 +355,9 @@ def _warn_exact_outputs(result, measured, weights, names) -> None:
         warnings.warn(f"the fit reproduces the outputs {', '.join(repr(names[k]) for k in exact)} "
                       f"exactly (residual RMS at most {ratio[exact].max():.2g} of the output's "
                       f"RMS): noise-free data? Their R is held at its floor, so the Cramér-Rao "
-                      f"bounds mean nothing; use --noise diagonal or leave them out with "
-                      f"--outputs", DataWarning, stacklevel=3)
+                      f"bounds mean nothing; "
+                      f"{'use --noise diagonal or ' if noise == 'full' else ''}leave them out "
+                      f"with --outputs", DataWarning, stacklevel=3)
 
 
 class _SelectedOutputs:

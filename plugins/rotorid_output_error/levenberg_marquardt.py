@@ -29,7 +29,7 @@ from collections.abc import Callable
 
 import attrs
 import numpy as np
-from rotorid.errors import SimulationDivergedError
+from rotorid.errors import EstimationError, SimulationDivergedError
 from rotorid.estimation.models import gauss_newton_products
 from rotorid.estimation.steps import bounded_step
 
@@ -38,6 +38,9 @@ _MAX_LAMBDA = 1e12
 DIVERGENCE_FACTOR = 100.0
 #: Floor of R relative to each output's mean square (keeps det R > 0 on noise-free data).
 NOISE_FLOOR = 1e-16
+#: An eigenvalue of R's correlation matrix below this fraction of the largest marks outputs
+#: whose residuals are linearly dependent to working precision.
+DEPENDENT_RESIDUALS = 1e-8
 
 
 @attrs.frozen
@@ -155,16 +158,42 @@ class Problem:
         spread = np.diag(self.noise(residuals) - self.noise_floor)
         exact = [names[c] for c in np.flatnonzero(spread <= np.diag(self.noise_floor))]
         return (f"the noise covariance R is singular: the outputs {', '.join(exact) or 'all'} "
-                f"are reproduced exactly (noise-free data?); use --noise diagonal or leave "
-                f"them out with --outputs")
+                f"are reproduced exactly (noise-free data?); {self._noise_fix()}")
+
+    def _noise_fix(self) -> str:
+        """What to do about a singular R, for this run's noise setting."""
+        diagonal = "use --noise diagonal or " if self.settings.noise == "full" else ""
+        return f"{diagonal}leave such outputs out with --outputs"
+
+    def _dependent_outputs(self, r: np.ndarray, outputs) -> list[str]:
+        """Those of ``outputs`` whose residuals R (their (n, n) block) finds linearly
+        dependent: each with a share of at least 0.1 in a near-null eigenvector of R's
+        correlation matrix."""
+        scale = np.sqrt(np.diag(r))
+        eigenvalues, vectors = np.linalg.eigh(r / np.outer(scale, scale))
+        null = vectors[:, eigenvalues < DEPENDENT_RESIDUALS * eigenvalues.max()]
+        return [outputs[k] for k in np.flatnonzero(np.any(np.abs(null) >= 0.1, axis=1))]
 
     def gauss_newton(self, values, r: np.ndarray, residuals):
         """F (P×P) and G (P,) at ``values`` with R held fixed; ``residuals`` z − y there.
 
         F = Σ (∂y/∂Θ)ᵀ Q (∂y/∂Θ) and G = −Σ (∂y/∂Θ)ᵀ Q (z − y) with Q = w R⁻¹ w, the inverse
-        noise covariance of the weighted residuals seen from the unweighted ones.
+        noise covariance of the weighted residuals seen from the unweighted ones. Raises
+        :class:`EstimationError` naming the outputs when R is too near singular for Q to be
+        positive definite (residuals linearly dependent: noise-free data).
         """
-        weighting = self.weights[:, None] * np.linalg.inv(r) * self.weights[None, :]
+        weighted = np.flatnonzero(self.weights)
+        try:
+            weighting = self.weights[:, None] * np.linalg.inv(r) * self.weights[None, :]
+            np.linalg.cholesky(weighting[np.ix_(weighted, weighted)])
+        except np.linalg.LinAlgError:
+            dependent = self._dependent_outputs(r[np.ix_(weighted, weighted)],
+                                                [self.model.output_names[k] for k in weighted])
+            raise EstimationError(
+                f"the noise covariance R became singular to working precision: the residuals "
+                f"of the outputs {', '.join(dependent) or 'fitted'} are linearly dependent, "
+                f"the fit reproducing them almost exactly (noise-free data?); "
+                f"{self._noise_fix()}") from None
         return gauss_newton_products(self.model, values, self.maneuvers, residuals, weighting)
 
 
