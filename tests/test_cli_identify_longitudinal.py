@@ -151,6 +151,10 @@ def test_a_channel_map_reads_the_test_range_names_and_units(tmp_path, capsys):
     ('Q_radps = { signal = "q" }', "channel 'Q_radps' needs a table with 'signal' and 'unit'"),
     ('Q_radps = { signal = "q", unit = "rad/s" }\nTHETA_rad = { signal = "q", unit = "rad" }',
      "signal 'q' is linked to several columns"),
+    ('Q_radps = { signal = "qq", unit = "rad/s" }',
+     "model.toml: column 'Q_radps' is linked to 'qq', which is no signal of the model; its "
+     "signals are .*; correct the signal name"),
+    ('time = { signal = "time", unit = "deg" }', "unit deg, which does not fit 'time'"),
 ])
 def test_bad_channel_maps_are_one_line_errors_naming_the_file(tmp_path, capsys, channels,
                                                              fragment):
@@ -164,6 +168,35 @@ def test_bad_channel_maps_are_one_line_errors_naming_the_file(tmp_path, capsys, 
     assert len(error.strip().splitlines()) == 1, error
     assert re.search(fragment, error), error
     assert "model.toml" in error or ".csv" in error
+    assert error.count("model.toml:") <= 1, error
+
+
+def test_time_in_ms_and_unused_columns_read_through_the_channel_map(tmp_path, capsys):
+    """A test range's files with the time in ms under their own name and a column the model
+    does not use (altitude) give the estimate of the same files with the time in s."""
+    results = []
+    for folder, time_column, time_scale, extra in (("s", "time", 1.0, ""),
+                                                   ("ms", "TIME_ms", 1000.0, "ALT_ft")):
+        directory = tmp_path / folder
+        directory.mkdir()
+        columns = (time_column,) + RANGE_COLUMNS[1:] + ((extra,) if extra else ())
+
+        def transform(table, scale=time_scale, extra=extra):
+            ranged = _range_units(table)
+            ranged[:, 0] *= scale
+            return np.column_stack([ranged, 500.0 + table[:, 0]]) if extra else ranged
+
+        files = _data(directory, columns, transform)
+        link = f'{time_column} = {{ signal = "time", unit = "ms" }}\n' if extra else ""
+        model = directory / "model.toml"
+        model.write_text(MODEL + CHANNELS + link, encoding="utf-8")
+        out = directory / "result.json"
+        status = main(["identify", str(model), *files, "--out", str(out), "--quiet"])
+        assert status == 0, capsys.readouterr().err
+        results.append(json.loads(out.read_text(encoding="utf-8"))["parameters"])
+    assert "TIME_ms" in open(files[0], encoding="utf-8").readline()
+    for name, parameter in results[0].items():
+        assert results[1][name]["value"] == pytest.approx(parameter["value"], rel=1e-6), name
 
 
 #: Constant sensor offsets of ax az q θ in every file of the bias test (flight-test units).

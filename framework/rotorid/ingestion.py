@@ -144,6 +144,14 @@ class Ingestion:
         if self.resample == "decimate" and self.sample_time is None:
             raise DataError("resample = 'decimate' needs a sample_time (the interval after "
                             "decimation, s)")
+        if self.signals is not None:
+            targets = set(self.signals.all.names) | set(CHANNEL_KINDS) | set(self.keep_columns)
+            strange = [link for link in self.channels.links if link.signal not in targets]
+            if strange:
+                raise DataError(
+                    f"{self.channels.source}: column {strange[0].column!r} is linked to "
+                    f"{strange[0].signal!r}, which is no signal of the model; its signals are "
+                    f"{', '.join(self.signals.all.names)} (and time); correct the signal name")
 
     def mapped(self, columns: Mapping[str, np.ndarray], where: str
                ) -> tuple[dict[str, np.ndarray], "Ingestion"]:

@@ -36,6 +36,7 @@ UNITS = {
     "rad/s²": ("angular acceleration", 1.0), "deg/s²": ("angular acceleration", DEGREE),
     "%": ("travel", 1.0),
     "N": ("force", 1.0), "lbf": ("force", POUND_FORCE),
+    "s": ("time", 1.0), "ms": ("time", 1e-3),
 }
 
 #: Physical kinds of named signals and the dimensions their units may have. A control is a
@@ -47,6 +48,7 @@ KIND_DIMENSIONS = {
     "rate": ("angular rate",),
     "angular-acceleration": ("angular acceleration",),
     "control": ("travel", "angle", "force"),
+    "time": ("time",),
 }
 
 #: Physical kind of every named channel; decides how it scales between unit systems.
@@ -60,6 +62,7 @@ CHANNEL_KINDS = {
     "beta0": "angle", "beta1c": "angle", "beta1s": "angle", "vi": "velocity",
     "long": "control", "lat": "control", "coll": "control", "ped": "control",
     "elevator": "control", "aileron": "control", "rudder": "control", "throttle": "control",
+    "time": "time",
 }
 
 
@@ -100,6 +103,7 @@ class UnitSystem:
                 "angular-acceleration": self.angle_per_radian,
                 "angle": self.angle_per_radian,
                 "control": 1.0,
+                "time": 1.0,
             }[kind]
         except KeyError:
             raise StructureError(f"unknown physical kind {kind!r}") from None
@@ -121,6 +125,7 @@ class UnitSystem:
                 "angular-acceleration": f"{self.angle_label}/s²",
                 "angle": self.angle_label,
                 "control": control_label,
+                "time": "s",
             }[kind]
         except KeyError:
             raise StructureError(f"unknown physical kind {kind!r}; use one of "

@@ -123,8 +123,11 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
                             f"names to them in the model's channel map (a model file's "
                             f"[channels] table)")
     if "time" not in columns:
+        link = ("; name the file's time column 'time' or link it in the model's channel map, "
+                "e.g. Time = { signal = \"time\", unit = \"s\" } (or unit = \"ms\")"
+                if for_model else "")
         raise DataFileError(f"{path}: missing channel(s) time; a maneuver file needs time, "
-                            f"then any of {','.join(ALL_CHANNELS[1:])}")
+                            f"then any of {','.join(ALL_CHANNELS[1:])}{link}")
     rows = columns["time"].size
     for channel in columns:
         if columns[channel].size != rows:

@@ -271,7 +271,14 @@ def parse_model(mapping: Mapping, source: str = "<string>") -> ModelStructure:
     except DataFileError:
         raise
     except RotoridError as error:
-        raise DataFileError(f"{source}: {error}") from None
+        raise _naming(source, error) from None
+
+
+def _naming(source: str, error: Exception) -> DataFileError:
+    """``error`` as a :class:`DataFileError` that names ``source`` once (errors of the
+    channel map name it already)."""
+    message = str(error)
+    return DataFileError(message if message.startswith(f"{source}:") else f"{source}: {message}")
 
 
 def _read(path: str | os.PathLike) -> Mapping:
@@ -295,7 +302,7 @@ def load_channel_map(path: str | os.PathLike) -> ChannelMap:
     except DataFileError:
         raise
     except RotoridError as error:
-        raise DataFileError(f"{path}: {error}") from None
+        raise _naming(str(Path(path)), error) from None
 
 
 # ----------------------------------------------------------------- writing
