@@ -38,6 +38,10 @@ MOTION_FRACTION = 0.3
 ACCELERATIONS = {"u": "ax", "v": "ay", "w": "az"}
 
 
+#: Where a user declares a channel's unit, for the advice of the checks.
+WHERE_UNITS = "the column's unit in the model's [channels] table, or the file header's channel_units"
+
+
 @attrs.frozen
 class KinematicFit:
     """The fit of one channel against its integrated driver.
@@ -138,10 +142,10 @@ def _scale_advice(fit: KinematicFit) -> str:
     ratio = math.degrees(1.0)
     if abs(fit.scale / ratio - 1) < 0.15:
         return (f"{fit.channel} is in deg and its driver ({fit.driver}) in rad: declare the "
-                f"driver's unit (channel_units, e.g. {{\"q\": \"rad/s\"}})")
+                f"driver's unit ({WHERE_UNITS}, e.g. {{\"q\": \"rad/s\"}})")
     if abs(fit.scale * ratio - 1) < 0.15:
         return (f"{fit.channel} is in rad and its driver ({fit.driver}) in deg: declare the "
-                f"channel's unit (channel_units {{\"{fit.channel}\": \"rad\"}})")
+                f"channel's unit ({WHERE_UNITS} {{\"{fit.channel}\": \"rad\"}})")
     return "check the calibration (scale factor) of these sensors"
 
 

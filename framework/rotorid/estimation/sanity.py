@@ -25,7 +25,7 @@ import numpy as np
 from rotorid.data import ManeuverSet
 from rotorid.errors import DataWarning
 from rotorid.estimation.data_checks import is_constant
-from rotorid.estimation.kinematics import check_kinematics
+from rotorid.estimation.kinematics import WHERE_UNITS, check_kinematics
 from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.units import unit_system
 
@@ -139,11 +139,11 @@ def _check_rate_scale(maneuvers: ManeuverSet) -> None:
         _warn(f"the largest angular rate (p, q, r) in any maneuver is {value} while the inputs "
               f"move: a maneuver for identification moves the aircraft by several deg/s; were "
               f"the rates recorded in rad/s? Declare the data's units (units: si, or "
-              f"channel_units {{\"q\": \"rad/s\", …}})")
+              f"{WHERE_UNITS} {{\"q\": \"rad/s\", …}})")
     elif largest > high:
         _warn(f"the largest angular rate (p, q, r) in any maneuver is {value}, beyond any "
-              f"helicopter maneuver: were the rates recorded in deg/s? Declare the data's "
-              f"units (units: flight-test, or channel_units {{\"q\": \"deg/s\", …}})")
+              f"aircraft's maneuver: were the rates recorded in deg/s? Declare the data's "
+              f"units (units: flight-test, or {WHERE_UNITS} {{\"q\": \"deg/s\", …}})")
 
 
 def _flat_runs(record: np.ndarray):
