@@ -293,7 +293,7 @@ COMMANDS = [
     ("identify-time-in-ms-at-5-khz", _identify(dt=0.2, samples=20000), ExitStatus.ERROR,
      ["maneuver m0", "lasts 4000 s", "longer than any identification maneuver", "in ms"]),
     ("identify-unknown-output", lambda tmp_path: [*_identify()(tmp_path), "--outputs", "q,zz"],
-     ExitStatus.ERROR, ["unknown output(s) 'zz' to fit", "ax, az"]),
+     ExitStatus.USAGE, ["argument --outputs: 'zz' is no output of ", "its outputs are ax, az"]),
     *[(f"identify-zero-{name}", _identify(_set_column(k, 0.0)), ExitStatus.ERROR,
        [f"output {name!r} is constant", "--outputs"])
       for k, name in enumerate(OUTPUT_CHANNELS) if name != "q"],

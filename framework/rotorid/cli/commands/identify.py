@@ -147,6 +147,17 @@ def add_arguments(parser) -> None:
                              "is written all the same)")
 
 
+def _check_outputs(chosen, outputs, model) -> None:
+    """A :class:`UsageError` when ``--outputs`` names ``chosen`` outputs that ``model`` (its
+    outputs ``outputs``) lacks."""
+    from rotorid.errors import UsageError
+
+    unknown = [name for name in chosen if name not in outputs]
+    if unknown:
+        raise UsageError(f"argument --outputs: {', '.join(map(repr, unknown))} is no output of "
+                         f"{model}; its outputs are {', '.join(outputs)}")
+
+
 def _options(args) -> dict:
     """Estimator options the user set explicitly (the estimator's defaults stand otherwise)."""
     from rotorid.errors import UsageError
@@ -275,6 +286,9 @@ def run(args) -> int:
         raise DataFileError(f"{args.model}: the model has no free parameter to estimate (every "
                             f"derivative is fixed or none is declared); declare at least one "
                             f"derivative without a fixed value")
+    if args.outputs is not None:
+        _check_outputs(names(args.outputs), model.output_names if by_reference
+                       else model.outputs, args.model)
     out = refuse_overwrite(args.out, args.force)
     if not out.parent.is_dir():
         raise MissingFileError(f"cannot write {out}: directory {out.parent} does not exist")
