@@ -360,6 +360,9 @@ COMMANDS = [
     ("identify-roll-in-deg-declared-rad", _identify(
         lambda y: _set_column(6, 5.0 * (-1) ** np.arange(200))(0.01 * y), units="si"),
      ExitStatus.ERROR, ["output 'phi'", "286.5° from trim", "deg declared as rad"]),
+    ("identify-yaw-rate-in-deg-per-s-declared-rad-per-s", _identify(
+        lambda y: _set_column(7, 20.0 * (-1) ** np.arange(200))(0.01 * y), units="si"),
+     ExitStatus.ERROR, ["output 'r'", "1146°/s from trim", "rates in deg/s declared as rad/s"]),
     ("identify-one-flat-maneuver-among-good-ones", _identify(lambda y: y * 0.0, every=False),
      ExitStatus.ERROR, ["maneuver m0", "every fitted output is constant"]),
     ("identify-values-times-1e300", _identify(lambda y: y * 1e300), ExitStatus.ERROR,

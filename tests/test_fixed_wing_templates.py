@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from delay_reference import sampled_outputs
 from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
-from rotorid.errors import StructureError
+from rotorid.errors import DataFileError, StructureError
 from rotorid.simulation.simulator import Simulator, sensitivities
 from rotorid.simulation.transfer import frequency_response, response_sensitivities
 from rotorid.units import G_SI
@@ -205,3 +205,17 @@ def test_an_output_reading_a_control_directly_is_simulated_exactly():
                                     hold, fine=0.001)
         scale = np.max(np.abs(reference), axis=0)
         np.testing.assert_allclose(simulated / scale, reference / scale, atol=2e-4)
+
+
+def test_a_derivative_the_declared_structure_lacks_is_named_with_the_declared_fix():
+    import tomllib
+
+    from rotorid.model.modelfile import parse_model
+
+    text = DECLARED.format(theta0_deg="0.0", minus_w0=-2.0, minus_g_cos=-G_SI, minus_g_sin=0.0,
+                           g_cos=G_SI, g_sin=0.0) + "\n[derivatives.M_elev]\n"
+    with pytest.raises(DataFileError, match=(
+            r"written-out: derivative M_elev does not fit the declared structure written-out "
+            r"\(equations X Z M; variables u w q elevator throttle\); correct its name, or "
+            r"declare the equation or signal it needs in \[structure\]")):
+        parse_model(tomllib.loads(text), "written-out")

@@ -119,14 +119,15 @@ def _check_plausible(maneuvers: ManeuverSet) -> None:
                             f"longer records (or the time in s, if it is in minutes)")
         units = unit_system(maneuver.units)
         degrees = math.degrees(units.radian_per_angle)
-        for names, scale, limit, unit in ((("theta", "phi"), degrees, MAX_ATTITUDE_DEG, "°"),
-                                          (("p", "q", "r"), degrees, MAX_RATE_DEG_S, "°/s"),
-                                          (("ax", "ay", "az"), 1 / units.g, MAX_ACCELERATION_G,
-                                           " g")):
+        for names, scale, limit, unit, guess in (
+                (("theta", "phi"), degrees, MAX_ATTITUDE_DEG, "°", "angles in deg declared as rad"),
+                (("p", "q", "r"), degrees, MAX_RATE_DEG_S, "°/s", "rates in deg/s declared as rad/s"),
+                (("ax", "ay", "az"), 1 / units.g, MAX_ACCELERATION_G, " g",
+                 "m/s² or ft/s² declared as g")):
             for name in (n for n in names if n in maneuver.output_names):
                 largest = float(np.max(np.abs(maneuver.channel(name)))) * scale
                 if largest > limit:
                     raise DataError(f"maneuver {maneuver.name}: output {name!r} reaches "
                                     f"{largest:.4g}{unit} from trim, beyond {limit:g}{unit}; "
                                     f"check the unit and scale of that channel in the data "
-                                    f"file (angles in deg declared as rad?)")
+                                    f"file ({guess}?)")

@@ -184,10 +184,14 @@ class StructureTemplate:
     def check(self, derivative: Derivative) -> None:
         """Raise when ``derivative`` drives an equation or reads a variable the template lacks."""
         if derivative.letter not in self.letters or derivative.variable not in self.variables:
+            shape = (f"the declared structure {self.name}"
+                     if isinstance(self.known, DeclaredTerms) else f"the {self.name} template")
+            fix = ("correct its name, or declare the equation or signal it needs in "
+                   "[structure]" if isinstance(self.known, DeclaredTerms)
+                   else "remove it or choose a template that has it")
             raise StructureError(
-                f"derivative {derivative.name} does not fit the {self.name} template (equations "
-                f"{' '.join(self.letters)}; variables {' '.join(self.variables)}); remove it "
-                f"or choose a template that has it")
+                f"derivative {derivative.name} does not fit {shape} (equations "
+                f"{' '.join(self.letters)}; variables {' '.join(self.variables)}); {fix}")
 
     def signals(self, units: UnitSystem) -> ModelSignals:
         """The states, inputs and outputs as named signals in the unit system ``units``."""
