@@ -145,3 +145,17 @@ def test_extra_channels_are_read_by_name_cut_with_the_record_and_checked():
         attrs.evolve(base, extra_channels={"V": np.zeros(9)})
     with pytest.raises(DataError, match="channel 'V' is NaN or infinite at row 3"):
         attrs.evolve(base, extra_channels={"V": np.where(np.arange(10) == 3, np.nan, 1.0)})
+
+
+def test_new_outputs_drop_the_conversion_note_of_the_outputs_they_replace():
+    """The note that the recorded outputs were converted from other units does not describe
+    simulated ones; an extra channel's note stays."""
+    time = np.arange(5) * 0.1
+    maneuver = Maneuver("m", time, np.zeros((5, 1)), np.ones((5, 2)), input_names=("long",),
+                        output_names=("q", "theta"), extra_channels={"u": np.ones(5)},
+                        metadata={"converted_units": {"q": "rad/s", "u": "m/s"}, "pilot": "A"})
+    simulated = maneuver.with_outputs(np.zeros((5, 2)))
+    assert simulated.metadata == {"converted_units": {"u": "m/s"}, "pilot": "A"}
+    assert maneuver.metadata["converted_units"] == {"q": "rad/s", "u": "m/s"}
+    only_outputs = attrs.evolve(maneuver, metadata={"converted_units": {"q": "rad/s"}})
+    assert "converted_units" not in only_outputs.with_outputs(np.zeros((5, 2))).metadata

@@ -273,6 +273,24 @@ def test_columns_a_channel_map_leaves_unlinked_travel_unused(tmp_path):
         read_maneuver(path)
 
 
+def test_a_file_naming_the_channels_themselves_is_read_through_a_map_that_links_others(
+        tmp_path):
+    """A file that holds the channels under their own names (as rotorid simulate writes them)
+    reads as it is through a map whose linked columns it lacks; lacking both, the linked
+    column is named."""
+    path = tmp_path / "simulated.csv"
+    path.write_text("# units: si\ntime,long,q\n" + "".join(f"{0.1 * k},{k},{0.01 * k}\n"
+                                                          for k in range(4)))
+    channels = {"PITCH_RATE_degps": {"signal": "q", "unit": "deg/s"},
+                "ELEV_pct": {"signal": "long", "unit": "%", "scale": -1.0}}
+    maneuver = read_maneuver(path, Ingestion(channels=channels))
+    assert np.allclose(maneuver.channel("q"), [0.0, 0.01, 0.02, 0.03])
+    assert np.allclose(maneuver.channel("long"), [0.0, 1.0, 2.0, 3.0])
+    path.write_text("time,long,pitch_rate\n0,0,0\n0.1,1,1\n")
+    with pytest.raises(DataFileError, match="has no column 'PITCH_RATE_degps' .linked to 'q'"):
+        read_maneuver(path, Ingestion(channels=channels))
+
+
 def test_non_utf8_csv_is_rejected(tmp_path):
     path = tmp_path / "m.csv"
     path.write_bytes(b"\xff\xfe" + "time".encode("utf-16-le"))

@@ -260,10 +260,16 @@ class Maneuver:
     def with_outputs(self, outputs, name: str | None = None,
                      output_names: tuple[str, ...] | None = None) -> "Maneuver":
         """A copy with other outputs (e.g. a simulation, ``output_names`` its channels; by
-        default the record's own), same time and inputs."""
+        default the record's own), same time and inputs; the metadata's note of the replaced
+        outputs' unit conversions (``converted_units``) goes with them."""
+        metadata = dict(self.metadata)
+        converted = {channel: unit for channel, unit in metadata.pop("converted_units", {}).items()
+                     if channel not in self.output_names}
+        if converted:
+            metadata["converted_units"] = converted
         return attrs.evolve(self, outputs=outputs, name=name or self.name,
                             output_names=self.output_names if output_names is None
-                            else output_names)
+                            else output_names, metadata=metadata)
 
     def head(self, duration: float) -> "Maneuver":
         """The first ``duration`` seconds (at least two samples)."""

@@ -158,7 +158,9 @@ class Ingestion:
         """``columns`` with each column the map links read as its channel (``scale · column
         + offset`` under the channel's name), and this ingestion without the map and with
         the linked outputs' units added to ``channel_units`` (controls keep the data's
-        unit). ``where`` names the record in errors."""
+        unit). A record that lacks a linked column but holds the channel under its own name
+        (as ``rotorid simulate`` writes it) is read as it is. ``where`` names the record in
+        errors."""
         links = self.channels.links
         if not links:
             return dict(columns), self
@@ -167,6 +169,8 @@ class Ingestion:
         result = {k: v for k, v in columns.items() if k not in linked}
         units = dict(self.channel_units)
         for link in links:
+            if link.column not in columns and link.signal in columns:
+                continue        # the record names the signal itself (rotorid simulate's files)
             if link.column not in columns:
                 raise DataError(f"{where} has no column {link.column!r} (linked to "
                                 f"{link.signal!r} in {source}); columns: "
