@@ -160,7 +160,8 @@ def test_study_runs_a_longitudinal_case_on_longitudinal_only_files(identified, t
 
 
 @pytest.mark.parametrize("channels, fragment", [
-    ('DELX = { signal = "long", unit = "%" }', "has no column 'DELX' .linked to 'long'"),
+    ('DELX = { signal = "long", unit = "%" }\ntheta = { signal = "theta", unit = "deg" }',
+     "has no column 'DELX' .linked to 'long'"),
     ('q = { signal = "q", unit = "g" }', "unit g, which does not fit 'q' .rate."),
     ('q = { signal = "q", unit = "deg/s" }\ntheta = { signal = "q", unit = "deg" }',
      "signal 'q' is linked to several columns"),

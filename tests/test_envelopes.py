@@ -105,6 +105,8 @@ def test_packaged_aee_is_unverified_and_empty(manager):
     check = aee.check(np.ones(5), np.ones(5), np.geomspace(1.0, 5.0, 5))
     assert check.passed is None and check.status == "not available"
     assert np.all(np.isnan(aee.bounds([1.0]).mag_upper_db))
+    assert check.report().startswith("AEE: not available, no point checked [UNVERIFIED source")
+    assert "nan" not in check.report()
 
 
 def _write_table(path, verified="false", provenance='"transcribed test table"',

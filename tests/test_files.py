@@ -276,8 +276,8 @@ def test_columns_a_channel_map_leaves_unlinked_travel_unused(tmp_path):
 def test_a_file_naming_the_channels_themselves_is_read_through_a_map_that_links_others(
         tmp_path):
     """A file that holds the channels under their own names (as rotorid simulate writes them)
-    reads as it is through a map whose linked columns it lacks; lacking both, the linked
-    column is named."""
+    reads as it is through a map whose linked columns it lacks altogether; a file holding
+    some linked columns, or lacking the channel too, is told the missing linked column."""
     path = tmp_path / "simulated.csv"
     path.write_text("# units: si\ntime,long,q\n" + "".join(f"{0.1 * k},{k},{0.01 * k}\n"
                                                           for k in range(4)))
@@ -287,6 +287,9 @@ def test_a_file_naming_the_channels_themselves_is_read_through_a_map_that_links_
     assert np.allclose(maneuver.channel("q"), [0.0, 0.01, 0.02, 0.03])
     assert np.allclose(maneuver.channel("long"), [0.0, 1.0, 2.0, 3.0])
     path.write_text("time,long,pitch_rate\n0,0,0\n0.1,1,1\n")
+    with pytest.raises(DataFileError, match="has no column 'PITCH_RATE_degps' .linked to 'q'"):
+        read_maneuver(path, Ingestion(channels=channels))
+    path.write_text("time,ELEV_pct,q\n0,0,0\n0.1,1,1\n")     # in the map's naming: a typo
     with pytest.raises(DataFileError, match="has no column 'PITCH_RATE_degps' .linked to 'q'"):
         read_maneuver(path, Ingestion(channels=channels))
 

@@ -158,9 +158,9 @@ class Ingestion:
         """``columns`` with each column the map links read as its channel (``scale · column
         + offset`` under the channel's name), and this ingestion without the map and with
         the linked outputs' units added to ``channel_units`` (controls keep the data's
-        unit). A record that lacks a linked column but holds the channel under its own name
-        (as ``rotorid simulate`` writes it) is read as it is. ``where`` names the record in
-        errors."""
+        unit). A record that holds none of the linked columns, its channels under their own
+        names (as ``rotorid simulate`` writes them), is read as it is. ``where`` names the
+        record in errors."""
         links = self.channels.links
         if not links:
             return dict(columns), self
@@ -168,9 +168,12 @@ class Ingestion:
         linked = {link.column for link in links}
         result = {k: v for k, v in columns.items() if k not in linked}
         units = dict(self.channel_units)
+        # a record holding none of the linked columns but the channels under their own names
+        # is in rotorid's naming already (rotorid simulate's files): read as it is
+        own_naming = not any(link.column in columns for link in links)
         for link in links:
-            if link.column not in columns and link.signal in columns:
-                continue        # the record names the signal itself (rotorid simulate's files)
+            if link.column not in columns and own_naming and link.signal in columns:
+                continue
             if link.column not in columns:
                 raise DataError(f"{where} has no column {link.column!r} (linked to "
                                 f"{link.signal!r} in {source}); columns: "

@@ -150,6 +150,8 @@ class EnvelopeCheck:
         first_sentence = self.provenance.split(". ")[0].rstrip(".")
         source = ("verified source" if self.verified else "UNVERIFIED source") + (
             f": {first_sentence}" if first_sentence else "")
+        if self.status == "not available":
+            return f"{self.envelope}: not available, no point checked [{source}]"
         line = (f"{self.envelope}: {self.status}; {self.n_inside}/{self.n_used} points inside "
                 f"(γ² ≥ {self.threshold:g}); worst margin {self.worst_margin_db:+.2f} dB, "
                 f"{self.worst_margin_deg:+.1f}°")
