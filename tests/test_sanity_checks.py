@@ -8,7 +8,6 @@ import html
 import json
 import math
 import warnings
-from pathlib import Path
 
 import attrs
 import numpy as np

@@ -281,7 +281,6 @@ def test_verify_command_writes_checks_and_figures(simulated_sweeps, tmp_path, ca
 
     from rotorid.cli.main import main
     from rotorid.model.modelfile import save_model
-    from rotorid.plugin.manager import create
 
     _, no_delay = _pitch_structures()
     save_model(no_delay.without("L_long"), tmp_path / "model.toml")  # reduced away, re-added
@@ -317,7 +316,6 @@ def test_paper_story_on_the_truth_model(envelopes):
     """Hover data from the nonlinear truth model (quick records): the model identified with
     the paper's delays verifies better on the sweeps than the one without (paper figs. 4–5)."""
     from rotorid.model.structure import FlightCondition, ModelStructure
-    from rotorid.plugin.manager import create
     from rotorid.verification.verify import verify_model
 
     data = create("data-sources", "helisim").generate({"condition": "hover", "quick": True})
