@@ -308,3 +308,34 @@ def test_unstable_poles_above_the_band_are_found_and_passed_over():
     assert "10.0 (unstable pole above the band)" in notes[0] and "—" in notes[0]
     best, notes = best_start(structure, [result(300.0, 10.0)], 20.0)
     assert best == 0 and "unstable poles above the J band (20 rad/s): 300" in notes[0]
+
+
+def test_an_aeroplane_is_fitted_on_its_own_channels_from_sweeps():
+    """The fixed-wing lateral template (controls aileron, rudder; outputs beta p phi r ay,
+    SI) from noisy aileron and rudder sweeps: the pairs are the aeroplane's own, and every
+    derivative comes back within 3 Cramér-Rao bounds."""
+    condition = rotorid.FlightCondition(u0=40.0)
+    truth = {"Y_v": -0.25, "L_v": -0.2, "L_p": -5.0, "L_r": 1.2, "L_aileron": 15.0,
+             "N_v": 0.1, "N_r": -1.0, "N_rudder": -4.6, "Y_rudder": 3.0}
+    structure = rotorid.ModelStructure.populated(condition, "fixed-wing-lateral", units="si")
+    structure = structure.without(*[n for n in structure.names if n not in truth])
+    sweep = Sweep(amplitude=0.02, omega_min=0.4, omega_max=15.0, sweep_time=50.0,
+                  sample_time=0.02)
+    time = np.arange(int(round(sweep.duration / 0.02)) + 1) * 0.02
+    clean = ManeuverSet([
+        Maneuver(axis, time, np.column_stack([sweep(time) * (axis == "aileron"),
+                                              sweep(time) * (axis == "rudder")]),
+                 np.zeros((time.size, 5)), units="si", input_names=structure.controls,
+                 output_names=structure.outputs, metadata={"axis": axis, "omega_min": 0.4})
+        for axis in structure.controls])
+    rng = np.random.default_rng(11)
+    sweeps = ManeuverSet([m.with_outputs(y + 1e-4 * rng.standard_normal(y.shape))
+                          for m, y in zip(clean, rotorid.simulate(structure, truth, clean))])
+    estimator = FrequencyResponseEstimator()
+    pairs = [p.pair for p in estimator.fit_data(sweeps) if not isinstance(p, str)]
+    assert {"p/aileron", "r/rudder", "ay/rudder"} <= set(pairs)
+    estimate = estimator.estimate(structure, sweeps)
+    assert estimate.converged
+    errors = np.abs(estimate.values - structure.as_vector(truth))
+    assert np.all(errors <= 3.0 * estimate.cramer_rao), dict(zip(structure.names, errors))
+    assert np.all(estimate.cramer_rao_pct < 25.0)

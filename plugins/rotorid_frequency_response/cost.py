@@ -22,7 +22,7 @@ from collections.abc import Sequence
 
 import attrs
 import numpy as np
-from rotorid.data import OUTPUT_CHANNELS
+from rotorid.errors import EstimationError
 from rotorid.frozen import readonly_array
 from rotorid.model.structure import ModelStructure
 from rotorid.simulation.transfer import compared_response
@@ -51,6 +51,16 @@ class Mismatch:
             else np.inf
 
 
+def _structure_mixing(pair: PairData, controls: Sequence[str]) -> np.ndarray:
+    """The pair's mixing (n, k) over its inputs as (n, m) over the structure's ``controls``
+    (an input the structure lacks contributes nothing: the model does not respond to it)."""
+    mixing = np.zeros((pair.omega.size, len(controls)), complex)
+    for column, name in enumerate(pair.inputs):
+        if name in controls:
+            mixing[:, controls.index(name)] = pair.mixing[:, column]
+    return mixing
+
+
 class MismatchProblem:
     """J of ``structure`` against ``pairs``, evaluated at any parameter vector."""
 
@@ -58,9 +68,17 @@ class MismatchProblem:
         self.structure = structure
         self.pairs = tuple(pairs)
         self.omega = np.concatenate([p.omega for p in self.pairs])
-        self.rows = np.concatenate([np.full(p.omega.size, OUTPUT_CHANNELS.index(p.output))
+        missing = [p.pair for p in self.pairs if p.output not in structure.outputs
+                   or p.control not in structure.controls]
+        if missing:
+            raise EstimationError(f"the structure has no response for the pair(s) "
+                                  f"{', '.join(missing)} (outputs {', '.join(structure.outputs)}; "
+                                  f"controls {', '.join(structure.controls)}); leave them out "
+                                  f"(pairs=...)")
+        self.rows = np.concatenate([np.full(p.omega.size, structure.outputs.index(p.output))
                                     for p in self.pairs])
-        self.mixing = np.concatenate([p.mixing for p in self.pairs])
+        self.mixing = np.concatenate([_structure_mixing(p, structure.controls)
+                                      for p in self.pairs])
         self.measured_db = np.concatenate([p.magnitude_db for p in self.pairs])
         self.measured_deg = np.concatenate([p.phase_deg for p in self.pairs])
         scale = np.concatenate([20.0 * p.weight / p.omega.size for p in self.pairs])

@@ -21,7 +21,7 @@ from collections.abc import Sequence
 
 import attrs
 import numpy as np
-from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS, ManeuverSet
+from rotorid.data import ManeuverSet
 from rotorid.errors import EstimationError
 from rotorid.frozen import readonly_array
 from rotorid.verification.compare import default_omega, sweep_frequency
@@ -44,8 +44,10 @@ class PairData:
         magnitude_db: measured 20 log10|Ĥ|, shape (n,); phase_deg: measured unwrapped phase
             in deg, shape (n,).
         weight: coherence weight W_γ = [1.58 (1 − e^(−γ²))]², shape (n,).
-        mixing: κ, shape (n, 4) complex: the model's compared response is
-            Σ_k κ[:, k]·H[:, output, k] over the inputs in ``INPUT_CHANNELS`` order.
+        mixing: κ, shape (n, k) complex: the model's compared response is
+            Σ_k κ[:, k]·H[:, output, inputs[k]] (a model without input k has no response
+            to it).
+        inputs: the k inputs the columns of ``mixing`` weigh.
     """
 
     output: str
@@ -55,6 +57,7 @@ class PairData:
     phase_deg: np.ndarray = attrs.field(converter=readonly_array)
     weight: np.ndarray = attrs.field(converter=readonly_array)
     mixing: np.ndarray = attrs.field(converter=lambda v: readonly_array(v, complex))
+    inputs: tuple[str, ...] = attrs.field(converter=tuple)
 
     @property
     def pair(self) -> str:
@@ -90,11 +93,10 @@ def pair_data(response: FrequencyResponse, n_points: int = 20,
 
     coherence = at_points(response.coherence)
     kept = coherence >= threshold
-    mixing = np.zeros((points.size, len(INPUT_CHANNELS)), complex)
-    mixing[:, INPUT_CHANNELS.index(response.input)] = 1.0
     return PairData(response.output, response.input, points[kept],
                     at_points(response.magnitude_db)[kept], at_points(response.phase_deg)[kept],
-                    coherence_weight(coherence[kept]), mixing[kept])
+                    coherence_weight(coherence[kept]), np.ones((int(kept.sum()), 1)),
+                    (response.input,))
 
 
 def excited_band(sweeps: ManeuverSet, band=(0.0, np.inf)) -> tuple[float, float]:
@@ -109,9 +111,11 @@ def excited_band(sweeps: ManeuverSet, band=(0.0, np.inf)) -> tuple[float, float]
 
 
 def all_pairs(maneuvers: ManeuverSet) -> tuple[str, ...]:
-    """Every output over every input that a sweep of ``maneuvers`` excites."""
+    """Every recorded output over every recorded input that a sweep of ``maneuvers``
+    excites."""
     axes = {primary_axis(m) for m in maneuvers}
-    return tuple(f"{o}/{c}" for c in INPUT_CHANNELS if c in axes for o in OUTPUT_CHANNELS)
+    return tuple(f"{o}/{c}" for c in maneuvers.input_names if c in axes
+                 for o in maneuvers.output_names)
 
 
 def sweep_pair_data(maneuvers: ManeuverSet, pairs: Sequence[str] | None = None,
@@ -122,9 +126,10 @@ def sweep_pair_data(maneuvers: ManeuverSet, pairs: Sequence[str] | None = None,
     docstring); a pair without coherent frequencies gives its name instead."""
     pairs = all_pairs(maneuvers) if pairs is None else tuple(pairs)
     grid = default_omega(maneuvers)
+    inputs = maneuvers.input_names
     found = []
     for name in pairs:
-        output, control = parse_pair(name)
+        output, control = parse_pair(name, maneuvers.output_names, inputs)
         subset = sweeps_exciting(maneuvers, control, name, EstimationError)
         points = cost_points(response_from_maneuvers(subset, control, output, grid,
                                                      windows=windows),
@@ -133,7 +138,7 @@ def sweep_pair_data(maneuvers: ManeuverSet, pairs: Sequence[str] | None = None,
             found.append(name)
             continue
         mixing, measured = [], None
-        for unit in np.eye(len(INPUT_CHANNELS)):
+        for unit in np.eye(len(inputs)):
             model, measured = apparent_response(
                 subset, control, output, points,
                 np.broadcast_to(unit, (points.size, unit.size)).astype(complex),
@@ -143,5 +148,5 @@ def sweep_pair_data(maneuvers: ManeuverSet, pairs: Sequence[str] | None = None,
         found.append(PairData(output, control, points[kept], measured.magnitude_db[kept],
                               measured.phase_deg[kept], coherence_weight(
                                   measured.coherence[kept]),
-                              np.column_stack(mixing)[kept]) if kept.any() else name)
+                              np.column_stack(mixing)[kept], inputs) if kept.any() else name)
     return tuple(found)
