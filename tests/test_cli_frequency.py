@@ -10,7 +10,7 @@ import scipy.io
 from rotorid.cli.main import main
 from rotorid.simulation.transfer import frequency_response
 from rotorid.verification.handling_qualities import bandwidth_phase_delay
-from rotorid_files.formats import write_maneuver
+from rotorid_files.formats import read_maneuver, write_maneuver
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_frequency_response_estimator import TRUTH, _structure, _sweeps  # noqa: E402
@@ -93,3 +93,38 @@ def test_handling_qualities_of_the_measured_attitude_responses_match_the_models(
     struct = scipy.io.loadmat(mat, simplify_cells=True)["handling_qualities"]
     assert struct["theta_long"]["bandwidth"] == pytest.approx(
         qualities["theta/long"]["bandwidth"])
+
+
+def test_a_model_file_reads_sweeps_in_a_test_ranges_names(sweep_dir, tmp_path, capsys):
+    """The same sweeps with the range's column names (pitch rate in rad/s, stick as DLONG):
+    without a model the columns are unknown channels, through the model file's [channels]
+    table the response is the one of the files in rotorid's names."""
+    renamed = tmp_path / "range"
+    renamed.mkdir()
+    for path in sorted(sweep_dir.glob("*.npz")):
+        csv = renamed / f"{path.stem}.csv"
+        write_maneuver(read_maneuver(path), csv)
+        lines = csv.read_text().splitlines()
+        header = next(k for k, line in enumerate(lines) if not line.startswith("#"))
+        columns = lines[header].split(",")
+        q, long = columns.index("q"), columns.index("long")
+        columns[q], columns[long] = "Q_radps", "DLONG"
+        rows = [line.split(",") for line in lines[header + 1:]]
+        for row in rows:
+            row[q] = repr(float(np.radians(float(row[q]))))
+        csv.write_text("\n".join(lines[:header] + [",".join(columns)]
+                                 + [",".join(row) for row in rows]) + "\n")
+    model = tmp_path / "model.toml"
+    model.write_text('[condition]\nairspeed_kt = 0.0\n[structure]\ntemplate = "six-dof"\n'
+                     '[channels]\nQ_radps = { signal = "q", unit = "rad/s" }\n'
+                     'DLONG = { signal = "long", unit = "%" }\n', encoding="utf-8")
+    plain, mapped = tmp_path / "plain.json", tmp_path / "mapped.json"
+    assert main(["frequency", str(sweep_dir), "--pairs", "q/long", "--out", str(plain)]) == 0
+    assert main(["frequency", str(renamed), "--pairs", "q/long", "--out",
+                 str(tmp_path / "x.json")]) == 3
+    assert "--model" in capsys.readouterr().err
+    assert main(["frequency", str(renamed), "--model", str(model), "--pairs", "q/long",
+                 "--out", str(mapped)]) == 0
+    first, second = (json.loads(p.read_text())["pairs"][0] for p in (plain, mapped))
+    np.testing.assert_allclose(second["real"], first["real"], rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(second["coherence"], first["coherence"], rtol=1e-6, atol=1e-9)

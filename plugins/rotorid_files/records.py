@@ -121,7 +121,8 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
         raise DataFileError(f"{path}: unknown channel(s) {', '.join(map(repr, unknown))}; "
                             f"channels are {','.join(known)}; link the file's own column "
                             f"names to them in the model's channel map (a model file's "
-                            f"[channels] table)")
+                            f"[channels] table; rotorid frequency reads through one with "
+                            f"--model)")
     if "time" not in columns:
         link = ("; name the file's time column 'time' or link it in the model's channel map, "
                 "e.g. Time = { signal = \"time\", unit = \"s\" } (or unit = \"ms\")"

@@ -2,13 +2,16 @@
 
 Usage::
 
-    rotorid frequency SWEEPS... [--pairs q/long,p/lat] [--conditioned] [--handling-qualities]
-                      --out responses.json
+    rotorid frequency SWEEPS... [--model MODEL.toml] [--pairs q/long,p/lat] [--conditioned]
+                      [--handling-qualities] --out responses.json
 
 SWEEPS are maneuver files, directories or glob patterns (only ``kind = sweep`` maneuvers when
 the files say their kind). Each pair's composite response (:mod:`rotorid.verification.frequency`)
 comes from the sweeps whose axis is its input, on the default log grid of the verification
-(:func:`rotorid.verification.compare.default_omega`). The file's suffix picks the format:
+(:func:`rotorid.verification.compare.default_omega`). With ``--model`` the files are read
+through a model file's signals and ``[channels]`` table (an aeroplane's channels, a test
+range's column names and units) and converted to its unit system. The file's suffix picks the
+format:
 
 * ``.json``: ``{"sweeps", "units", "pairs": [{"pair", "input", "output", "conditioned_on",
   "windows_s", "omega_rad_s", "magnitude_db", "phase_deg", "real", "imag", "coherence",
@@ -43,6 +46,10 @@ COLUMNS = ("omega_rad_s", "magnitude_db", "phase_deg", "real", "imag", "coherenc
 def add_arguments(parser) -> None:
     parser.add_argument("sweeps", nargs="+", metavar="SWEEPS",
                         help="sweep files, directories or glob patterns")
+    parser.add_argument("--model", default=None, metavar="MODEL.toml",
+                        help="read the sweeps through this model file's signals and [channels] "
+                             "table, in its unit system (for channels other than the "
+                             "helicopter's, or a test range's column names)")
     parser.add_argument("--pairs", default=None,
                         help="comma-separated OUTPUT/INPUT pairs of the sweeps' channels "
                              "(default: the paper's pairs they hold, else every output over "
@@ -133,7 +140,14 @@ def run(args) -> int:
     out = Path(args.out)
     if out.suffix.lower() not in FORMATS:
         raise UsageError(f"--out {out}: give a file ending in {', '.join(FORMATS)}")
-    sweeps, _ = load_sweeps(args.sweeps)
+    units, ingestion = None, None
+    if args.model is not None:
+        from rotorid.model.modelfile import load_channel_map, load_model
+
+        structure = load_model(args.model)
+        units = structure.units.name
+        ingestion = {"signals": structure.signals, "channels": load_channel_map(args.model)}
+    sweeps, _ = load_sweeps(args.sweeps, units, ingestion)
     omega = default_omega(sweeps)
     responses = []
     pairs = chosen_pairs(args.pairs, sweeps, sweeps.output_names, sweeps.input_names)
