@@ -214,9 +214,9 @@ def test_bad_inputs_give_one_line_errors(case, tmp_path, capsys):
     assert "no estimator named 'least-squares'" in _error_line(
         ["identify", str(model), str(data), "--estimator", "least-squares", "--out", out],
         capsys)
-    assert "unknown output" in _error_line(
+    assert "argument --outputs: 'vz' is no output of" in _error_line(
         ["identify", str(model), str(data), "--outputs", "q,vz", "--out", out, "--quiet"],
-        capsys)
+        capsys, ExitStatus.USAGE)
     assert "must be at least 1" in _error_line(
         ["identify", str(model), str(data), "--max-iterations", "0", "--out", out], capsys,
         ExitStatus.USAGE)

@@ -429,3 +429,17 @@ def test_atomic_write_failure_leaves_the_old_file(tmp_path):
 def test_atomic_write_needs_an_existing_directory(tmp_path):
     with pytest.raises(MissingFileError, match="does not exist"):
         atomic_write(tmp_path / "nowhere" / "file.txt", "x")
+
+
+def test_a_file_without_time_read_for_a_model_is_told_how_to_link_its_time(tmp_path):
+    import rotorid
+
+    signals = rotorid.ModelStructure.populated(rotorid.FlightCondition(u0=40.0),
+                                               "fixed-wing-lateral", units="si").signals
+    path = tmp_path / "flight.csv"
+    path.write_text("Time,aileron,p\n0,0,0\n0.1,1,1\n")
+    with pytest.raises(DataFileError, match=(
+            r"missing channel\(s\) time; a maneuver file needs time, then any of v,p,phi,r,"
+            r"aileron,rudder,beta,ay; name the file's time column 'time' or link it in the "
+            r"model's channel map, e.g. Time = \{ signal = \"time\", unit = \"s\" \}")):
+        read_maneuver(path, Ingestion(signals=signals))

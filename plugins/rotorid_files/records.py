@@ -127,8 +127,10 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
         link = ("; name the file's time column 'time' or link it in the model's channel map, "
                 "e.g. Time = { signal = \"time\", unit = \"s\" } (or unit = \"ms\")"
                 if for_model else "")
+        channels = (ALL_CHANNELS[1:] if ingestion.signals is None
+                    else ingestion.signals.all.names)
         raise DataFileError(f"{path}: missing channel(s) time; a maneuver file needs time, "
-                            f"then any of {','.join(ALL_CHANNELS[1:])}{link}")
+                            f"then any of {','.join(channels)}{link}")
     rows = columns["time"].size
     for channel in columns:
         if columns[channel].size != rows:
