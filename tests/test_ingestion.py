@@ -12,6 +12,7 @@ import scipy.io
 from rotorid import Maneuver
 from rotorid.data import ALL_CHANNELS
 from rotorid.errors import DataError, DataFileError, DataWarning
+from rotorid.ingestion import Ingestion
 from rotorid.plugin.manager import create
 from rotorid_files.formats import read_maneuver, write_maneuver
 
@@ -234,3 +235,11 @@ def test_body_velocity_columns_are_read_as_extra_channels_and_written_back(tmp_p
     again = read_maneuver(path)
     assert np.array_equal(again.extra_channels["u"], m.extra_channels["u"])
     assert np.array_equal(again.outputs, m.outputs)
+
+
+def test_a_trim_naming_a_linked_column_asks_for_its_channel():
+    with pytest.raises(DataError, match=r"trim value for column 'DELE', which the channel map "
+                                        r"links to 'long': give the trim of 'long' instead"):
+        Ingestion(trim={"DELE": 1.0}, channels={"DELE": {"signal": "long", "unit": "%"}})
+    kept = Ingestion(trim={"long": 1.0}, channels={"DELE": {"signal": "long", "unit": "%"}})
+    assert kept.trim == {"long": 1.0}

@@ -144,6 +144,13 @@ class Ingestion:
         if self.resample == "decimate" and self.sample_time is None:
             raise DataError("resample = 'decimate' needs a sample_time (the interval after "
                             "decimation, s)")
+        linked = {link.column: link.signal for link in self.channels.links}
+        columns = [name for name in (self.trim if isinstance(self.trim, Mapping) else ())
+                   if name in linked and name != linked[name]]
+        if columns:
+            raise DataError(f"trim value for column {columns[0]!r}, which {self.channels.source} "
+                            f"links to {linked[columns[0]]!r}: give the trim of "
+                            f"{linked[columns[0]]!r} instead, in its unit after conversion")
         if self.signals is not None:
             targets = set(self.signals.all.names) | set(CHANNEL_KINDS) | set(self.keep_columns)
             strange = [link for link in self.channels.links if link.signal not in targets]
