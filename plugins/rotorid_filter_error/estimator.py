@@ -50,7 +50,7 @@ from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.models import LinearModel
 from rotorid.model.parameter_units import rate_unit
 from rotorid.model.structure import ModelStructure
-from rotorid.plugin.manager import notify
+from rotorid.plugin.manager import create, notify
 from rotorid.simulation.discretisation import COMPLEX_STEP
 from rotorid.units import rmse_reference_factors
 from rotorid_output_error.levenberg_marquardt import Settings, run
@@ -184,9 +184,20 @@ def _whole_number(instance, attribute, value):
                               f"measurement update), got {value!r}")
 
 
+#: Where the derivatives and delays start (the ``start`` option).
+START_CHOICES = ("auto", "initial", "equation-error", "output-error")
+#: The note of a fit from equation error (white process noise only) that ended with a sign
+#: violation or without converging: the free F may have followed the data there.
+POORER_OPTIMUM_ADVICE = (
+    "from equation error this fit ended with sign violations or without converging, which "
+    "can mean a poorer optimum where the process noise follows the data; with little "
+    "process noise, a start from an output-error fit (start = 'output-error', rotorid "
+    "identify --start output-error) may reach a likelier one: compare the costs")
+
+
 def _start_choice(instance, attribute, value):
-    if value not in ("auto", "initial", "equation-error"):
-        raise EstimationError(f"start must be 'auto', 'initial' or 'equation-error', "
+    if value not in START_CHOICES:
+        raise EstimationError(f"start must be one of {', '.join(map(repr, START_CHOICES))}, "
                               f"got {value!r}")
 
 
@@ -455,9 +466,12 @@ class FilterErrorEstimator:
             only, its innovations' sensor noise stays white, and the inputs between updates
             need no hold assumption, as decimated records' do. Linear structures only.
         start: ``"auto"`` (equation error when every derivative's initial value is zero, else
-            the initial values), ``"initial"`` or ``"equation-error"`` for the derivatives and delays.
-            With gusts, equation error starts a first fit with accelerations in place of the
-            gusts, whose derivatives and delays start the gust fit (:meth:`_gust_free_start`).
+            the initial values), ``"initial"``, ``"equation-error"`` or ``"output-error"`` (an
+            output-error fit of the structure, for data with little process noise, where a
+            free F from equation error can settle in a poorer optimum) for the derivatives
+            and delays. With gusts, equation error starts a first fit with accelerations in
+            place of the gusts, whose derivatives and delays start the gust fit
+            (:meth:`_gust_free_start`).
         callback: called with ``(stage, progress record)`` after every accepted iteration.
     """
 
@@ -512,8 +526,10 @@ class FilterErrorEstimator:
             gust_states(structure, self.gusts), self.initial_states, self.output_biases,
             self.update_every)
         values, note, given = self._start_values(problem, maneuvers, start)
-        if self._wants_equation_error(structure) and not any(
-                name in given for name in structure.parameter_names):
+        mine = not any(name in given for name in structure.parameter_names)
+        if self.start == "output-error" and mine:
+            values[:problem.n_structure], note = self._output_error_start(structure, maneuvers)
+        elif self._wants_equation_error(structure) and mine:
             first = self._gust_free_start(problem, maneuvers, start)
             if first is not None:
                 values[:problem.n_structure], note = first
@@ -523,7 +539,11 @@ class FilterErrorEstimator:
         held = (_noise_held(problem, values, bounds) if problem.maneuver_parameters.size
                 else None)
         result = run_fit(problem, values, bounds, self.callback, held, stage)
-        return filter_error_estimate(problem, result, values, bounds, note)
+        estimate = filter_error_estimate(problem, result, values, bounds, note)
+        if (self._wants_equation_error(structure) and mine and not problem.disturbances
+                and not problem.gusts and (estimate.sign_violations or not estimate.converged)):
+            estimate = attrs.evolve(estimate, notes=(*estimate.notes, POORER_OPTIMUM_ADVICE))
+        return estimate
 
     def _wants_equation_error(self, structure: ModelStructure) -> bool:
         """Whether the derivatives start from equation error (``start`` option, or "auto"
@@ -531,6 +551,17 @@ class FilterErrorEstimator:
         derivatives = ~structure.is_delay()
         return bool(structure.n_parameters) and (self.start == "equation-error" or (
             self.start == "auto" and not np.any(structure.initial_values()[derivatives])))
+
+    def _output_error_start(self, structure: ModelStructure, maneuvers: ManeuverSet
+                            ) -> tuple[np.ndarray, str]:
+        """Derivatives and delays (structure order) from an output-error fit of
+        ``structure`` (its own start), and the start note."""
+        fitted = create("estimators", "output-error",
+                        output_biases=self.output_biases).estimate(structure, maneuvers)
+        found = dict(zip(fitted.parameter_names, fitted.values))
+        return (np.array([found[name] for name in structure.parameter_names]),
+                f"start values from an output-error fit ({fitted.iterations} iterations, "
+                f"{'converged' if fitted.converged else 'not converged'})")
 
     def _gust_free_start(self, problem, maneuvers, start) -> tuple[np.ndarray, str] | None:
         """Derivatives and delays (``problem.n_structure``,) from a first fit with a

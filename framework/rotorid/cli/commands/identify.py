@@ -4,6 +4,7 @@ Usage::
 
     rotorid identify MODEL.toml DATA... [--estimator output-error] [--out result.json]
                      [--outputs ax,az,...] [--noise full|diagonal] [--max-iterations N]
+                     [--start auto|initial|equation-error|output-error]
                      [--enforce-signs] [--output-biases] [--initial-states]
                      [--hold zoh|foh] [--trim first-second|CH=VALUE,...]
                      [--resample linear|decimate] [--sample-time S]
@@ -101,6 +102,12 @@ def add_arguments(parser) -> None:
                         help="noise covariance R: full (default) or diagonal")
     parser.add_argument("--max-iterations", type=int, default=None, metavar="N",
                         help="iteration limit of the final run (default: the estimator's)")
+    parser.add_argument("--start", default=None,
+                        choices=("auto", "initial", "equation-error", "output-error"),
+                        help="where the derivatives start (default auto: the model file's "
+                             "initial values, or equation error when all are zero); "
+                             "output-error (filter error only) starts from an output-error "
+                             "fit, for data with little process noise")
     parser.add_argument("--enforce-signs", action="store_true",
                         help="use the derivatives' sign priors as bounds")
     parser.add_argument("--output-biases", action="store_true",
@@ -170,6 +177,12 @@ def _options(args) -> dict:
         options["outputs"] = outputs
     if args.noise is not None:
         options["noise"] = args.noise
+    if args.start is not None:
+        if args.start == "output-error" and args.estimator != "filter-error":
+            raise UsageError("--start output-error starts filter error from an output-error "
+                             "fit; with another estimator choose auto, initial or "
+                             "equation-error")
+        options["start"] = args.start
     if args.max_iterations is not None:
         if args.max_iterations < 1:
             raise UsageError(f"--max-iterations must be at least 1, got {args.max_iterations}")
