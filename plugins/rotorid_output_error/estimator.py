@@ -351,13 +351,17 @@ def _warn_exact_outputs(result, measured, weights, names, noise: str) -> None:
     signal = np.sqrt(sum(np.sum((z * weights) ** 2, axis=0) for z in measured) / n)
     ratio = np.sqrt(np.diag(result.noise_covariance)) / np.maximum(signal, 1e-300)
     exact = np.flatnonzero(ratio < EXACT_FRACTION)
-    if exact.size:
-        warnings.warn(f"the fit reproduces the outputs {', '.join(repr(names[k]) for k in exact)} "
-                      f"exactly (residual RMS at most {ratio[exact].max():.2g} of the output's "
-                      f"RMS): noise-free data? Their R is held at its floor, so the Cramér-Rao "
-                      f"bounds mean nothing; "
-                      f"{'use --noise diagonal or ' if noise == 'full' else ''}leave them out "
-                      f"with --outputs", DataWarning, stacklevel=3)
+    if not exact.size:
+        return
+    if exact.size == len(names):        # nothing to leave out: the records are noise-free
+        fix = "the values are the model's that generated the records; bounds need noisy records"
+    else:
+        fix = (f"{'use --noise diagonal or ' if noise == 'full' else ''}leave them out with "
+               f"--outputs")
+    warnings.warn(f"the fit reproduces the outputs {', '.join(repr(names[k]) for k in exact)} "
+                  f"exactly (residual RMS at most {ratio[exact].max():.2g} of the output's "
+                  f"RMS): noise-free data? Their R is held at its floor, so the Cramér-Rao "
+                  f"bounds mean nothing; {fix}", DataWarning, stacklevel=3)
 
 
 class _SelectedOutputs:
