@@ -205,3 +205,35 @@ def test_the_full_study_reproduces_the_papers_claims(tmp_path):
         assert result.path.steps[-1].n_parameters == 0       # reduced down to nothing
         _, rmse = result.path.rmse_curve()
         assert result.path.selected_index == int(np.argmin(rmse))
+
+
+def test_key_derivatives_are_those_the_cases_structure_can_hold():
+    """The helicopter's key derivatives where the structure's shape has them (the six-dof
+    template all nine, the longitudinal template its own four); an aeroplane declared in β has
+    none, so its report has no key-derivative section or table."""
+    import sys
+    import tomllib
+    from pathlib import Path
+
+    import rotorid
+    from rotorid.model.modelfile import parse_model
+    from rotorid.report.html import case_table_names
+    from rotorid.study.result import KEY_DERIVATIVES, CaseResult
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_filter_error import AEROPLANE_LATERAL
+
+    def names(structure):
+        return CaseResult.key_derivative_names(types.SimpleNamespace(
+            structures={"with delays": structure}))
+
+    hover = rotorid.FlightCondition.from_airspeed(0.0)
+    assert names(rotorid.ModelStructure.six_dof(hover)) == KEY_DERIVATIVES
+    assert names(rotorid.ModelStructure.populated(hover, "longitudinal")) == (
+        "M_w", "Z_w", "M_u", "X_u")
+    aeroplane = types.SimpleNamespace(
+        key_derivative_names=lambda: names(parse_model(tomllib.loads(AEROPLANE_LATERAL), "a")),
+        handling_qualities={}, case=types.SimpleNamespace(reference=None),
+        frequency_comparison=None, estimator_comparison=None, hybrid_comparison=None)
+    assert aeroplane.key_derivative_names() == ()
+    assert case_table_names(aeroplane, ()) == ["removed", "parameters", "verification"]

@@ -52,7 +52,7 @@ from rotorid.study.claims import (
 )
 from rotorid.study.expectations import check_signs, derivative_unit
 from rotorid.study.hybrid_comparison import FLAP_SHAPED, HYBRID_MODELS, mean_cost
-from rotorid.study.result import KEY_DERIVATIVES, MODELS
+from rotorid.study.result import MODELS
 from rotorid.units import CHANNEL_KINDS, unit_system
 from rotorid.verification.band import DEFAULT_BAND
 from rotorid.verification.envelopes import MISMATCH_COST_GUIDELINE_TEXT
@@ -63,7 +63,7 @@ def key_derivative_checks(result):
     estimate = result.estimates["with delays"]
     identified = {name: (float(estimate.values[i]), float(estimate.cramer_rao[i]))
                   for i, name in enumerate(estimate.parameter_names)}
-    return check_signs(KEY_DERIVATIVES, identified, result.condition.airspeed_kt,
+    return check_signs(result.key_derivative_names(), identified, result.condition.airspeed_kt,
                        estimate.units, result.truth_derivatives,
                        published=result.case.data_source in PAPER_SOURCES)
 
@@ -132,11 +132,12 @@ def parameter_rows(result) -> list[list[str]]:
 
 
 def _key_table(result, truth) -> str:
-    """The key-derivative table, or a sentence when the model has none of them."""
+    """The key-derivative table, or a sentence when the selected model kept none of those
+    its structure can hold."""
     rows = key_derivative_rows(result)
     if len(rows) == 1:
-        return (f"<p>The model has none of the helicopter's key derivatives "
-                f"({html.escape(', '.join(KEY_DERIVATIVES))}).</p>")
+        return (f"<p>The selected model kept none of the key derivatives "
+                f"({html.escape(', '.join(result.key_derivative_names()))}).</p>")
     return _html_table(rows, None if not truth else 8)
 
 
@@ -144,7 +145,7 @@ def key_derivative_rows(result) -> list[list[str]]:
     if not has_truth_model(result):
         estimate = result.estimates["with delays"]
         rows = [["derivative", "unit", "identified", "CR bound"]]
-        for name in KEY_DERIVATIVES:
+        for name in result.key_derivative_names():
             if name in estimate:
                 item = estimate[name]
                 rows.append([name, parameter_unit(name, estimate.units, estimate),
@@ -685,8 +686,10 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         title = f"{claims_title(result)}, measured"
         contents.append(("claims", title))
         body += [f'<h2 id="claims">{html.escape(title)}</h2>', claims_html(claims)]
+    keys = bool(result.key_derivative_names())
     contents += [("reduction", "Model reduction"), ("delays", "Time delays"),
-                 ("parameters", "Identified parameters"), ("key-derivatives", "Key derivatives"),
+                 ("parameters", "Identified parameters"),
+                 *((("key-derivatives", "Key derivatives"),) if keys else ()),
                  ("time-histories", "Time histories"), ("verification", "Frequency-domain "
                                                                        "verification")]
     key_text = ("Identified (model with delays) beside the truth model's residualised 6-DoF "
@@ -710,8 +713,8 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         '<h2 id="parameters">Identified parameters (Appendix B)</h2>',
         "<p>CR: Cramér-Rao bound (in the parameter's unit); CR % and I %: Cramér-Rao bound and "
         "insensitivity relative to the value.</p>", _html_table(parameter_rows(result)),
-        '<h2 id="key-derivatives">Key derivatives</h2>', f"<p>{key_text}</p>",
-        _key_table(result, truth),
+        *(('<h2 id="key-derivatives">Key derivatives</h2>', f"<p>{key_text}</p>",
+            _key_table(result, truth)) if keys else ()),
         reference_html(result),
         '<h2 id="time-histories">Time histories of the identification maneuvers</h2>',
         figures_html(figures.get("time", [])),
@@ -730,8 +733,9 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         shown = [error] + ([bode[error.pair]] if error.pair in bode else [])
         body += [f'<h3 id="{anchor}">{html.escape(error.pair)}</h3>', figures_html(shown)]
     if result.case.reference:
-        contents.insert(contents.index(("key-derivatives", "Key derivatives")) + 1,
-                        ("reference", "Reference values"))
+        before = ("key-derivatives", "Key derivatives") if keys else ("parameters",
+                                                                      "Identified parameters")
+        contents.insert(contents.index(before) + 1, ("reference", "Reference values"))
     handling = handling_qualities_html(result)
     if handling:
         contents.append(("handling-qualities", "Handling qualities"))
@@ -761,9 +765,11 @@ _TABLE_ROWS = {
 
 
 def case_table_names(result, claims) -> list[str]:
-    """The case's tables (``tables/<name>.csv``) in the report's order: the four every case
-    has, then those of its ``claims``, ``[reference]`` values and comparisons it ran."""
-    return ["removed", "parameters", "key_derivatives", "verification",
+    """The case's tables (``tables/<name>.csv``) in the report's order: the three every case
+    has, the key derivatives where its structure can hold any, then those of its ``claims``,
+    ``[reference]`` values and comparisons it ran."""
+    return ["removed", "parameters",
+            *(("key_derivatives",) if result.key_derivative_names() else ()), "verification",
             *(("handling_qualities",) if any(result.handling_qualities.values()) else ()),
             *(("checks",) if claims else ()),
             *(("reference",) if result.case.reference else ()),

@@ -94,11 +94,18 @@ class CaseResult:
         per maneuver (the simulation the metrics were taken from)."""
         return self.simulations[model].outputs
 
+    def key_derivative_names(self) -> tuple[str, ...]:
+        """The key derivatives (:data:`KEY_DERIVATIVES`) the case's structure can hold (an
+        aeroplane's declared structure in β, say, holds none of them)."""
+        possible = set(self.structures["with delays"].template.derivative_names())
+        return tuple(name for name in KEY_DERIVATIVES if name in possible)
+
     def key_derivatives(self) -> dict:
-        """Identified key derivatives of the delayed model, and the truth's linearisation."""
+        """Identified key derivatives of the delayed model, and the truth's linearisation
+        (those of :meth:`key_derivative_names`)."""
         estimate = self.estimates["with delays"]
         table = {}
-        for name in KEY_DERIVATIVES:
+        for name in self.key_derivative_names():
             identified = (estimate.value(name) if name in estimate.parameter_names else None)
             truth = None if self.truth_derivatives is None else self.truth_derivatives.get(name)
             table[name] = {"identified": identified, "truth_linearisation": truth}
