@@ -263,3 +263,14 @@ def test_condition_from_mapping():
 def test_bad_conditions_are_rejected(build, fragment):
     with pytest.raises(StructureError, match=fragment):
         build()
+
+
+def test_a_condition_states_its_airspeed_in_the_unit_systems_speed():
+    condition = FlightCondition(u0=40.0)
+    assert condition.describe("si") == "40.0 m/s, Θ0 = 0.00°, Φ0 = 0.00°"
+    assert condition.describe() == "77.8 kt, Θ0 = 0.00°, Φ0 = 0.00°"
+    assert condition.airspeed_text("si", 0) == "40 m/s"
+    from rotorid.report.figures import flight_label
+
+    assert flight_label(condition, "si") == "40 m/s"
+    assert flight_label(FlightCondition.from_airspeed(0.0), "si") == "hover"

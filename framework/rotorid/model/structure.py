@@ -146,9 +146,17 @@ class FlightCondition:
         """Total airspeed in knots."""
         return math.sqrt(self.u0**2 + self.v0**2 + self.w0**2) / KNOT
 
-    def describe(self) -> str:
-        """One-line summary, e.g. ``70.0 kt, Θ0 = 1.2°, Φ0 = -1.5°``."""
-        return (f"{self.airspeed_kt:.1f} kt, Θ0 = {math.degrees(self.theta0):.2f}°, "
+    def airspeed_text(self, units: str = "flight-test", decimals: int = 1) -> str:
+        """The airspeed in the unit system's speed: ``"70.0 kt"`` (flight-test units) or
+        ``"36.0 m/s"`` (``units = "si"``)."""
+        if unit_system(units).name == "si":
+            return f"{self.airspeed_kt * KNOT:.{decimals}f} m/s"
+        return f"{self.airspeed_kt:.{decimals}f} kt"
+
+    def describe(self, units: str = "flight-test") -> str:
+        """One-line summary, e.g. ``70.0 kt, Θ0 = 1.2°, Φ0 = -1.5°`` (the airspeed in m/s
+        for ``units = "si"``)."""
+        return (f"{self.airspeed_text(units)}, Θ0 = {math.degrees(self.theta0):.2f}°, "
                 f"Φ0 = {math.degrees(self.phi0):.2f}°")
 
 

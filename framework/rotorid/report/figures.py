@@ -36,9 +36,10 @@ def file_stem(text: str) -> str:
     return "".join(c if c.isalnum() or c in "-_" else "_" for c in text)
 
 
-def flight_label(condition) -> str:
-    """``"hover"`` or the airspeed, e.g. ``"70 kt"``: how titles name a flight condition."""
-    return "hover" if abs(condition.airspeed_kt) < 0.5 else f"{condition.airspeed_kt:.0f} kt"
+def flight_label(condition, units: str = "flight-test") -> str:
+    """``"hover"`` or the airspeed in the unit system's speed, e.g. ``"70 kt"`` or ``"40 m/s"``
+    (``units = "si"``): how titles name a flight condition."""
+    return "hover" if abs(condition.airspeed_kt) < 0.5 else condition.airspeed_text(units, 0)
 
 
 def rmse_caption(path) -> str:
@@ -152,7 +153,7 @@ def case_figures(result, figures_dir: Path,
     tally = FigureTally(case_figure_count(result), progress)
     written = {"reduction": [], "delays": [], "time": [], "frequency": [], "bode": []}
     signals = result.structures["with delays"].signals
-    flight = flight_label(result.condition)
+    flight = flight_label(result.condition, result.estimates["no delays"].units)
     figure = plot_rmse_path(result.path, title=f"{flight}: RMSE versus removed parameters")
     tally.save(figure, figures_dir / "rmse")
     written["reduction"].append(ReportFigure("rmse.png", rmse_caption(result.path)))

@@ -671,7 +671,8 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
     verification_count = 0 if result.verification_data is None else len(result.verification_data)
     contents = [("summary", "Summary")]
     body = [
-        f"<p>{html.escape(case.description)}. Trim: {html.escape(result.condition.describe())}. "
+        f"<p>{html.escape(case.description)}. Trim: "
+        f"{html.escape(result.condition.describe(estimates['no delays'].units))}. "
         f"{len(result.identification)} identification maneuvers "
         f"({', '.join(_kinds(result.identification))}), {verification_count} verification "
         f"maneuvers; "
@@ -806,14 +807,15 @@ def write_study_report(results: Mapping[str, object], out_dir: str | Path) -> Pa
     for name, result in results.items():
         checks = case_claims(result)
         decided, failed = claims_tally(checks)
-        rows.append([name, result.condition.describe(),
+        units = result.estimates["no delays"].units
+        rows.append([name, result.condition.describe(units),
                      f"{result.path.selected.n_parameters} ({len(result.path.removed)})",
                      f"{result.estimates['no delays'].rmse:.4f}",
                      f"{result.estimates['with delays'].rmse:.4f}", _delays_text(result),
                      f"{len(decided) - len(failed)}/{len(decided)}" if checks else "–"])
         link = f"{html.escape(name)}/report.html"
         anchor = "case-" + file_stem(name)
-        contents.append((anchor, f"Case {name} ({flight_label(result.condition)})"))
+        contents.append((anchor, f"Case {name} ({flight_label(result.condition, units)})"))
         rmse = ReportFigure("rmse.png", rmse_caption(result.path))
         sections.append(f'<h2 id="{anchor}"><a href="{link}">Case {html.escape(name)}</a></h2>'
                         + summary_html(result, checks)

@@ -331,7 +331,7 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     verif = case.actuated(data.verification)
     clock["data"] = time.perf_counter()
     report(case.name, f"{len(ident)} identification and {0 if verif is None else len(verif)} "
-                      f"verification maneuvers; trim {condition.describe()}")
+                      f"verification maneuvers; trim {condition.describe(ident.units)}")
     if case.cutoff_hz is not None and case.keeps_every_sample:
         report(case.name, f"identification records low-passed at {case.cutoff_hz:g} Hz, "
                           f"every sample kept ({ident[0].dt:g} s)")
