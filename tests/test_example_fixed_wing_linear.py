@@ -192,9 +192,10 @@ def test_a_study_of_the_aeroplane_speaks_about_the_aeroplane(tmp_path, capsys):
     assert identified.structure.outputs == ("V", "alpha", "q", "theta", "q_dot", "ax", "az")
     assert not identified.structure.free_delays                # no rotor, no default delays
     report = (tmp_path / "out" / "aeroplane" / "report.html").read_text()
-    for absent in ("Bo-105", "paper's claims", "truth"):
+    for absent in ("Bo-105", "paper's claims", "truth", "Appendix B", " kt"):
         assert absent not in report
     assert "rad/s per m/s" in report and "q/elevator" in report       # Z_V
+    assert "Trim: 50.0 m/s" in report and "RMSE values (eq. 18) are pure numbers" in report
     assert "[%]" not in report.split('id="time-histories"')[1].split('id="verification"')[0]
 
 

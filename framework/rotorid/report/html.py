@@ -91,6 +91,14 @@ def parameter_unit(name: str, units: str, estimate=None) -> str:
     return derivative_unit(name, units)
 
 
+def rmse_basis_text(estimate) -> str:
+    """What the report's RMSE values ("[mixed units]") are, from ``estimate.rmse_basis``."""
+    if estimate.rmse_basis:
+        counted = estimate.rmse_basis.split(" with ", 1)[-1]
+        return f"RMSE values (eq. 18) are pure numbers, {counted}"
+    return "RMSE values pool the outputs' residuals in their own units"
+
+
 def removed_rows(result) -> list[list[str]]:
     """Appendix B, removed parameters: step, parameter, criterion, metric, RMSE, iterations."""
     rows = [["step", "removed", "criterion", "metric [%]", "parameters [-]",
@@ -676,7 +684,8 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         f"{len(result.identification)} identification maneuvers "
         f"({', '.join(_kinds(result.identification))}), {verification_count} verification "
         f"maneuvers; "
-        f"{'quick' if case.is_quick else 'full'} set. Units: {estimates['no delays'].units}. "
+        f"{'quick' if case.is_quick else 'full'} set. Units: {estimates['no delays'].units}; "
+        f"{html.escape(rmse_basis_text(estimates['no delays']))}. "
         f"Time: {html.escape(seconds)}.</p>",
         "<p>Machine-readable results: <a href=\"result.json\">result.json</a>; tables: "
         + ", ".join(f'<a href="tables/{t}.csv">{t}.csv</a>'
@@ -688,6 +697,8 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         contents.append(("claims", title))
         body += [f'<h2 id="claims">{html.escape(title)}</h2>', claims_html(claims)]
     keys = bool(result.key_derivative_names())
+    # the paper's tables where the case reproduces the paper
+    appendix = " (Appendix B)" if case.data_source in PAPER_SOURCES else ""
     contents += [("reduction", "Model reduction"), ("delays", "Time delays"),
                  ("parameters", "Identified parameters"),
                  *((("key-derivatives", "Key derivatives"),) if keys else ()),
@@ -706,12 +717,12 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         f"removed in order: {html.escape(', '.join(path.removed) or 'none')}. "
         f"{_other_selections(path)}</p>",
         figures_html(figures.get("reduction", [])),
-        "<h3>Removed parameters (Appendix B)</h3>", _html_table(removed_rows(result), 7),
+        f"<h3>Removed parameters{appendix}</h3>", _html_table(removed_rows(result), 7),
         '<h2 id="delays">Time delays</h2>',
         f"<p>{html.escape(_delays_text(result))}. RMSE without delays "
         f"{result.rmse_text('no delays')}, with delays {result.rmse_text('with delays')}.</p>",
         figures_html(figures.get("delays", [])),
-        '<h2 id="parameters">Identified parameters (Appendix B)</h2>',
+        f'<h2 id="parameters">Identified parameters{appendix}</h2>',
         "<p>CR: Cramér-Rao bound (in the parameter's unit); CR % and I %: Cramér-Rao bound and "
         "insensitivity relative to the value.</p>", _html_table(parameter_rows(result)),
         *(('<h2 id="key-derivatives">Key derivatives</h2>', f"<p>{key_text}</p>",
@@ -821,8 +832,10 @@ def write_study_report(results: Mapping[str, object], out_dir: str | Path) -> Pa
                         + summary_html(result, checks)
                         + figures_html([rmse], prefix=f"{html.escape(name)}/figures/")
                         + (claims_html(checks) if checks else ""))
+    bases = dict.fromkeys(rmse_basis_text(r.estimates["no delays"]) for r in results.values())
     body = ('<h2 id="overview">Overview</h2><p>Each case links to its full report: reduction '
-            "path, Appendix-B tables, time histories, frequency-domain verification.</p>"
+            "path, parameter tables, time histories, frequency-domain verification. "
+            + html.escape("; ".join(bases)) + ".</p>"
             + _html_table(rows) + "\n".join(sections))
     return atomic_write(out_dir / "report.html", _page("rotorid study report", body, contents))
 
