@@ -195,3 +195,13 @@ def test_mismatch_cost_uses_the_coherent_range(manager):
 def test_wrap180():
     assert wrap180([180.0, -180.0, 190.0, -190.0, 540.0]).tolist() == [
         180.0, 180.0, -170.0, 170.0, 180.0]
+
+
+def test_a_check_says_where_its_points_fall_outside(manager):
+    muad = envelope(manager, "muad")
+    omega = np.array([0.5, 1.0, 2.0, 4.0])
+    inside = muad.check(np.ones(4, complex), np.ones(4), omega)
+    assert inside.outside_text() == ""
+    error = np.array([1.0, 1.0, 10.0, 10.0], complex)        # +20 dB at 2 and 4 rad/s
+    outside = muad.check(error, np.ones(4), omega)
+    assert outside.outside_text() == "; outside at 2–4 rad/s"

@@ -633,7 +633,8 @@ def _verification_verdicts(result) -> tuple[list[str], list[str]]:
         if check is None or check.passed is None:
             continue
         line = (f"{item.pair} {check.n_inside}/{check.n_used} points inside MUAD "
-                f"(worst {check.worst_margin_db:+.1f} dB / {check.worst_margin_deg:+.0f}°)")
+                f"(worst {check.worst_margin_db:+.2f} dB / {check.worst_margin_deg:+.1f}°"
+                f"{check.outside_text()})")
         (passed if check.passed else failed).append(line)
     return passed, failed
 

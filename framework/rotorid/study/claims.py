@@ -115,7 +115,8 @@ def muad_claim(result, pair: str) -> Claim:
                      "pair not verified" if check is None else check.status)
     return _decided(claim, f"{check.n_inside}/{check.n_used} coherent points inside, worst "
                            f"margin {check.worst_margin_db:+.2f} dB / "
-                           f"{check.worst_margin_deg:+.1f}°", bool(check.passed))
+                           f"{check.worst_margin_deg:+.1f}°{check.outside_text()}",
+                    bool(check.passed))
 
 
 def phase_claim(result, pair: str) -> Claim:

@@ -131,6 +131,16 @@ class EnvelopeCheck:
         """Smallest phase margin over the used points (negative: outside), deg."""
         return _worst(self.margin_deg, self.used)
 
+    def outside_text(self) -> str:
+        """Where the used points fall outside the envelope, e.g. ``"; outside at 0.42–0.6
+        rad/s"`` (empty when none does)."""
+        outside = self.omega[self.used & ~self.inside]
+        if not outside.size:
+            return ""
+        low, high = float(outside.min()), float(outside.max())
+        return f"; outside at {low:.2g} rad/s" if low == high else \
+            f"; outside at {low:.2g}–{high:.2g} rad/s"
+
     def summary(self) -> dict:
         """JSON-ready summary (no per-point arrays)."""
         return {
