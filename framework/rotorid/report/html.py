@@ -214,6 +214,17 @@ def verification_rows(result) -> list[list[str]]:
     return rows
 
 
+def _unavailable_envelopes_html(result) -> str:
+    """Why an envelope column reads "not available": its source's first sentence."""
+    unavailable = {check.envelope: check.provenance.split(". ")[0].rstrip(".")
+                   for verification in result.verification.values()
+                   for item in verification.pairs for check in item.checks.values()
+                   if check.status == "not available"}
+    return "".join(f"<p>{html.escape(name)}: not available — "
+                   f"{html.escape(why[:1].lower() + why[1:])}.</p>"
+                   for name, why in unavailable.items())
+
+
 def comparison_cost_rows(result) -> list[list[str]]:
     """With ``[compare] frequency``: J per pair of the time- and frequency-domain fits of each
     model, their sum, and both fits' RMSE and worst TIC on the identification multisteps, from
@@ -619,9 +630,11 @@ def _band_source(band) -> str:
     return "set by the case's [verification] table"
 
 
-def _kinds(maneuvers) -> list[str]:
-    """The distinct maneuver kinds of a set (metadata ``kind``), in order of appearance."""
-    return list(dict.fromkeys(str(m.metadata.get("kind", "unspecified")) for m in maneuvers))
+def _kinds(maneuvers) -> str:
+    """The distinct maneuver kinds of a set (metadata ``kind``) in order of appearance, as
+    `` (3211, sweep)``; empty when no maneuver states its kind."""
+    kinds = dict.fromkeys(str(m.metadata["kind"]) for m in maneuvers if "kind" in m.metadata)
+    return f" ({', '.join(kinds)})" if kinds else ""
 
 
 def _verification_verdicts(result) -> tuple[list[str], list[str]]:
@@ -682,8 +695,8 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
     body = [
         f"<p>{html.escape(case.description)}. Trim: "
         f"{html.escape(result.condition.describe(estimates['no delays'].units))}. "
-        f"{len(result.identification)} identification maneuvers "
-        f"({', '.join(_kinds(result.identification))}), {verification_count} verification "
+        f"{len(result.identification)} identification maneuvers"
+        f"{html.escape(_kinds(result.identification))}, {verification_count} verification "
         f"maneuvers; "
         f"{'quick' if case.is_quick else 'full'} set. Units: {estimates['no delays'].units}; "
         f"{html.escape(rmse_basis_text(estimates['no delays']))}. "
@@ -735,7 +748,7 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         f"<p>Every verdict (MUAD, AEE, the mismatch cost J, and the analytic comparison in "
         f"result.json) counts the same points: the verification band "
         f"{html.escape(result.case.band.describe())} ({_band_source(result.case.band)}).</p>",
-        _html_table(verification_rows(result))]
+        _html_table(verification_rows(result)), _unavailable_envelopes_html(result)]
     if notes:
         body += ["<h3>Verification notes</h3>",
                  "<ul>" + "".join(f"<li>{html.escape(n)}</li>" for n in notes) + "</ul>"]
