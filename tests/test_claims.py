@@ -58,7 +58,9 @@ def _verified(**passed):
     items = [types.SimpleNamespace(pair=pair.replace("_", "/"), checks={
         "muad": types.SimpleNamespace(passed=ok, n_inside=10 if ok else 7, n_used=10,
                                       worst_margin_db=0.5 if ok else -1.0,
-                                      worst_margin_deg=3.0, status="checked")})
+                                      worst_margin_deg=3.0, status="checked",
+                                      outside_text=lambda ok=ok: "" if ok else
+                                      "; outside at 2–4 rad/s")})
         for pair, ok in passed.items()]
     by_pair = {item.pair: item for item in items}
     return {"with delays": types.SimpleNamespace(pairs=items, get=by_pair.get)}
@@ -79,6 +81,7 @@ def test_a_case_on_a_users_own_data_is_checked_on_the_guidelines():
     assert len(decided) == 4
     assert [c.claim.split(" ")[0] for c in failed] == ["time-domain", "time-domain",
                                                         "q/elevator"]
+    assert failed[-1].evidence.endswith("worst margin -1.00 dB / +3.0°; outside at 2–4 rad/s")
     truth_data = _result(truth={"M_w": -0.1}, **models)
     assert claims_title(truth_data) == "The paper's claims"
     assert case_claims(truth_data) == paper_claims(truth_data)
