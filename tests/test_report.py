@@ -237,3 +237,17 @@ def test_key_derivatives_are_those_the_cases_structure_can_hold():
         frequency_comparison=None, estimator_comparison=None, hybrid_comparison=None)
     assert aeroplane.key_derivative_names() == ()
     assert case_table_names(aeroplane, ()) == ["removed", "parameters", "verification"]
+
+
+def test_the_bode_caption_names_the_response_the_analytic_one_is_compared_with():
+    from rotorid.report.figures import _bode_caption
+
+    single = types.SimpleNamespace(model_source="simulated", conditioned=None, analytic=object())
+    assert ("which the measured response (no other input moved, so it is conditioned on "
+            "nothing) is compared with") in _bode_caption("p/aileron", single)
+    loops = types.SimpleNamespace(
+        model_source="simulated", analytic=object(),
+        conditioned=types.SimpleNamespace(conditioned_on=("lat", "ped")))
+    caption = _bode_caption("q/long", loops)
+    assert "red: the measured response conditioned on lat, ped" in caption
+    assert "which the conditioned response is compared with" in caption

@@ -98,13 +98,15 @@ def _bode_caption(pair: str, item) -> str:
              "(used for a model that cannot be simulated over the whole sweep)")
     text = (f"{html.escape(pair)}, model with delays. Blue: the measured response estimated "
             f"from the sweeps (single input); orange: {model}")
-    if item.conditioned is not None and item.conditioned.conditioned_on:
+    conditioned = item.conditioned is not None and bool(item.conditioned.conditioned_on)
+    if conditioned:
         text += (f"; red: the measured response conditioned on "
                  f"{html.escape(', '.join(item.conditioned.conditioned_on))} (the other inputs "
                  "that moved, removed by partial spectra; its partial coherence below)")
     if item.analytic is not None:
         text += ("; green line: the model's analytic response with exact delays, which the "
-                 "conditioned response is compared with")
+                 + ("conditioned response" if conditioned else "measured response (no other "
+                    "input moved, so it is conditioned on nothing)") + " is compared with")
     return text + (". Phases share one 360° branch; markers as in the error plots.")
 
 

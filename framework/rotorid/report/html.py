@@ -827,7 +827,7 @@ def write_study_report(results: Mapping[str, object], out_dir: str | Path) -> Pa
     """Write ``<out>/report.html``: one summary per case, linking each case report."""
     out_dir = Path(out_dir)
     rows = [["case", "trim", "parameters (removed) [-]", "RMSE no delays [mixed units]",
-             "RMSE with delays [mixed units]", "delays [s]", "claims holding [-]"]]
+             "RMSE with delays [mixed units]", "delays [s]", "claims or guidelines holding [-]"]]
     sections, contents = [], [("overview", "Overview")]
     for name, result in results.items():
         checks = case_claims(result)
