@@ -527,9 +527,10 @@ class FilterErrorEstimator:
             self.update_every)
         values, note, given = self._start_values(problem, maneuvers, start)
         mine = not any(name in given for name in structure.parameter_names)
+        from_equation_error = mine and self._wants_equation_error(structure)
         if self.start == "output-error" and mine:
             values[:problem.n_structure], note = self._output_error_start(structure, maneuvers)
-        elif self._wants_equation_error(structure) and mine:
+        elif from_equation_error:
             first = self._gust_free_start(problem, maneuvers, start)
             if first is not None:
                 values[:problem.n_structure], note = first
@@ -540,8 +541,8 @@ class FilterErrorEstimator:
                 else None)
         result = run_fit(problem, values, bounds, self.callback, held, stage)
         estimate = filter_error_estimate(problem, result, values, bounds, note)
-        if (self._wants_equation_error(structure) and mine and not problem.disturbances
-                and not problem.gusts and (estimate.sign_violations or not estimate.converged)):
+        if (from_equation_error and not problem.disturbances and not problem.gusts
+                and (estimate.sign_violations or not estimate.converged)):
             estimate = attrs.evolve(estimate, notes=(*estimate.notes, POORER_OPTIMUM_ADVICE))
         return estimate
 
@@ -558,8 +559,7 @@ class FilterErrorEstimator:
         ``structure`` (its own start), and the start note."""
         fitted = create("estimators", "output-error",
                         output_biases=self.output_biases).estimate(structure, maneuvers)
-        found = dict(zip(fitted.parameter_names, fitted.values))
-        return (np.array([found[name] for name in structure.parameter_names]),
+        return (np.array([fitted.value(name) for name in structure.parameter_names]),
                 f"start values from an output-error fit ({fitted.iterations} iterations, "
                 f"{'converged' if fitted.converged else 'not converged'})")
 

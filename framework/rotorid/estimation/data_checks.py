@@ -120,8 +120,10 @@ def _check_plausible(maneuvers: ManeuverSet) -> None:
         units = unit_system(maneuver.units)
         degrees = math.degrees(units.radian_per_angle)
         for names, scale, limit, unit, guess in (
-                (("theta", "phi"), degrees, MAX_ATTITUDE_DEG, "°", "angles in deg declared as rad"),
-                (("p", "q", "r"), degrees, MAX_RATE_DEG_S, "°/s", "rates in deg/s declared as rad/s"),
+                (("theta", "phi"), degrees, MAX_ATTITUDE_DEG, "°",
+                 "angles in deg declared as rad"),
+                (("p", "q", "r"), degrees, MAX_RATE_DEG_S, "°/s",
+                 "rates in deg/s declared as rad/s"),
                 (("ax", "ay", "az"), 1 / units.g, MAX_ACCELERATION_G, " g",
                  "m/s² or ft/s² declared as g")):
             for name in (n for n in names if n in maneuver.output_names):

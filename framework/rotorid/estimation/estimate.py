@@ -109,14 +109,22 @@ def rmse(residuals: np.ndarray) -> float:
     return float(np.sqrt(np.mean(residuals**2)))
 
 
+def rmse_counted_units(output_units) -> tuple[str, ...]:
+    """The distinct reference units (:data:`rotorid.units.RMSE_REFERENCE_UNITS`) the residuals
+    of outputs in ``output_units`` count in for the RMSE, in output order; ``()`` when an
+    output has none, so that the RMSE mixes units."""
+    if rmse_reference_factors(output_units) is None:
+        return ()
+    return tuple(dict.fromkeys(RMSE_REFERENCE_UNITS[UNITS[u][0]] for u in output_units))
+
+
 def rmse_basis(output_units) -> str:
     """What makes the RMSE over outputs in ``output_units`` a pure number: the reference
-    units its residuals are counted in (:data:`rotorid.units.RMSE_REFERENCE_UNITS`); ``""``
-    when an output has none, so that the RMSE mixes units."""
-    if rmse_reference_factors(output_units) is None:
-        return ""
-    references = dict.fromkeys(RMSE_REFERENCE_UNITS[UNITS[u][0]] for u in output_units)
-    return f"dimensionless: eq. 18 with the residuals counted in {', '.join(references)}"
+    units its residuals are counted in (:func:`rmse_counted_units`); ``""`` when an output
+    has none, so that the RMSE mixes units."""
+    counted = rmse_counted_units(output_units)
+    return (f"dimensionless: eq. 18 with the residuals counted in {', '.join(counted)}"
+            if counted else "")
 
 
 # attrs metadata that drive the JSON record (Estimate.as_dict / from_dict):

@@ -39,7 +39,8 @@ ACCELERATIONS = {"u": "ax", "v": "ay", "w": "az"}
 
 
 #: Where a user declares a channel's unit, for the advice of the checks.
-WHERE_UNITS = "the column's unit in the model's [channels] table, or the file header's channel_units"
+WHERE_UNITS = ("the column's unit in the model's [channels] table, or the file header's "
+               "channel_units")
 
 
 @attrs.frozen

@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rotorid.estimation.estimate import rmse_counted_units
 from rotorid.io import atomic_write
 from rotorid.model.derivatives import delayed_derivative
 from rotorid.report.figures import (
@@ -92,10 +93,12 @@ def parameter_unit(name: str, units: str, estimate=None) -> str:
 
 
 def rmse_basis_text(estimate) -> str:
-    """What the report's RMSE values ("[mixed units]") are, from ``estimate.rmse_basis``."""
-    if estimate.rmse_basis:
-        counted = estimate.rmse_basis.split(" with ", 1)[-1]
-        return f"RMSE values (eq. 18) are pure numbers, {counted}"
+    """What the report's RMSE values ("[mixed units]") are: the units ``estimate``'s
+    residuals count in (:func:`rotorid.estimation.estimate.rmse_counted_units`)."""
+    counted = rmse_counted_units(estimate.output_units)
+    if counted:
+        return (f"RMSE values (eq. 18) are pure numbers, the residuals counted in "
+                f"{', '.join(counted)}")
     return "RMSE values pool the outputs' residuals in their own units"
 
 
