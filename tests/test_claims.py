@@ -10,6 +10,7 @@ from rotorid.study.claims import (
     claims_tally,
     claims_title,
     paper_claims,
+    phase_claim,
     sign_claim,
 )
 from rotorid.verification.band import DEFAULT_BAND
@@ -24,16 +25,20 @@ def _estimate(values: dict, bounds: dict, rmse: float = 0.3):
 
 
 def _result(source="helisim", airspeed_kt=70.0, truth=None, simulated_rmse=None,
-            **estimates):
+            kept_delays=("L_lat",), **estimates):
     """A case result of ``estimates``; each model's simulation RMSE is its estimate's unless
-    ``simulated_rmse`` gives it (an estimator whose RMSE is not a simulation's)."""
+    ``simulated_rmse`` gives it (an estimator whose RMSE is not a simulation's). Without
+    ``kept_delays`` it shows its model with delays alone, as the "identified model"."""
     case = types.SimpleNamespace(data_source=source, band=DEFAULT_BAND)
     metrics = {label: types.SimpleNamespace(
         rmse=estimate.rmse if simulated_rmse is None else simulated_rmse)
         for label, estimate in estimates.items()}
     return types.SimpleNamespace(
         case=case, condition=types.SimpleNamespace(airspeed_kt=airspeed_kt),
-        estimates=estimates, time_metrics=metrics, verification={}, truth_derivatives=truth)
+        estimates=estimates, time_metrics=metrics, verification={}, truth_derivatives=truth,
+        kept_delays=kept_delays, models=tuple(estimates) if kept_delays else ("with delays",),
+        model_name=lambda label: label if kept_delays else "identified model",
+        final_model_name="model with delays" if kept_delays else "identified model")
 
 
 def test_sign_claims_carry_the_truth_models_value_and_their_verdicts():
@@ -87,6 +92,17 @@ def test_a_case_on_a_users_own_data_is_checked_on_the_guidelines():
     assert case_claims(truth_data) == paper_claims(truth_data)
     assert [c.claim for c in case_claims(truth_data) if c.claim.startswith("M_w")] == [
         "M_w < 0"]
+
+
+def test_a_case_without_delays_is_checked_once_on_its_one_model():
+    model = _estimate({"M_w": -0.2}, {"M_w": 0.01}, rmse=1.5)
+    own = _result(source="files", kept_delays=(), **{"no delays": model, "with delays": model})
+    own.verification = _verified(alpha_elevator=True)
+    assert [c.claim.split(" where")[0] for c in case_claims(own)] == [
+        "time-domain RMSE ≤ 1.0 to 2.0 (identified model; checked against 2)",
+        "alpha/elevator of the identified model inside MUAD"]
+    phase = phase_claim(own, "p/long")
+    assert phase.verdict == "not checked" and phase.reason == "the model kept no delay"
 
 
 def test_an_rmse_that_would_mix_units_is_not_checked():

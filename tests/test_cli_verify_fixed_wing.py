@@ -69,3 +69,26 @@ def test_verify_checks_every_pair_of_the_aeroplane_on_its_own_columns(tmp_path, 
     for pair in ("V/elevator", "alpha/elevator", "q/elevator", "theta/elevator", "V/thrust"):
         assert muad[pair], pair
     assert list(summary["time_domain"]["rmse_per_output"]) == list(OUTPUTS)
+    assert not [n for n in summary["notes"] if "step input" in n]      # sweeps are sweeps
+
+
+def test_verify_on_multisteps_says_they_are_not_sweeps(tmp_path, capsys):
+    """The identification records (3211 and doublets, no kind metadata) given as sweeps:
+    verified, with a note per record that it is a step input."""
+    model = tmp_path / "fixed_wing_linear.toml"
+    shutil.copy(EXAMPLE, model)
+    (tmp_path / "records").mkdir()
+    write_records(tmp_path / "records")
+    result = tmp_path / "result.json"
+    assert main(["identify", str(model), str(tmp_path / "records"), "--out", str(result),
+                 "--quiet"]) == 0, capsys.readouterr().err
+    out = tmp_path / "verification"
+    status = main(["verify", str(result), str(tmp_path / "records"), "--out", str(out),
+                   "--no-figures"])
+    printed = capsys.readouterr()
+    assert status == 0, printed.err
+    notes = json.loads((out / "verification.json").read_text(encoding="utf-8"))["notes"]
+    stepped = [n for n in notes if "a step input (multistep, doublet), not a frequency sweep" in n]
+    records = sorted(p.stem for p in (tmp_path / "records").glob("*.csv"))
+    assert sorted(n.split(":")[0] for n in stepped) == records
+    assert all(f"note: {n}" in printed.out for n in stepped)

@@ -187,7 +187,8 @@ def test_a_study_of_the_aeroplane_speaks_about_the_aeroplane(tmp_path, capsys):
     case = tmp_path / "case.toml"
     case.write_text(_case_text())
     status = main(["study", str(case), "--out", str(tmp_path / "out")])
-    assert status == 0, capsys.readouterr().err
+    printed = capsys.readouterr()
+    assert status == 0, printed.err
     identified = load_result(tmp_path / "out" / "aeroplane" / "result.json", "no delays")
     assert identified.structure.outputs == ("V", "alpha", "q", "theta", "q_dot", "ax", "az")
     assert not identified.structure.free_delays                # no rotor, no default delays
@@ -197,6 +198,12 @@ def test_a_study_of_the_aeroplane_speaks_about_the_aeroplane(tmp_path, capsys):
     assert "rad/s per m/s" in report and "q/elevator" in report       # Z_V
     assert "Trim: 50.0 m/s" in report and "RMSE values (eq. 18) are pure numbers" in report
     assert "[%]" not in report.split('id="time-histories"')[1].split('id="verification"')[0]
+    # no delays declared: one model, not the same model twice as "no delays" and "with delays"
+    assert "none declared" in report and "identified model: value" in report
+    assert "delays: value" not in report and "without delays" not in report
+    assert report.count("time-domain RMSE ≤ 1.0 to 2.0 (identified model") == 1
+    summary = next(line for line in printed.out.splitlines() if line.startswith("aeroplane:"))
+    assert "RMSE" in summary and "delays" not in summary
 
 
 def test_a_declared_structure_in_a_case_needs_its_unit_system(tmp_path, capsys):

@@ -107,8 +107,8 @@ def case_result_summary(result) -> str:
     """``CaseResult('hover', 45 parameters at step 15 of 15; RMSE no delays 0.2763, with
     delays 0.2350)``."""
     path = result.path
-    rmse = ", ".join(f"{label} {_number(estimate.rmse)}"
-                     for label, estimate in result.estimates.items())
+    rmse = ", ".join(f"{result.model_name(label)} {_number(result.estimates[label].rmse)}"
+                     for label in result.models)
     return (f"CaseResult({result.name!r}, {path.selected.n_parameters} "
             f"parameters at step {path.selected_index} of {len(path.steps) - 1}; RMSE {rmse})")
 
@@ -116,10 +116,10 @@ def case_result_summary(result) -> str:
 def case_result_html(result) -> str:
     """The summary and one row per model: parameters, delays, RMSE, det R, J_ave."""
     rows = []
-    for label, estimate in result.estimates.items():
-        verification = result.verification.get(label)
+    for label in result.models:
+        estimate, verification = result.estimates[label], result.verification.get(label)
         cost = None if verification is None else verification.average_cost()
-        rows.append((label, len(estimate.parameter_names), int(np.sum(estimate.is_delay)),
+        rows.append((result.model_name(label), len(estimate.parameter_names), int(np.sum(estimate.is_delay)),
                      _number(estimate.rmse), _number(estimate.cost, 3), _number(cost)))
     return html_table(case_result_summary(result),
                       ("model", "parameters", "delays", "RMSE", "det R", "J_ave"), rows)

@@ -17,7 +17,6 @@ from rotorid.progress import Countdown, counted
 from rotorid.report.plots.case import plot_rmse_path, plot_time_histories, save_figure
 from rotorid.report.plots.frequency import RELAXED_THRESHOLD, plot_bode, plot_error
 from rotorid.report.plots.profiles import plot_delay_profiles
-from rotorid.study.result import MODELS
 from rotorid.verification.compare import envelopes_by_name
 from rotorid.verification.pairs import parse_pair
 
@@ -71,8 +70,9 @@ def _time_caption(maneuver, models: Sequence[str]) -> str:
     on = f" on {axis}" if axis else ""
     return (f"{html.escape(str(kind))} input{html.escape(on)} "
             f"(<code>{html.escape(maneuver.name)}</code>, identification data): measured "
-            f"outputs (thin grey) behind the simulated outputs of the models "
-            f"{html.escape(' and '.join(models))}, fed the recorded inputs; below them the "
+            f"outputs (thin grey) behind the simulated outputs of the "
+            f"{'models ' if len(models) > 1 else ''}{html.escape(' and '.join(models))}, fed "
+            "the recorded inputs; below them the "
             "inputs, and last the on-axis and the main coupled output zoomed on the input "
             "window (shaded above).")
 
@@ -167,9 +167,10 @@ def case_figures(result, figures_dir: Path,
                                               _profiles_caption(result.delay_profiles)))
     tally.group_done("reduction" + (" and delay profiles" if result.delay_profiles else ""))
     maneuvers = list(result.identification)
-    outputs = {label: result.simulated(label) for label in MODELS}
+    names = [result.model_name(label) for label in result.models]
+    outputs = [result.simulated(label) for label in result.models]
     for index, maneuver in enumerate(maneuvers):
-        simulated = {label: outputs[label][index] for label in MODELS}
+        simulated = {name: fit[index] for name, fit in zip(names, outputs)}
         kind, axis = maneuver.metadata.get("kind"), maneuver.metadata.get("axis")
         what = " ".join(str(v) for v in (kind, "input on" if axis else None, axis) if v)
         figure = plot_time_histories(maneuver, simulated,
@@ -177,7 +178,7 @@ def case_figures(result, figures_dir: Path,
                                      signals=signals)
         name = f"time_{file_stem(maneuver.name)}"
         tally.save(figure, figures_dir / name)
-        written["time"].append(ReportFigure(f"{name}.png", _time_caption(maneuver, MODELS)))
+        written["time"].append(ReportFigure(f"{name}.png", _time_caption(maneuver, names)))
     tally.group_done(f"time histories of {counted(len(maneuvers), 'maneuver')}")
     by_name = envelopes_by_name(result.case.envelopes, band=result.case.band)
     envelopes = [e for e in by_name.values() if e.kind == "bounds"]
@@ -185,8 +186,8 @@ def case_figures(result, figures_dir: Path,
     muad_range = _muad_range(by_name)
     for item in () if reference is None else reference.pairs:
         output, control = parse_pair(item.pair, signals.outputs.names, signals.inputs.names)
-        errors = {label: result.verification[label][item.pair] for label in MODELS
-                  if label in result.verification}
+        errors = {result.model_name(label): result.verification[label][item.pair]
+                  for label in result.models if label in result.verification}
         figure = plot_error(errors, envelopes,
                             title=f"{flight}: {item.pair} error ε = H_model/H_measured")
         stem = f"error_{output}_{control}"
@@ -197,7 +198,7 @@ def case_figures(result, figures_dir: Path,
                                                  item.pair))
         figure = plot_bode(item, signals.outputs[output].unit, signals.inputs[control].unit,
                            title=f"{flight}: {item.pair} frequency responses "
-                                 f"(model with delays)")
+                                 f"({result.final_model_name})")
         stem = f"bode_{output}_{control}"
         tally.save(figure, figures_dir / stem)
         written["bode"].append(ReportFigure(f"{stem}.png", _bode_caption(item.pair, item),

@@ -53,14 +53,14 @@ from rotorid.study.claims import (
 )
 from rotorid.study.expectations import check_signs, derivative_unit
 from rotorid.study.hybrid_comparison import FLAP_SHAPED, HYBRID_MODELS, mean_cost
-from rotorid.study.result import MODELS
+from rotorid.study.result import ONE_MODEL
 from rotorid.units import CHANNEL_KINDS, unit_system
 from rotorid.verification.band import DEFAULT_BAND
 from rotorid.verification.envelopes import MISMATCH_COST_GUIDELINE_TEXT
 from rotorid.verification.handling_qualities import HQ_PAIRS
 
 def key_derivative_checks(result):
-    """Sign checks of the key derivatives of the model with delays."""
+    """Sign checks of the key derivatives of the model with delays (the final model)."""
     estimate = result.estimates["with delays"]
     identified = {name: (float(estimate.values[i]), float(estimate.cramer_rao[i]))
                   for i, name in enumerate(estimate.parameter_names)}
@@ -118,18 +118,21 @@ def removed_rows(result) -> list[list[str]]:
 
 
 def parameter_rows(result) -> list[list[str]]:
-    """Appendix B, identified parameters of both models: value, CR bound, CR %, insens. %."""
+    """Appendix B, identified parameters of the models shown (both, or the one of a case
+    without delays): value, CR bound, CR %, insensitivity %."""
     header = ["parameter", "unit"]
-    for label in MODELS:
-        header += [f"{label}: value", f"{label}: CR", f"{label}: CR [%]", f"{label}: I [%]"]
-    names = list(result.estimates["no delays"].parameter_names)
-    names += [n for n in result.estimates["with delays"].parameter_names if n not in names]
+    for label in result.models:
+        name = result.model_name(label)
+        header += [f"{name}: value", f"{name}: CR", f"{name}: CR [%]", f"{name}: I [%]"]
+    names = list(dict.fromkeys(n for label in result.models
+                               for n in result.estimates[label].parameter_names))
     rows = [header]
     units = result.estimates["with delays"].units
     for name in names:
-        stating = next(e for e in result.estimates.values() if name in e.parameter_names)
+        stating = next(result.estimates[label] for label in result.models
+                       if name in result.estimates[label].parameter_names)
         row = [name, parameter_unit(name, units, stating)]
-        for label in MODELS:
+        for label in result.models:
             estimate = result.estimates[label]
             if name not in estimate.parameter_names:
                 row += ["", "", "", ""]
@@ -190,7 +193,7 @@ def reference_html(result) -> str:
         return ""
     return "\n".join([
         '<h2 id="reference">Reference values</h2>',
-        "<p>The model with delays beside the reference values the case file gives "
+        f"<p>The {result.final_model_name} beside the reference values the case file gives "
         "(<code>[reference]</code>), in the model's units. The verdict is <em>agrees</em> when "
         "the difference is within two combined bounds √(CR² + uncertainty²), <em>differs</em> "
         "beyond; a reference without uncertainty counts the Cramér-Rao bound only.</p>",
@@ -202,12 +205,13 @@ def verification_rows(result) -> list[list[str]]:
     rows = [["pair", "model", "verification band", "points in band [-]", "MUAD",
              "worst margin [dB / deg]", "AEE",
              f"J (mismatch; guideline {MISMATCH_COST_GUIDELINE_TEXT}) [-]", "mean |∠ε| [deg]"]]
-    for label in MODELS:
+    for label in result.models:
         verification = result.verification.get(label)
         for item in () if verification is None else verification.pairs:
             muad, aee = item.checks.get("muad"), item.checks.get("aee")
             cost = item.checks.get("mismatch-cost")
-            rows.append([item.pair, label, item.band.describe(), str(int(item.checked.sum())),
+            rows.append([item.pair, result.model_name(label), item.band.describe(),
+                         str(int(item.checked.sum())),
                          "" if muad is None else muad.status,
                          "" if muad is None else f"{_number(muad.worst_margin_db, 3)} / "
                                                  f"{_number(muad.worst_margin_deg, 3)}",
@@ -612,7 +616,8 @@ def _delays_text(result) -> str:
     estimate = result.estimates["with delays"]
     parts = [f"{delayed_derivative(n)} {estimate.values[i]:.3f} ± {estimate.cramer_rao[i]:.3f} s"
              for i, n in enumerate(estimate.parameter_names) if delayed_derivative(n)]
-    text = ", ".join(parts) or "none"
+    declared = result.case.delayed(result.structures["with delays"].template.name)
+    text = ", ".join(parts) or ("none" if declared else "none declared")
     if result.dropped_delays:
         text += (f" (dropped as undetermined: {', '.join(result.dropped_delays)})")
     truth = result.truth_delays
@@ -660,11 +665,11 @@ def summary_html(result, claims) -> str:
     path = result.path
     items = [f"Selected structure: step {path.selected_index} of {len(path.steps) - 1} by rule "
              f"<code>{html.escape(path.rule)}</code>, {path.selected.n_parameters} parameters; "
-             f"RMSE {result.rmse_text('no delays')} without delays, "
-             f"{result.rmse_text('with delays')} with delays "
-             f"({html.escape(_delays_text(result).split('. ')[0])})."]
+             f"{result.rmse_summary()} "
+             f"(delays: {html.escape(_delays_text(result).split('. ')[0])})."]
     passed, failed = _verification_verdicts(result)
-    items.append(f"Frequency-domain verification, model with delays, in the verification band "
+    items.append(f"Frequency-domain verification, {result.final_model_name}, in the "
+                 f"verification band "
                  f"{html.escape(result.case.band.describe())}: {len(passed)} of "
                  f"{len(passed) + len(failed)} checked pairs inside MUAD"
                  + (f"; outside: {html.escape('; '.join(failed))}" if failed else "") + ".")
@@ -721,11 +726,11 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
                  *((("key-derivatives", "Key derivatives"),) if keys else ()),
                  ("time-histories", "Time histories"), ("verification", "Frequency-domain "
                                                                        "verification")]
-    key_text = ("Identified (model with delays) beside the truth model's residualised 6-DoF "
-                "linearisation and the published Helisim Bo-105 values (Padfield 2007)."
-                if truth else "Identified values of the model with delays (measured data: "
-                              "compared only with the reference values the case file gives, "
-                              "if any).")
+    key_text = (f"Identified ({result.final_model_name}) beside the truth model's residualised "
+                "6-DoF linearisation and the published Helisim Bo-105 values (Padfield 2007)."
+                if truth else f"Identified values of the {result.final_model_name} (measured "
+                              "data: compared only with the reference values the case file "
+                              "gives, if any).")
     body += [
         '<h2 id="reduction">Model reduction</h2>',
         f"<p>Selected step {path.selected_index} of {len(path.steps) - 1} by rule "
@@ -736,8 +741,9 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         figures_html(figures.get("reduction", [])),
         f"<h3>Removed parameters{appendix}</h3>", _html_table(removed_rows(result), 7),
         '<h2 id="delays">Time delays</h2>',
-        f"<p>{html.escape(_delays_text(result))}. RMSE without delays "
-        f"{result.rmse_text('no delays')}, with delays {result.rmse_text('with delays')}.</p>",
+        f"<p>{html.escape(_delays_text(result)[:1].upper() + _delays_text(result)[1:])}. "
+        f"{result.rmse_summary()}"
+        f"{'' if result.kept_delays else ': one model, shown as the ' + ONE_MODEL}.</p>",
         figures_html(figures.get("delays", [])),
         f'<h2 id="parameters">Identified parameters{appendix}</h2>',
         "<p>CR: Cramér-Rao bound (in the parameter's unit); CR % and I %: Cramér-Rao bound and "
@@ -839,7 +845,8 @@ def write_study_report(results: Mapping[str, object], out_dir: str | Path) -> Pa
         rows.append([name, result.condition.describe(units),
                      f"{result.path.selected.n_parameters} ({len(result.path.removed)})",
                      f"{result.estimates['no delays'].rmse:.4f}",
-                     f"{result.estimates['with delays'].rmse:.4f}", _delays_text(result),
+                     f"{result.estimates['with delays'].rmse:.4f}" if result.kept_delays
+                     else "–", _delays_text(result),
                      f"{len(decided) - len(failed)}/{len(decided)}" if checks else "–"])
         link = f"{html.escape(name)}/report.html"
         anchor = "case-" + file_stem(name)

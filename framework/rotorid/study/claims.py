@@ -19,8 +19,8 @@ those conditions.
 
 A case about one's own aircraft (no truth model: measured data) is held against no paper.
 What its user needs is whether the model meets the accepted guidelines: :func:`case_claims`
-gives it :func:`guideline_claims`, the RMSE guideline of both models and the MUAD bounds on
-every pair the model with delays was verified on (the case's own pairs, not the paper's).
+gives it :func:`guideline_claims`, the RMSE guideline of the models shown and the MUAD bounds
+on every pair the model with delays (or the one model) was verified on (the case's own pairs, not the paper's).
 """
 
 from __future__ import annotations
@@ -88,15 +88,17 @@ def _verified(result, label: str, pair: str):
 
 
 def rmse_claims(result) -> list[Claim]:
-    """The time-domain guideline on both identified models, each simulated on the
-    identification maneuvers (``result.time_metrics``): the model's own response to the
-    recorded inputs, not an estimator's one-step predictions (filter error's innovation RMSE
+    """The time-domain guideline on the models shown (both, or the one model of a case that
+    kept no delay: ``CaseResult.models``), each simulated on the identification maneuvers
+    (``result.time_metrics``): the model's own response to the recorded inputs, not an
+    estimator's one-step predictions (filter error's innovation RMSE
     stays small in turbulence whatever the simulation does). Not checked where the RMSE is
     not given: it would mix units."""
     claims = []
-    for label in result.estimates:
+    for label in result.models:
         rmse = result.time_metrics[label].rmse
-        claim = f"time-domain RMSE ≤ 1.0 to 2.0 ({label}; checked against {RMSE_GUIDELINE:g})"
+        claim = (f"time-domain RMSE ≤ 1.0 to 2.0 ({result.model_name(label)}; checked against "
+                 f"{RMSE_GUIDELINE:g})")
         claims.append(
             _decided(claim, f"RMSE {rmse:.3f}", rmse <= RMSE_GUIDELINE)
             if math.isfinite(rmse) else
@@ -106,9 +108,11 @@ def rmse_claims(result) -> list[Claim]:
 
 
 def muad_claim(result, pair: str) -> Claim:
-    """``pair`` of the model with delays inside the MUAD bounds in the verification band."""
+    """``pair`` of the model with delays (the final model) inside the MUAD bounds in the
+    verification band."""
     item = _verified(result, "with delays", pair)
-    claim = f"{pair} with delays inside MUAD where {_band_text(result)}"
+    model = "with delays" if result.kept_delays else f"of the {result.final_model_name}"
+    claim = f"{pair} {model} inside MUAD where {_band_text(result)}"
     check = None if item is None else item.checks.get("muad")
     if check is None or check.passed is None:
         return Claim(claim, "", "not checked",
@@ -122,6 +126,8 @@ def muad_claim(result, pair: str) -> Claim:
 def phase_claim(result, pair: str) -> Claim:
     """The delays reduce the mean phase error of off-axis ``pair``."""
     claim = f"{pair}: delays reduce the phase error (mean |∠ε| where {_band_text(result)})"
+    if not result.kept_delays:
+        return Claim(claim, "", "not checked", "the model kept no delay")
     items = {label: _verified(result, label, pair) for label in ("no delays", "with delays")}
     phases = {label: None if item is None else mean_phase_error(item)
               for label, item in items.items()}
@@ -172,8 +178,8 @@ def paper_claims(result) -> list[Claim]:
 
 
 def guideline_claims(result) -> list[Claim]:
-    """The guidelines on a case about one's own aircraft: the RMSE guideline of both models
-    and each pair the model with delays was verified on inside the MUAD bounds."""
+    """The guidelines on a case about one's own aircraft: the RMSE guideline of the models
+    shown and each pair the model with delays was verified on inside the MUAD bounds."""
     verified = result.verification.get("with delays")
     pairs = () if verified is None else [item.pair for item in verified.pairs]
     return rmse_claims(result) + [muad_claim(result, pair) for pair in pairs]

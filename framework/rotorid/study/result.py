@@ -27,6 +27,8 @@ from rotorid.verification.simulation_fit import SimulationFit
 
 #: The two identified models of a case: the selected structure, and it with delays.
 MODELS = ("no delays", "with delays")
+#: What tables, legends and sentences call the one model of a case that kept no delay.
+ONE_MODEL = "identified model"
 #: Derivatives the paper checks for sign and magnitude (truth-model.md §8).
 KEY_DERIVATIVES = ("M_w", "L_v", "N_v", "Z_w", "M_u", "X_u", "X_v", "Y_u", "Y_v")
 
@@ -77,6 +79,38 @@ class CaseResult:
     def time_metrics(self) -> dict[str, TimeDomainMetrics]:
         """Each model's time-domain metrics on the identification data, by model label."""
         return {label: fit.metrics for label, fit in self.simulations.items()}
+
+    @property
+    def kept_delays(self) -> tuple[str, ...]:
+        """The derivatives whose delays the model with delays kept (none where the case
+        declares none, or the data determined none)."""
+        return tuple(d.name for d in self.structures["with delays"].derivatives
+                     if d.delay is not None)
+
+    @property
+    def models(self) -> tuple[str, ...]:
+        """The labels of the models the case shows: :data:`MODELS`, or ``"with delays"``
+        alone where it kept no delay (the two are then one model)."""
+        return MODELS if self.kept_delays else MODELS[1:]
+
+    def model_name(self, label: str) -> str:
+        """How the report names model ``label``: the label itself, or :data:`ONE_MODEL`
+        where the case shows one model."""
+        return label if self.kept_delays else ONE_MODEL
+
+    @property
+    def final_model_name(self) -> str:
+        """The model verified and checked, in words: "model with delays", or
+        :data:`ONE_MODEL` where the case shows one model."""
+        return "model with delays" if self.kept_delays else ONE_MODEL
+
+    def rmse_summary(self) -> str:
+        """The RMSE of the models shown: "RMSE 0.2763 without delays, 0.2350 with delays",
+        or "RMSE 0.2427" for one model (:meth:`rmse_text`)."""
+        if not self.kept_delays:
+            return f"RMSE {self.rmse_text('with delays')}"
+        return (f"RMSE {self.rmse_text('no delays')} without delays, "
+                f"{self.rmse_text('with delays')} with delays")
 
     def rmse_text(self, model: str) -> str:
         """The RMSE of ``model`` ("no delays", "with delays") as its estimator gives it, four

@@ -50,6 +50,45 @@ def primary_axis(maneuver) -> str:
     return names[int(np.argmax(np.sqrt(np.mean(centred ** 2, axis=0))))]
 
 
+#: Fewest reversals of a frequency sweep's input (a sweep runs through many cycles; a 3211
+#: multistep reverses 3 times, a doublet once).
+SWEEP_REVERSALS = 6
+#: Hysteresis of a reversal, relative to the input's half range about its median.
+REVERSAL_HYSTERESIS = 0.25
+
+
+def input_reversals(signal: np.ndarray) -> int:
+    """How often ``signal`` (N,) crosses from above to below its median or back, each
+    crossing counted once it passes :data:`REVERSAL_HYSTERESIS` of its half range."""
+    centred = np.asarray(signal, dtype=float) - np.median(signal)
+    threshold = REVERSAL_HYSTERESIS * 0.5 * float(np.ptp(signal))
+    sides = np.sign(centred[np.abs(centred) > threshold]) if threshold > 0.0 else ()
+    return int(np.count_nonzero(np.diff(sides))) if len(sides) else 0
+
+
+def not_a_sweep(maneuver) -> str | None:
+    """Why ``maneuver`` looks like a step input (multistep, doublet) rather than a frequency
+    sweep: its excited input (:func:`primary_axis`) reverses fewer than
+    :data:`SWEEP_REVERSALS` times. None when it looks like a sweep."""
+    axis = primary_axis(maneuver)
+    reversals = input_reversals(maneuver.channel(axis))
+    if reversals >= SWEEP_REVERSALS:
+        return None
+    return (f"its input {axis} reverses {reversals} time(s) in {maneuver.duration:.0f} s: a "
+            f"step input (multistep, doublet), not a frequency sweep. Its frequency responses "
+            f"are coherent only near the few frequencies it excites, so the verdicts rest on "
+            f"few points; verify on frequency sweeps")
+
+
+def step_input_notes(sweeps) -> list[str]:
+    """``"NAME: why"`` for each maneuver of ``sweeps`` that looks like a step input
+    (:func:`not_a_sweep`); none when the maneuvers state their ``kind`` (the sweeps were then
+    chosen by it)."""
+    if any("kind" in m.metadata for m in sweeps):
+        return []
+    return [f"{m.name}: {doubt}" for m in sweeps if (doubt := not_a_sweep(m)) is not None]
+
+
 def unexcited(control: str, axes) -> str | None:
     """Why no sweep can verify a pair on ``control`` when the sweeps excite ``axes`` (their
     :func:`primary_axis`), or None when one of them excites it."""

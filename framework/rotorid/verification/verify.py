@@ -15,6 +15,7 @@ from rotorid.simulation.simulator import simulate
 from rotorid.simulation.transfer import frequency_response
 from rotorid.verification.band import DEFAULT_BAND, VerificationBand
 from rotorid.verification.compare import VerificationResult, compare_sweeps, envelopes_by_name
+from rotorid.verification.pairs import step_input_notes
 from rotorid.verification.segments import segmented_simulation
 
 #: Growth of the unstable mode over the longest sweep above which the model's open-loop
@@ -48,7 +49,8 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] | None = None,
     segments of 2/σ s (at least 5 s) restarted from the data (:func:`segmented_simulation`).
     A slower instability is simulated in one piece. ``segment`` given explicitly simulates in
     segments of that length and uses the simulated comparison. The result's notes say which
-    was done. Envelope names are built from ``manager`` (default the current plugin
+    was done, and name any maneuver that looks like a step input rather than a sweep
+    (:func:`~rotorid.verification.pairs.step_input_notes`). Envelope names are built from ``manager`` (default the current plugin
     manager). Every check counts the points of ``band``
     (:class:`~rotorid.verification.band.VerificationBand`). Other keyword options go to
     :func:`compare_sweeps`.
@@ -58,7 +60,7 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] | None = None,
     eigenvalues = np.linalg.eigvals(structure.matrices(values)[0])
     growth = float(np.max(eigenvalues.real))
     longest = max(m.duration for m in sweeps)
-    notes = _stability_notes(eigenvalues, growth * longest)
+    notes = _stability_notes(eigenvalues, growth * longest) + step_input_notes(sweeps)
     drifts = growth * longest > math.log(DRIFT_LIMIT)
     comparison = "apparent" if drifts and segment is None else "simulated"
     if segment is None and drifts:

@@ -135,7 +135,7 @@ def run(args) -> int:
         measured_handling_qualities,
         sweep_attitude_pairs,
     )
-    from rotorid.verification.pairs import parse_pair, sweeps_exciting
+    from rotorid.verification.pairs import parse_pair, step_input_notes, sweeps_exciting
 
     out = Path(args.out)
     if out.suffix.lower() not in FORMATS:
@@ -148,6 +148,8 @@ def run(args) -> int:
         units = structure.units.name
         ingestion = {"signals": structure.signals, "channels": load_channel_map(args.model)}
     sweeps, _ = load_sweeps(args.sweeps, units, ingestion)
+    for note in step_input_notes(sweeps):
+        print(f"warning: {note}")
     omega = default_omega(sweeps)
     responses = []
     pairs = chosen_pairs(args.pairs, sweeps, sweeps.output_names, sweeps.input_names)

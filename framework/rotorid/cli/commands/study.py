@@ -98,8 +98,7 @@ def run(args) -> int:
         path = result.path
         print(f"{name}: {path.selected.n_parameters} parameters after removing "
               f"{len(path.removed)} (step {path.selected_index} of {len(path.steps) - 1}); "
-              f"RMSE without delays {result.rmse_text('no delays')}, "
-              f"with delays {result.rmse_text('with delays')}")
+              f"{result.rmse_summary()}")
         print(f"  {claims_summary(result)}")
     if swept:
         points = sweep_points({n: results[n] for n in swept})

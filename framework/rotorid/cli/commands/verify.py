@@ -14,9 +14,11 @@ derivatives of the structure that the result does not list were removed by the r
 are dropped; output biases and initial states of the identification records are ignored.
 SWEEPS are maneuver files, directories or glob patterns, read through the model file's
 ``[channels]`` map and converted to its unit system; when the maneuvers carry ``kind``
-metadata only the ``sweep`` ones are used. They need only the channels the model uses (a
-``longitudinal`` model verifies on sweeps without lateral columns); a sweep of a control the
-model lacks (``axis`` metadata, or none of the model's controls moving in it) is left out with
+metadata only the ``sweep`` ones are used; without it, a maneuver whose input reverses only a
+few times (a multistep or doublet) gets a note, since its frequency responses rest on few
+frequencies (:func:`rotorid.verification.pairs.step_input_notes`). They need only the channels
+the model uses (a ``longitudinal`` model verifies on sweeps without lateral columns); a sweep
+of a control the model lacks (``axis`` metadata, or none of the model's controls moving in it) is left out with
 a line saying so, so a directory holding every axis's sweeps can be given. A result identified
 with the actuators' lag (``actuator_lag_s``, :mod:`rotorid.actuators`) has the sweeps' inputs
 put through the same lag.

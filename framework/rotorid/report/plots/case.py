@@ -151,10 +151,27 @@ def _primary_axis(maneuver: Maneuver) -> str:
     return maneuver.input_names[int(np.argmax(excursion))]
 
 
-def _zoomed(axis: str, outputs: tuple[str, ...]) -> tuple[str, ...]:
-    """The outputs of the zoom row: :data:`ZOOM_OUTPUTS` of the axis that the model has,
-    else its first two outputs."""
-    return tuple(o for o in ZOOM_OUTPUTS.get(axis, ()) if o in outputs) or outputs[:2]
+def _zoomed(axis: str, outputs: tuple[str, ...], rates: tuple[str, ...], control: np.ndarray,
+            response: np.ndarray | None) -> tuple[str, ...]:
+    """The outputs of the zoom row: :data:`ZOOM_OUTPUTS` of the axis that the model has.
+
+    For another axis (an aeroplane's rudder, say) the angular rates among ``outputs``
+    (``rates``: those of kind ``rate``) whose change follows the input most closely, as in
+    :data:`ZOOM_OUTPUTS` the on-axis rate and the coupled one (r and p for a rudder): largest
+    |correlation| of the model's simulated ``response`` (N, ny) differentiated against
+    ``control`` (N,), the excited input over the same samples. Fewer than two rates are
+    completed by the other outputs in the same order; without a response, or with a constant
+    input, the first two outputs."""
+    chosen = tuple(o for o in ZOOM_OUTPUTS.get(axis, ()) if o in outputs)
+    if chosen or response is None or len(control) < 3 or np.ptp(control) == 0.0:
+        return chosen or outputs[:2]
+    change = np.gradient(response, axis=0)
+    change, input_change = change - change.mean(axis=0), control - control.mean()
+    spread = np.linalg.norm(change, axis=0) * np.linalg.norm(input_change)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        following = np.where(spread > 0.0, np.abs(input_change @ change) / spread, 0.0)
+    order = sorted(range(len(outputs)), key=lambda k: (outputs[k] not in rates, -following[k]))
+    return tuple(outputs[k] for k in order[:2])
 
 
 def _title(signal) -> str:
@@ -190,7 +207,8 @@ def plot_time_histories(maneuver: Maneuver, simulated: Mapping[str, np.ndarray],
 
     The first rows: the model's outputs, two per row (measured thin and grey behind the
     models; the input window shaded); then the inputs (two panels); last the on-axis and the
-    main coupled output zoomed on the input window (:data:`ZOOM_OUTPUTS`). Axes are labelled
+    main coupled output zoomed on the input window (:data:`ZOOM_OUTPUTS`; for other controls
+    the two outputs the input drives most directly, :func:`_zoomed`). Axes are labelled
     with the signals' names and units.
 
     Args:
@@ -237,7 +255,12 @@ def plot_time_histories(maneuver: Maneuver, simulated: Mapping[str, np.ndarray],
             axis.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.0, 1.0))
         axis.grid(True, alpha=0.3)
     mask = (time >= start) & (time <= end)
-    for k, name in enumerate(_zoomed(_primary_axis(maneuver), outputs.names)):
+    axis_name = _primary_axis(maneuver)
+    response = next(iter(simulated.values()), None)
+    rates = tuple(signal.name for signal in outputs if signal.kind == "rate")
+    zoomed = _zoomed(axis_name, outputs.names, rates, maneuver.channel(axis_name)[mask],
+                     None if response is None else response[mask])
+    for k, name in enumerate(zoomed):
         zoom = figure.add_subplot(grid[rows + 1, k])
         column = outputs.index(name)
         _outputs_panel(zoom, time[mask], measured[mask, column],
