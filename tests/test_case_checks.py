@@ -1,10 +1,11 @@
 """Case files are checked before any data exist: each bad setting is one line naming the case
 file, the table and key, and the fix; a Study checks every case before running any."""
 
+import numpy as np
 import pytest
 from rotorid.errors import DataFileError
 from rotorid.study.case import FlightCase
-from rotorid.study.pipeline import Study, run_case
+from rotorid.study.pipeline import Study, load_data, run_case
 from rotorid.study.reference import ReferenceValue
 from rotorid.verification.band import VerificationBand
 
@@ -59,6 +60,9 @@ def case_file(tmp_path, text: str):
      'template = "longitudinal"\n[delays]\nderivatives = ["M_q"]\n',
      r"\[data\] channels: column 'P' is linked to 'p', which is not a signal of the case's "
      r"structure \(u, w, q, theta"),
+    ('channels = { Time_s = { signal = "time", unit = "deg" } }\n',
+     r"\[data\] channels: column 'Time_s' has unit deg, which does not fit 'time' \(time\); "
+     r"give one of s, ms"),
     ('[structure]\ntemplate = "longitudinal"\n[delays]\nderivatives = ["M_q"]\n'
      '[verification]\npairs = ["p/lat"]\n',
      r"\[verification\] pairs: unknown response pair 'p/lat'; write OUTPUT/INPUT with OUTPUT "
@@ -69,6 +73,26 @@ def test_a_bad_setting_names_the_file_and_the_key(tmp_path, text, message):
     with pytest.raises(DataFileError, match=message) as caught:
         FlightCase.load(path)
     assert str(caught.value).startswith(str(path)) and "\n" not in str(caught.value)
+
+
+def test_a_files_case_reads_its_records_through_a_linked_time_column(tmp_path):
+    """A range's time column (in ms here) linked in the case's channel map, as in a model
+    file's: the case passes its checks and its records read on a time axis in s."""
+    time_ms = np.arange(0.0, 2000.0, 20.0)
+    columns = {"T_ms": time_ms, "Q_rps": 0.01 * np.sin(time_ms / 300.0),
+               **{name: np.zeros_like(time_ms) for name in ("long", "lat", "coll", "ped", "ax",
+                                                            "az", "theta", "ay", "p", "phi",
+                                                            "r")}}
+    np.savetxt(tmp_path / "f.csv", np.column_stack(list(columns.values())), delimiter=",",
+               header=",".join(columns), comments="")
+    path = case_file(tmp_path, 'channels = { T_ms = { signal = "time", unit = "ms" }, '
+                               'Q_rps = { signal = "q", unit = "rad/s" } }\n'
+                               '[condition]\nairspeed_kt = 0.0\n')
+    case = FlightCase.load(path)
+    data, _ = load_data(case, tmp_path / "store")
+    record = data.identification[0]
+    assert record.time[-1] == pytest.approx(1.98)
+    assert np.degrees(0.01) * np.sin(1.98 / 0.3) == pytest.approx(record.channel("q")[-1])
 
 
 @pytest.mark.parametrize("name", ["../../X", "/tmp/abs", "a/b", "..", ".hidden", ""])

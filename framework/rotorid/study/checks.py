@@ -25,6 +25,10 @@ from rotorid.study.reference import check_reference_names
 from rotorid.units import unit_fits_kind, units_of_kind
 from rotorid.verification.pairs import parse_pair
 
+#: The records' time column, which a channel map may link (in s or ms) beside the signals;
+#: also the name of its kind (rotorid.units).
+TIME = "time"
+
 #: A case name is a directory of the results: letters, digits and ``_ . + -``, never a path.
 SAFE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+-]*")
 
@@ -198,8 +202,8 @@ def _starting_structure(case, where: str):
 
 
 def _check_channels(case, structure, where: str) -> None:
-    """A ``[data] channels`` map (a files case's) links signals of the case's structure, each
-    in a unit that fits the signal's kind; its columns are checked when the files are read."""
+    """A ``[data] channels`` map (a files case's) links signals of the case's structure (or
+    the records' time), each in a unit that fits the signal's kind; its columns are checked when the files are read."""
     table = case.data.get("channels")
     if table is None:
         return
@@ -209,11 +213,12 @@ def _check_channels(case, structure, where: str) -> None:
     links = _wrapped(lambda: ChannelMap.from_mapping(table, "[data] channels").links, where)
     signals = structure.signals.all
     for link in links:
-        if link.signal not in signals:
+        if link.signal != TIME and link.signal not in signals:
             raise DataFileError(f"{where}: [data] channels: column {link.column!r} is linked to "
                                 f"{link.signal!r}, which is not a signal of the case's "
-                                f"structure ({', '.join(signals.names)}); link it to one of them")
-        kind = signals[link.signal].kind
+                                f"structure ({', '.join(signals.names)}) nor {TIME}; link it to "
+                                f"one of them")
+        kind = TIME if link.signal == TIME else signals[link.signal].kind
         if not unit_fits_kind(link.unit, kind):
             raise DataFileError(f"{where}: [data] channels: column {link.column!r} has unit "
                                 f"{link.unit}, which does not fit {link.signal!r} ({kind}); "
