@@ -100,6 +100,27 @@ def test_rates_recorded_in_rad_per_s_are_named(model, clean):
     assert kinematic and "its driver (q, r) in rad" in kinematic[0]
 
 
+def test_one_gyro_read_in_the_wrong_unit_is_found_by_its_attitude(model, clean):
+    """q recorded in rad/s but read as deg/s: θ̇ = cos Φ0 q − sin Φ0 r then follows neither
+    term of its driver together, but q's alone with the units' ratio as the scale."""
+    structure, _ = model
+
+    def q_in_radians(y):
+        y[:, _column("q")] = np.radians(y[:, _column("q")])
+        return y
+
+    wrong = _changed(clean, q_in_radians)
+    [theta] = [f for f in kinematic_fits(wrong, structure.condition) if f.channel == "theta"]
+    assert theta.driver == "q"
+    assert theta.scale == pytest.approx(math.degrees(1.0), rel=0.03)   # the r term left out
+    [message] = [m for m in _messages(wrong, structure)
+                 if m.startswith("kinematic consistency: theta")]
+    assert "theta is in deg and its driver (q) in rad" in message
+    # the consistent channels keep their full drivers
+    [phi] = [f for f in kinematic_fits(clean, structure.condition) if f.channel == "phi"]
+    assert phi.driver == "q, p, r" and phi.scale == pytest.approx(1.0, abs=0.02)
+
+
 def test_an_input_that_never_moves_drops_its_derivatives_before_the_fit(model, clean):
     structure, _ = model
     column = INPUT_CHANNELS.index("lat")

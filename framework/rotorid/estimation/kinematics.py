@@ -103,39 +103,59 @@ def _fit(targets, drivers, times) -> tuple[float, np.ndarray, float]:
     return scale, biases, residual
 
 
+def _channel_fit(channel: str, used: list[str], drivers, targets, times,
+                 unit: str) -> KinematicFit | None:
+    """The fit of one channel, or None where its residual exceeds :data:`MOTION_FRACTION` of
+    its motion (or nothing moves)."""
+    if not np.any(np.concatenate(drivers)) or np.ptp(np.concatenate(targets)) == 0:
+        return None
+    scale, biases, residual = _fit(targets, drivers, times)
+    motion = np.sqrt(np.mean(np.concatenate([y - np.mean(y) for y in targets]) ** 2))
+    if residual > MOTION_FRACTION * motion:
+        return None
+    return KinematicFit(channel, ", ".join(used), scale, float(np.mean(biases)),
+                        float(biases[np.argmax(np.abs(biases))]), residual,
+                        float(np.sqrt(np.mean(np.concatenate(drivers) ** 2))), unit)
+
+
 def kinematic_fits(maneuvers: ManeuverSet,
                    condition: FlightCondition | None = None) -> tuple[KinematicFit, ...]:
     """The fit of every attitude, and of every velocity the maneuvers all carry, against its
     kinematic driver; channels that hardly move (see :data:`MOTION_FRACTION`) or have no
-    moving driver are left out."""
+    moving driver are left out.
+
+    An attitude its whole driver does not explain is fitted against each of the driver's
+    terms alone (θ against q, φ against p): a rate gyro read in the wrong unit leaves the
+    attitude to the other, small terms (r through sin Φ0), which then explain nothing, while
+    the rate's own term does with the units' ratio as its scale."""
     system = unit_system(maneuvers.units)
     known = ModelStructure(condition or FlightCondition(), (), system).known_state_matrix()
     channels = [a for a in ("theta", "phi") if a in maneuvers.output_names]
     channels += [v for v in ACCELERATIONS
-                                   if all(v in m.extra_channels for m in maneuvers)]
+                 if all(v in m.extra_channels for m in maneuvers)]
     states = [_states(m) for m in maneuvers]
     times = [m.time for m in maneuvers]
     fits = []
     for channel in channels:
         row = STATES.index(channel)
-        used = [STATES[j] for j in np.flatnonzero(known[row])]
-        drivers = [x @ known[row] for x in states]
+        terms = list(np.flatnonzero(known[row]))
+        targets = [x[:, row] for x in states]
         if channel in ACCELERATIONS:
             acceleration = ACCELERATIONS[channel]
-            used.insert(0, acceleration)
-            drivers = [f + m.channel(acceleration) for f, m in zip(drivers, maneuvers)]
-        targets = [x[:, row] for x in states]
-        if not np.any(np.concatenate(drivers)) or np.ptp(np.concatenate(targets)) == 0:
-            continue
-        scale, biases, residual = _fit(targets, drivers, times)
-        motion = np.sqrt(np.mean(np.concatenate([y - np.mean(y) for y in targets]) ** 2))
-        if residual > MOTION_FRACTION * motion:
-            continue
-        fits.append(KinematicFit(channel, ", ".join(used), scale, float(np.mean(biases)),
-                                 float(biases[np.argmax(np.abs(biases))]), residual,
-                                 float(np.sqrt(np.mean(np.concatenate(drivers) ** 2))),
-                                 system.label(ACCELERATIONS[channel]) if channel in ACCELERATIONS
-                                 else f"{system.label(channel)}/s"))
+            drivers = [x @ known[row] + m.channel(acceleration)
+                       for x, m in zip(states, maneuvers)]
+            found = _channel_fit(channel, [acceleration] + [STATES[j] for j in terms], drivers,
+                                 targets, times, system.label(acceleration))
+        else:
+            unit = f"{system.label(channel)}/s"
+            found = _channel_fit(channel, [STATES[j] for j in terms],
+                                 [x @ known[row] for x in states], targets, times, unit)
+            alone = (_channel_fit(channel, [STATES[j]], [known[row, j] * x[:, j] for x in states],
+                                  targets, times, unit) for j in terms if len(terms) > 1)
+            found = found or min((fit for fit in alone if fit is not None),
+                                 key=lambda fit: fit.residual, default=None)
+        if found is not None:
+            fits.append(found)
     return tuple(fits)
 
 
