@@ -204,6 +204,11 @@ def test_a_study_of_the_aeroplane_speaks_about_the_aeroplane(tmp_path, capsys):
     assert report.count("time-domain RMSE ≤ 1.0 to 2.0 (identified model") == 1
     summary = next(line for line in printed.out.splitlines() if line.startswith("aeroplane:"))
     assert "RMSE" in summary and "delays" not in summary
+    # the study's result verifies on the range's files through the case's own channel map
+    status = main(["verify", str(tmp_path / "out" / "aeroplane" / "result.json"),
+                   str(tmp_path / "sweeps"), "--out", str(tmp_path / "verified"),
+                   "--no-figures"])
+    assert status == 0, capsys.readouterr().err
 
 
 def test_a_declared_structure_in_a_case_needs_its_unit_system(tmp_path, capsys):

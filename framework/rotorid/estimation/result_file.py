@@ -38,6 +38,9 @@ from rotorid.units import unit_system
 
 #: The models of a study's ``result.json``, the one with delays first (the default).
 STUDY_MODELS = ("with delays", "no delays")
+#: The ingestion settings a result records for its records (:class:`rotorid.ingestion.
+#: Ingestion`), which sweeps are then read with.
+INGESTION_SETTINGS = ("trim", "resample", "sample_time")
 #: Parameters that belong to the identification records, not to the model: output biases and
 #: initial states per maneuver.
 RECORD_PARAMETER_PREFIXES = ("bias_", "x0_")
@@ -62,6 +65,10 @@ class IdentifiedModel:
         actuator_lag_s, actuator_inputs: the actuators' first-order lag (s) the records' inputs
             went through before the fit, and the inputs it acted on (None: every input);
             None without one (:mod:`rotorid.actuators`): the model maps the lagged inputs.
+        ingestion: how the identification records were read (:class:`rotorid.ingestion.
+            Ingestion` settings ``trim``, ``resample``, ``sample_time``, and for a study of
+            files the case's ``channels`` table), so that sweeps are read the same way; empty
+            where the result names none.
     """
 
     structure: ModelStructure
@@ -72,6 +79,7 @@ class IdentifiedModel:
     noise: Mapping[str, float] = attrs.field(factory=dict, converter=dict)
     actuator_lag_s: float | None = None
     actuator_inputs: tuple[str, ...] | None = None
+    ingestion: Mapping[str, object] = attrs.field(factory=dict, converter=dict)
 
     def __repr__(self) -> str:
         label = f", model {self.model!r}" if self.model else ""
@@ -149,11 +157,16 @@ def load_result(path: str | os.PathLike, model: str | None = None,
         entry = record["estimates"][chosen]
         declared = structure or _study_structure(record, entry, path)
         settings = record.get("case") if isinstance(record.get("case"), Mapping) else {}
+        data = settings.get("data") if isinstance(settings.get("data"), Mapping) else {}
+        ingestion = {k: data[k] for k in (*INGESTION_SETTINGS, "channels") if k in data}
     else:
         if model is not None:
             raise UsageError(f"{path} is a `rotorid identify` result holding one model; "
                              f"choosing a model ({model!r}) applies to study results only")
         chosen, entry, settings = None, record, record
+        read = record.get("ingestion")
+        ingestion = ({k: v for k, v in read.items() if k in INGESTION_SETTINGS}
+                     if isinstance(read, Mapping) else {})
         declared = structure or _described_structure(record, path)
     if not isinstance(entry.get("parameters"), Mapping):
         raise DataFileError(f"{path}: no 'parameters' table; give a result written by "
@@ -163,7 +176,7 @@ def load_result(path: str | os.PathLike, model: str | None = None,
     lag, inputs = settings.get("actuator_lag_s"), settings.get("actuator_inputs")
     return IdentifiedModel(identified, values, estimate, str(path), chosen, noise,
                            None if lag is None else float(lag),
-                           None if inputs is None else tuple(inputs))
+                           None if inputs is None else tuple(inputs), ingestion)
 
 
 def named_model_file(path: str | os.PathLike) -> Path | None:

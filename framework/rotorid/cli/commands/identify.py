@@ -24,7 +24,8 @@ maneuver files (CSV, NPZ, MAT), directories or glob patterns of the ``files`` da
 are converted to the model's unit system, after the trim removal and resampling asked for
 (:mod:`rotorid.ingestion`), and through the actuators' known lag with ``--actuator-lag``
 (:mod:`rotorid.actuators`; recorded as ``actuator_lag_s``, ``rotorid verify`` then lags the
-sweeps alike). ``--process-noise``, ``--disturbances``, ``--gusts`` and ``--update-every`` set
+sweeps alike). The trim removal and resampling are recorded too (``ingestion``), and
+``rotorid verify`` reads the sweeps with them. ``--process-noise``, ``--disturbances``, ``--gusts`` and ``--update-every`` set
 the ``filter-error`` estimator's noise model (docs/estimation.md, "Filter error"); another
 estimator refuses them. The report goes to stdout; stderr gets one line per
 accepted iteration (unless ``--quiet``; an observer plugin of the
@@ -119,7 +120,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--trim", type=trim, default=None,
                         metavar="first-second|CH=VALUE,...",
                         help="remove the trim from every file: each channel's mean over the "
-                             "first second, or stated values in the files' units")
+                             "first second, or stated values in the model's units (after the "
+                             "channel map's scale and unit conversion), e.g. az=-32.17")
     parser.add_argument("--resample", choices=("linear", "decimate"), default=None,
                         help="resample non-uniform time onto a uniform grid: linear "
                              "interpolation, or anti-aliased decimation to --sample-time")
@@ -334,6 +336,9 @@ def run(args) -> int:
     _print_warnings(caught)
     data_warnings = [str(warning.message) for warning in found]
     record = _record(estimate, args.model, out, data_warnings)
+    read = {k: v for k, v in _ingestion(args).items() if v is not None}
+    if read:
+        record["ingestion"] = read
     if args.actuator_lag is not None:
         record["actuator_lag_s"] = args.actuator_lag
         record["actuator_inputs"] = _actuator_inputs(args)

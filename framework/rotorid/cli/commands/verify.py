@@ -3,6 +3,7 @@
 Usage::
 
     rotorid verify [MODEL.toml] RESULT.json SWEEPS... [--pairs q/long,p/long] [--out DIR]
+                   [--trim first-second|CH=VALUE,...]
 
 ``RESULT.json`` is an estimate written by ``rotorid identify`` or a study's ``result.json``
 (its model with delays, or the one ``--model`` names), read by
@@ -13,15 +14,17 @@ the structure (the estimate JSON of ``Estimate.as_dict`` names none, so give it)
 derivatives of the structure that the result does not list were removed by the reduction and
 are dropped; output biases and initial states of the identification records are ignored.
 SWEEPS are maneuver files, directories or glob patterns, read through the model file's
-``[channels]`` map and converted to its unit system; when the maneuvers carry ``kind``
-metadata only the ``sweep`` ones are used; without it, a maneuver whose input reverses only a
-few times (a multistep or doublet) gets a note, since its frequency responses rest on few
+``[channels]`` map (a study's result: its case's ``[data] channels``) and converted to its unit
+system, with the trim removal and resampling the identification records had (the result's
+``ingestion``; ``--trim`` states another trim). When the maneuvers carry ``kind`` metadata
+only the ``sweep`` ones are used; without it, a maneuver whose input reverses only a few
+times (a multistep or doublet) gets a note, since its frequency responses rest on few
 frequencies (:func:`rotorid.verification.pairs.step_input_notes`). They need only the channels
 the model uses (a ``longitudinal`` model verifies on sweeps without lateral columns); a sweep
-of a control the model lacks (``axis`` metadata, or none of the model's controls moving in it) is left out with
-a line saying so, so a directory holding every axis's sweeps can be given. A result identified
-with the actuators' lag (``actuator_lag_s``, :mod:`rotorid.actuators`) has the sweeps' inputs
-put through the same lag.
+of a control the model lacks (``axis`` metadata, or none of the model's controls moving in
+it) is left out with a line saying so, so a directory holding every axis's sweeps can be
+given. A result identified with the actuators' lag (``actuator_lag_s``,
+:mod:`rotorid.actuators`) has the sweeps' inputs put through the same lag.
 
 Pairs are ``OUTPUT/INPUT`` names of the model's signals; by default the paper's pairs the model
 has (q/long and az/coll for the ``longitudinal`` template), else every output over every input
@@ -42,7 +45,7 @@ import json
 import logging
 from pathlib import Path
 
-from rotorid.cli.arguments import names, output_directory
+from rotorid.cli.arguments import names, output_directory, trim
 
 NAME = "verify"
 HELP = ("verify an identified model on frequency sweeps: ε = H_model/H_truth against the "
@@ -63,6 +66,11 @@ def add_arguments(parser) -> None:
                              "model; limited to the axes the sweeps excite)")
     parser.add_argument("--model", choices=STUDY_MODELS, default=None,
                         help="which model of a study's result.json (default: with delays)")
+    parser.add_argument("--trim", type=trim, default=None,
+                        metavar="first-second|CH=VALUE,...",
+                        help="remove the trim from every sweep: each channel's mean over the "
+                             "first second, or stated values in the model's units (default: "
+                             "as the result's identification records were)")
     parser.add_argument("--envelopes", default=DEFAULT_ENVELOPES,
                         help=f"comma-separated envelope names ({DEFAULT_ENVELOPES})")
     parser.add_argument("--band", default=None, metavar="COHERENCE,OMEGA_MIN,OMEGA_MAX",
@@ -74,6 +82,13 @@ def add_arguments(parser) -> None:
                         help="write only verification.json (faster)")
     parser.add_argument("--strict", action="store_true",
                         help="exit with status 1 when a verified envelope check fails")
+
+
+def trim_text(removed) -> str:
+    """``first-second``, or the stated trim values as ``theta=3.1, az=-32.1``."""
+    if isinstance(removed, str):
+        return removed
+    return ", ".join(f"{name}={value:g}" for name, value in removed.items())
 
 
 def parse_band(text: str | None):
@@ -210,9 +225,14 @@ def run(args) -> int:
                              None if model is None else load_model(model))
     structure, values = identified.structure, identified.values
     model_file = _model_file(model, result_path)
-    ingestion = {"signals": structure.signals}
+    ingestion = {"signals": structure.signals, **identified.ingestion}
+    if args.trim is not None:
+        ingestion["trim"] = args.trim
     if model_file is not None:
         ingestion["channels"] = load_channel_map(model_file)
+    if ingestion.get("trim") is not None:
+        how = "--trim" if args.trim is not None else "the identification records' trim removal"
+        print(f"sweeps read with {how}: {trim_text(ingestion['trim'])}")
     sweeps, left_out = load_sweeps(locations, structure.units.name, ingestion)
     if identified.actuator_lag_s is not None:
         sweeps = lagged_inputs(sweeps, identified.actuator_lag_s, identified.actuator_inputs)
