@@ -234,8 +234,11 @@ def plot_time_histories(maneuver: Maneuver, simulated: Mapping[str, np.ndarray],
     first = figure.add_subplot(grid[0, 0])
     axes = [first] + [figure.add_subplot(grid[k // 2, k % 2], sharex=first)
                       for k in range(1, len(outputs))]
-    start, end = input_window(maneuver)
-    time = maneuver.time
+    origin = float(maneuver.time[0])        # a range's clock (IRIG seconds of day) starts late
+    start, end = (t - origin for t in input_window(maneuver))
+    time = maneuver.time - origin
+    time_label = ("time t [s]" if origin == 0.0
+                  else f"time from the record's start at {origin:g} s [s]")
     for column, signal in enumerate(outputs):
         _outputs_panel(axes[column], time, measured[:, column],
                        {label: values[:, column] for label, values in simulated.items()},
@@ -250,7 +253,7 @@ def plot_time_histories(maneuver: Maneuver, simulated: Mapping[str, np.ndarray],
                       color=f"C{4 + 2 * offset + k}", label=f"δ_{signal.name} [{signal.unit}]")
         axis.set_ylabel("inputs" if len({s.unit for s in group}) != 1
                         else f"input [{group[0].unit}]")
-        axis.set_xlabel("time t [s]")
+        axis.set_xlabel(time_label)
         if group:
             axis.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.0, 1.0))
         axis.grid(True, alpha=0.3)
@@ -268,7 +271,7 @@ def plot_time_histories(maneuver: Maneuver, simulated: Mapping[str, np.ndarray],
                        _title(outputs[column]))
         zoom.set_title(f"zoom: {OUTPUT_TITLES.get(name, name)} over the input window "
                        f"{start:.1f}–{end:.1f} s", fontsize="medium")
-        zoom.set_xlabel("time t [s]")
+        zoom.set_xlabel(time_label)
         zoom.set_facecolor((0.97, 0.97, 1.0))
     handles, labels = axes[0].get_legend_handles_labels()
     figure.legend(handles, labels, loc="outside lower center", ncols=len(labels),
