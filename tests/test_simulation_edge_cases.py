@@ -1,11 +1,13 @@
 """Edge cases of the simulation engine: nothing to force, records shorter than a delay,
 and the interval integrals of the discretisation against the block matrix exponential."""
 
+import warnings
+
 import numpy as np
 import pytest
 import scipy.linalg
 from rotorid import FlightCondition, Maneuver, ManeuverSet, ModelStructure
-from rotorid.errors import StructureError
+from rotorid.errors import SimulationDivergedError, StructureError
 from rotorid.simulation.discretisation import _integrals
 from rotorid.simulation.simulator import Simulator
 
@@ -79,6 +81,21 @@ def test_complex_step_through_the_integrals_gives_the_frechet_derivative():
                            EQUATION_ROWS)
     _, frechet = scipy.linalg.expm_frechet(a * 0.02, direction * 0.02)
     assert np.max(np.abs(phi[0, 0].imag / h - frechet)) <= 1e-12 * np.max(np.abs(frechet))
+
+
+def test_a_model_far_out_diverges_with_an_error_and_no_numpy_warning():
+    """A trial step far out (M_q = −10¹⁵⁰ 1/s, as a profile fit may try): e^{A·dt} overflows in
+    the discretisation's doublings, silently, and the simulation says it diverged."""
+    structure = ModelStructure.six_dof(CONDITION)
+    values = structure.as_vector({"M_q": -1e150, "M_long": 1.0})
+    t = np.arange(20) * 0.02
+    u = np.zeros((20, 4))
+    u[5:, 0] = 1.0
+    maneuvers = ManeuverSet([Maneuver("far", t, u, np.zeros((20, 8)))])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        with pytest.raises(SimulationDivergedError, match="simulation diverged"):
+            Simulator(structure, maneuvers).outputs(values)
 
 
 def test_negative_delays_are_rejected_by_name():

@@ -95,26 +95,30 @@ def _integrals(a: np.ndarray, s: np.ndarray, rows: tuple[int, ...]):
     """
     d, n_s = s.shape
     n_x, n_e = a.shape[-1], len(rows)
-    norm = np.abs(a.real).sum(axis=1).max() * np.abs(s.real).max()
-    doublings = max(0, math.ceil(math.log2(norm / _TAYLOR_NORM))) if norm > 0 else 0
-    step = s / 2.0**doublings                                          # (D, S)
-    powers = np.empty((d, _TAYLOR_TERMS, n_x, n_x), dtype=complex)     # A^k
-    powers[:, 0] = np.eye(n_x)
-    for k in range(1, _TAYLOR_TERMS):
-        powers[:, k] = a @ powers[:, k - 1]
-    k = np.arange(_TAYLOR_TERMS + 2)
-    scaled = step[..., None] ** k / np.array([math.factorial(i) for i in k])  # (D, S, K+2)
-    flat = powers.reshape(d, _TAYLOR_TERMS, -1)
-    phi = (scaled[..., :-2] @ flat).reshape(d, n_s, n_x, n_x)
-    columns = powers[..., list(rows)].reshape(d, _TAYLOR_TERMS, -1)
-    gam = (scaled[..., 1:-1] @ columns).reshape(d, n_s, n_x, n_e)
-    kin = (scaled[..., 2:] @ columns).reshape(d, n_s, n_x, n_e)
-    for _ in range(doublings):
-        kin = kin + step[..., None, None] * gam + phi @ kin
-        gam = gam + phi @ gam
-        phi = phi @ phi
-        step = 2.0 * step
-    return phi, gam, kin
+    # A trial step far out (a profile's fit with its delay fixed far from the optimum) can
+    # make A's powers or e^{A·s} overflow: the maps then hold inf or nan, and the simulation
+    # that uses them raises SimulationDivergedError, which the fit treats as a rejected step.
+    with np.errstate(over="ignore", invalid="ignore"):
+        norm = np.abs(a.real).sum(axis=1).max() * np.abs(s.real).max()
+        doublings = max(0, math.ceil(math.log2(norm / _TAYLOR_NORM))) if norm > 0 else 0
+        step = s / 2.0**doublings                                          # (D, S)
+        powers = np.empty((d, _TAYLOR_TERMS, n_x, n_x), dtype=complex)     # A^k
+        powers[:, 0] = np.eye(n_x)
+        for k in range(1, _TAYLOR_TERMS):
+            powers[:, k] = a @ powers[:, k - 1]
+        k = np.arange(_TAYLOR_TERMS + 2)
+        scaled = step[..., None] ** k / np.array([math.factorial(i) for i in k])  # (D, S, K+2)
+        flat = powers.reshape(d, _TAYLOR_TERMS, -1)
+        phi = (scaled[..., :-2] @ flat).reshape(d, n_s, n_x, n_x)
+        columns = powers[..., list(rows)].reshape(d, _TAYLOR_TERMS, -1)
+        gam = (scaled[..., 1:-1] @ columns).reshape(d, n_s, n_x, n_e)
+        kin = (scaled[..., 2:] @ columns).reshape(d, n_s, n_x, n_e)
+        for _ in range(doublings):
+            kin = kin + step[..., None, None] * gam + phi @ kin
+            gam = gam + phi @ gam
+            phi = phi @ phi
+            step = 2.0 * step
+        return phi, gam, kin
 
 
 def _distinct_integrals(a: np.ndarray, s: np.ndarray, rows: tuple[int, ...]):
