@@ -665,14 +665,17 @@ def test_other_number_spellings_are_refused(text):
         parse_number(text)
 
 
-def test_a_long_message_is_cut_with_a_count_of_what_is_left_out(tmp_path, capsys):
+def test_a_long_message_loses_its_middle_with_a_count_of_what_is_left_out(tmp_path, capsys):
     speeds = ",".join(str(v) for v in range(300, 500))
     assert _run(["study", "speed-sweep", "--speeds", speeds, "--out",
                  str(tmp_path / "out")]) == ExitStatus.ERROR
     (line,) = capsys.readouterr().err.splitlines()
     full = f"airspeeds must lie in 0–200 kt, got {[float(v) for v in range(300, 500)]}"
-    assert line.endswith(f"… ({len(full) - MESSAGE_LIMIT} more characters left out)")
-    assert len(line) < MESSAGE_LIMIT + 80
+    kept = MESSAGE_LIMIT - MESSAGE_LIMIT // 3
+    # the start and the end (where a message puts its fix) kept, the middle counted
+    assert f"{full[:kept]} … ({len(full) - MESSAGE_LIMIT} characters left out) … " in line
+    assert line.endswith(full[-(MESSAGE_LIMIT // 3):])
+    assert len(line) < MESSAGE_LIMIT + 120
     assert one_line("a\n  b\tc") == "a b c"
 
 

@@ -82,12 +82,15 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def one_line(message: str, limit: int = MESSAGE_LIMIT) -> str:
-    """``message`` on one line and at most about ``limit`` characters; what is cut is
-    counted at the end."""
+    """``message`` on one line and at most about ``limit`` characters. A longer one loses
+    its middle, counted where it was cut: a message names the problem first and the fix
+    last, and a long list between them (a range file's columns) is what goes."""
     text = " ".join(message.split())
     if len(text) <= limit:
         return text
-    return f"{text[:limit]}… ({len(text) - limit} more characters left out)"
+    tail = limit // 3
+    return (f"{text[:limit - tail]} … ({len(text) - limit} characters left out) … "
+            f"{text[-tail:]}")
 
 
 @contextlib.contextmanager

@@ -480,7 +480,7 @@ def _reliable(conditioned: FrequencyResponse) -> FrequencyResponse:
 def _drift_notes(results: Sequence[PairVerification]) -> list[str]:
     """A note for each simulated pair whose model output drifts (RMS ratio > DRIFT_RATIO)."""
     return [f"{p.pair}: the model's {p.pair.split('/')[0]} has {p.output_rms_ratio:.3g} times "
-            f"the truth's RMS on these sweeps; its open-loop simulation drifts (unstable "
+            f"the measured RMS on these sweeps; its open-loop simulation drifts (unstable "
             f"model?), so the simulated comparison of this pair is not meaningful"
             for p in results
             if p.model_source == "simulated" and p.output_rms_ratio > DRIFT_RATIO]

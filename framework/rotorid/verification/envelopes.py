@@ -168,7 +168,7 @@ class EnvelopeCheck:
         if self.cost is not None:
             line += f"; J = {self.cost:.1f} (guideline {MISMATCH_COST_GUIDELINE_TEXT})"
         if self.passed is None and self.status == "no coherent points":
-            line += (f" — the truth's coherence never reaches {self.threshold:g}: check that "
+            line += (f" — the measured coherence never reaches {self.threshold:g}: check that "
                      f"the sweeps excite this input and the output responds, or lower the "
                      f"envelope's threshold")
         return f"{line} [{source}]"

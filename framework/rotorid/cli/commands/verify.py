@@ -48,7 +48,7 @@ from pathlib import Path
 from rotorid.cli.arguments import names, output_directory, trim
 
 NAME = "verify"
-HELP = ("verify an identified model on frequency sweeps: ε = H_model/H_truth against the "
+HELP = ("verify an identified model on frequency sweeps: ε = H_model/H_measured against the "
         "MUAD/AEE envelopes and the mismatch cost J, with figures and a JSON of the checks")
 DEFAULT_ENVELOPES = "muad,aee,mismatch-cost"
 
