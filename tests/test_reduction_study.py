@@ -163,6 +163,9 @@ def test_builtin_cases_load_and_quick_variant():
     assert quick.data["duration_scale"] < 1.0
     assert FlightCase.load("forward").data["airspeed_kt"] == 70.0
     assert hover.with_seed(7).data["seed"] == 7
+    files = FlightCase.from_mapping({"name": "own", "data": {"source": "files",
+                                                             "identification": "f.csv"}})
+    assert files.quick() is files and not files.quick().is_quick      # no [quick] table
     with pytest.raises(rotorid.MissingFileError, match="built-in cases"):
         FlightCase.load("cruise")
     with pytest.raises(rotorid.DataFileError, match="unknown key"):

@@ -614,7 +614,7 @@ def _other_selections(path) -> str:
 
 def _delays_text(result) -> str:
     estimate = result.estimates["with delays"]
-    parts = [f"{delayed_derivative(n)} {estimate.values[i]:.3f} ± {estimate.cramer_rao[i]:.3f} s"
+    parts = [f"{delayed_derivative(n)} {estimate.values[i]:.3f} ± {estimate.cramer_rao[i]:.2g} s"
              for i, n in enumerate(estimate.parameter_names) if delayed_derivative(n)]
     declared = result.case.delayed(result.structures["with delays"].template.name)
     text = ", ".join(parts) or ("none" if declared else "none declared")

@@ -262,7 +262,10 @@ class FlightCase:
 
     # ----------------------------------------------------------------- variants
     def quick(self) -> "FlightCase":
-        """The reduced but honest variant: shorter records, criteria-stopped reduction."""
+        """The reduced but honest variant: shorter records, criteria-stopped reduction (the
+        case's ``[quick]`` table); the case itself when it has none."""
+        if not self.quick_settings:
+            return self
         settings = dict(self.quick_settings)
         data = dict(self.data)
         if "duration_scale" in settings:

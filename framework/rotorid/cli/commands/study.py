@@ -88,6 +88,9 @@ def run(args) -> int:
 
     cases, swept = expand_cases(args.cases, args.speeds, args.template)
     if args.quick:
+        for case in cases:
+            if not case.quick_settings:
+                print(f"{case.name}: no [quick] table, so --quick leaves the case as it is")
         cases = [case.quick() for case in cases]
     if args.seed is not None:
         cases = [case.with_seed(args.seed) for case in cases]
