@@ -259,3 +259,31 @@ def test_a_study_records_its_data_warnings_and_its_report_shows_them(tmp_path):
     shown = "".join(f"<li>{html.escape(w)}</li>" for w in result.data_warnings)
     assert shown in case_html(result, {}, [])
     assert shown in write_study_report({"mine": result}, tmp_path / "out").read_text()
+
+
+def test_an_offset_on_a_channel_of_ones_own_is_named_with_its_declared_unit():
+    """A model's own output (an aeroplane's airspeed V) recorded on top of its trim: named
+    with the unit the model's signals declare, and without a unit where none do."""
+    from rotorid.model.signals import ModelSignals, Signal, SignalSet
+
+    t = np.arange(0.0, 10.0, 0.02)
+    elevator = np.where((t > 2.0) & (t < 3.0), 1.0, 0.0)
+    speed = 40.0 + 0.5 * np.sin(2 * np.pi * t)    # whole periods: the first second's mean is 40
+    maneuvers = ManeuverSet([Maneuver(f"m{k}", t, elevator[:, None], speed[:, None],
+                                      units="si", input_names=("elevator",),
+                                      output_names=("V",)) for k in range(2)])
+    signals = ModelSignals(states=SignalSet([Signal("V", "m/s", "velocity")]),
+                           inputs=SignalSet([Signal("elevator", "deg", "control")]),
+                           outputs=SignalSet([Signal("V", "m/s", "velocity")]))
+    [declared] = _messages_of(lambda: check_data(maneuvers, None, signals))
+    assert declared.startswith("output 'V' starts away from zero in 2 of 2 maneuvers: 40 m/s "
+                               "(mean of the first 1 s of m1) against a swing of 0.998 m/s;")
+    [bare] = _messages_of(lambda: check_data(maneuvers))
+    assert "maneuvers: 40 (mean of the first" in bare
+
+
+def _messages_of(check) -> list[str]:
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DataWarning)
+        check()
+    return [str(w.message) for w in caught if issubclass(w.category, DataWarning)]

@@ -26,8 +26,9 @@ from rotorid.data import ManeuverSet
 from rotorid.errors import DataWarning
 from rotorid.estimation.data_checks import is_constant
 from rotorid.estimation.kinematics import WHERE_UNITS, check_kinematics
+from rotorid.model.signals import ModelSignals
 from rotorid.model.structure import FlightCondition, ModelStructure
-from rotorid.units import unit_system
+from rotorid.units import CHANNEL_KINDS, unit_system
 
 #: Seconds at the start of a maneuver whose mean is its starting level.
 START_WINDOW = 1.0
@@ -98,8 +99,17 @@ def _check_gravity(maneuvers: ManeuverSet) -> bool:
     return True
 
 
-def _check_offsets(maneuvers: ManeuverSet, skip: tuple[str, ...]) -> None:
-    system = unit_system(maneuvers.units)
+def _unit(maneuvers: ManeuverSet, name: str, signals: ModelSignals | None) -> str:
+    """`` ft/s``: the unit of output ``name`` with a leading space, from the model's
+    ``signals`` where they declare it, else the shipped channel's; empty for a channel of
+    one's own that no signals declare."""
+    if signals is not None and name in signals.all:
+        return f" {signals.all[name].unit}"
+    return f" {unit_system(maneuvers.units).label(name)}" if name in CHANNEL_KINDS else ""
+
+
+def _check_offsets(maneuvers: ManeuverSet, skip: tuple[str, ...],
+                   signals: ModelSignals | None) -> None:
     for column, name in enumerate(maneuvers.output_names):
         if name in skip:
             continue
@@ -113,11 +123,11 @@ def _check_offsets(maneuvers: ManeuverSet, skip: tuple[str, ...]) -> None:
         if not offsets:
             continue
         _, level, swing, where = max(offsets)
-        unit = system.label(name)
+        unit = _unit(maneuvers, name, signals)
         kind = " (an absolute attitude?)" if name in ("theta", "phi") else ""
         _warn(f"output {name!r} starts away from zero in {len(offsets)} of {len(maneuvers)} "
-              f"maneuvers{kind}: {level:.4g} {unit} (mean of the first {START_WINDOW:g} s of "
-              f"{where}) against a swing of {swing:.4g} {unit}; outputs are perturbations "
+              f"maneuvers{kind}: {level:.4g}{unit} (mean of the first {START_WINDOW:g} s of "
+              f"{where}) against a swing of {swing:.4g}{unit}; outputs are perturbations "
               f"from trim: remove the trim (rotorid identify --trim first-second, or "
               f"--trim {name}=VALUE) or estimate output biases (--output-biases)")
 
@@ -155,22 +165,22 @@ def _flat_runs(record: np.ndarray):
             yield int(begin), int(end - begin + 1)
 
 
-def _first_flat_run(maneuver, column: int):
-    """(kind, description) of the first flat run of an output that varies, or None; kind is
-    ``"clipped"`` at the record's extreme, ``"dropout"`` elsewhere."""
+def _first_flat_run(maneuver, column: int, unit: str):
+    """(kind, description) of the first flat run of an output that varies (its ``unit`` as
+    :func:`_unit` gives it), or None; kind is ``"clipped"`` at the record's extreme,
+    ``"dropout"`` elsewhere."""
     record = maneuver.outputs[:, column]
     if is_constant(record):
         return None
     for start, length in _flat_runs(record):
         value = record[start]
         kind = "clipped" if value in (record.max(), record.min()) else "dropout"
-        unit = unit_system(maneuver.units).label(maneuver.output_names[column])
-        return kind, (f"{value:.6g} {unit} for {length} samples ({length * maneuver.dt:.3g} s) "
+        return kind, (f"{value:.6g}{unit} for {length} samples ({length * maneuver.dt:.3g} s) "
                       f"from t = {maneuver.time[start]:.4g} s in maneuver {maneuver.name!r}")
     return None
 
 
-def _check_flat_runs(maneuvers: ManeuverSet) -> None:
+def _check_flat_runs(maneuvers: ManeuverSet, signals: ModelSignals | None) -> None:
     """Outputs that sit on one value: at the record's extreme (clipping) or not (dropout);
     one warning per output and kind, naming the first case and how many maneuvers have one."""
     advice = {"clipped": ("sits at its extreme", "a saturated or clipped sensor"),
@@ -178,7 +188,7 @@ def _check_flat_runs(maneuvers: ManeuverSet) -> None:
     for column, name in enumerate(maneuvers.output_names):
         found: dict[str, list[str]] = {}
         for m in maneuvers:
-            run = _first_flat_run(m, column)
+            run = _first_flat_run(m, column, _unit(maneuvers, name, signals))
             if run is not None:
                 found.setdefault(run[0], []).append(run[1])
         for kind, cases in found.items():
@@ -188,14 +198,16 @@ def _check_flat_runs(maneuvers: ManeuverSet) -> None:
                   f"maneuver out")
 
 
-def check_data(maneuvers: ManeuverSet, condition: FlightCondition | None = None) -> None:
+def check_data(maneuvers: ManeuverSet, condition: FlightCondition | None = None,
+               signals: ModelSignals | None = None) -> None:
     """Issue a :class:`~rotorid.errors.DataWarning` for each finding about the outputs of
     ``maneuvers`` (everything but unexcited inputs, see :func:`without_unexcited`).
-    ``condition`` is the trim the kinematic check linearises about (default: level hover)."""
+    ``condition`` is the trim the kinematic check linearises about (default: level hover);
+    ``signals`` the model's, whose units the messages give for channels of its own."""
     one_g = _check_gravity(maneuvers)
-    _check_offsets(maneuvers, ("az",) if one_g else ())
+    _check_offsets(maneuvers, ("az",) if one_g else (), signals)
     _check_rate_scale(maneuvers)
-    _check_flat_runs(maneuvers)
+    _check_flat_runs(maneuvers, signals)
     check_kinematics(maneuvers, condition)
 
 
@@ -203,5 +215,6 @@ def check_before_fit(maneuvers: ManeuverSet, structure: ModelStructure | None,
                      condition: FlightCondition | None = None) -> ModelStructure | None:
     """Every sanity check; returns ``structure`` without the derivatives of inputs that
     never move (see :func:`without_unexcited`)."""
-    check_data(maneuvers, condition if structure is None else structure.condition)
+    check_data(maneuvers, condition if structure is None else structure.condition,
+               getattr(structure, "signals", None))
     return without_unexcited(structure, maneuvers)

@@ -142,6 +142,21 @@ def load_sweeps(locations, units: str | None = None, ingestion=None):
     return sweeps.select(lambda m: m.name not in left_out), left_out
 
 
+def _data_warnings(sweeps, structure) -> list[str]:
+    """What the sanity checks of identification data (:func:`rotorid.estimation.sanity.
+    check_data`: 1 g in az, absolute attitudes, rates in rad/s, kinematic consistency) find in
+    the sweeps as read: a trim left in makes every verdict on them meaningless."""
+    import warnings
+
+    from rotorid.errors import DataWarning
+    from rotorid.estimation.sanity import check_data
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DataWarning)
+        check_data(sweeps, structure.condition, structure.signals)
+    return [str(w.message) for w in caught if issubclass(w.category, DataWarning)]
+
+
 def _not_sweeping(sweep) -> str | None:
     """Why ``sweep``, read with a model's controls, sweeps none of them; None when it does."""
     import numpy as np
@@ -240,6 +255,8 @@ def run(args) -> int:
               f"actuator lag")
     for name, reason in left_out.items():
         print(f"left out {name}: {reason}")
+    for warning in _data_warnings(sweeps, structure):
+        print(f"warning: {warning}")
     selection = producible_pairs(structure, values, sweeps,
                                  chosen_pairs(args.pairs, sweeps, structure.outputs,
                                               structure.controls))
