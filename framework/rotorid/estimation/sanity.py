@@ -17,6 +17,8 @@ find data a fit would use and be misled by; each warning gives the numbers and t
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import math
 import warnings
 
@@ -196,6 +198,21 @@ def _check_flat_runs(maneuvers: ManeuverSet, signals: ModelSignals | None) -> No
             _warn(f"output {name!r} {verb} {cases[0]} ({len(cases)} of {len(maneuvers)} "
                   f"maneuvers like this): {cause}; cut the maneuver before it or leave the "
                   f"maneuver out")
+
+
+@contextlib.contextmanager
+def checks_report(shown: bool):
+    """Unless ``shown``, the checks' report lines (the ``rotorid.checks`` logger's INFO
+    messages, e.g. each kinematic fit) are left out while the block runs; their warnings
+    stay."""
+    log = logging.getLogger("rotorid.checks")
+    level = log.level
+    if not shown:
+        log.setLevel(logging.WARNING)
+    try:
+        yield
+    finally:
+        log.setLevel(level)
 
 
 def check_data(maneuvers: ManeuverSet, condition: FlightCondition | None = None,

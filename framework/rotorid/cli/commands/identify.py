@@ -42,9 +42,7 @@ to the JSON file, so that ``rotorid verify RESULT.json SWEEPS...`` finds it; for
 
 from __future__ import annotations
 
-import contextlib
 import json
-import logging
 import os
 import sys
 import warnings
@@ -257,20 +255,6 @@ def _record(estimate, model: str, out: Path, data_warnings: list[str]) -> dict:
     return record
 
 
-@contextlib.contextmanager
-def _checks_log(quiet: bool):
-    """With ``quiet``, the sanity checks' report lines (the ``rotorid.checks`` logger's INFO
-    messages) are left out; their warnings stay."""
-    log = logging.getLogger("rotorid.checks")
-    level = log.level
-    if quiet:
-        log.setLevel(logging.WARNING)
-    try:
-        yield
-    finally:
-        log.setLevel(level)
-
-
 def _print_warnings(caught) -> None:
     for warning in caught:
         print(f"rotorid identify: warning: {warning.message}", file=sys.stderr, flush=True)
@@ -289,7 +273,7 @@ def run(args) -> int:
     from rotorid.cli.files import load_maneuvers, refuse_overwrite
     from rotorid.errors import DataFileError, ExitStatus, MissingFileError, RotoridWarning
     from rotorid.estimation.data_checks import check_fit_data
-    from rotorid.estimation.sanity import check_before_fit
+    from rotorid.estimation.sanity import check_before_fit, checks_report
     from rotorid.io import atomic_write
     from rotorid.model.modelfile import load_channel_map, load_model
     from rotorid.model.reference import is_model_reference, load_model_reference
@@ -311,7 +295,7 @@ def run(args) -> int:
     with using(manager):
         options = _options(args)
         estimator = _estimator(args.estimator, options)
-        with warnings.catch_warnings(record=True) as found, _checks_log(args.quiet):
+        with warnings.catch_warnings(record=True) as found, checks_report(shown=not args.quiet):
             warnings.simplefilter("always", RotoridWarning)
             ingestion = _ingestion(args)
             if by_reference:

@@ -149,9 +149,9 @@ def _data_warnings(sweeps, structure) -> list[str]:
     import warnings
 
     from rotorid.errors import DataWarning
-    from rotorid.estimation.sanity import check_data
+    from rotorid.estimation.sanity import check_data, checks_report
 
-    with warnings.catch_warnings(record=True) as caught:
+    with warnings.catch_warnings(record=True) as caught, checks_report(shown=False):
         warnings.simplefilter("always", DataWarning)
         check_data(sweeps, structure.condition, structure.signals)
     return [str(w.message) for w in caught if issubclass(w.category, DataWarning)]
