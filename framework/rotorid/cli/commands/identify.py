@@ -25,8 +25,8 @@ are converted to the model's unit system, after the trim removal and resampling 
 (:mod:`rotorid.ingestion`), and through the actuators' known lag with ``--actuator-lag``
 (:mod:`rotorid.actuators`; recorded as ``actuator_lag_s``, ``rotorid verify`` then lags the
 sweeps alike). The trim removal and resampling are recorded too (``ingestion``), and
-``rotorid verify`` reads the sweeps with them. ``--process-noise``, ``--disturbances``, ``--gusts`` and ``--update-every`` set
-the ``filter-error`` estimator's noise model (docs/estimation.md, "Filter error"); another
+``rotorid verify`` reads the sweeps with them. ``--process-noise``, ``--disturbances``,
+``--gusts`` and ``--update-every`` set the ``filter-error`` estimator's noise model (docs/estimation.md, "Filter error"); another
 estimator refuses them. The report goes to stdout; stderr gets one line per
 accepted iteration (unless ``--quiet``; an observer plugin of the
 ``rotorid_estimation_iteration`` hook, so it works with any estimator that reports through
