@@ -74,7 +74,8 @@ from .starts import (
     process_noise_start,
     with_start,
 )
-from .system import companion_system, lifted, seen_states, with_disturbances
+from .system import (companion_system, disturbance_noise, lifted, seen_states,
+                     with_disturbances)
 
 NAME = "filter-error"
 #: Lower bound of a measurement-noise variance relative to its start value, or to half the
@@ -326,11 +327,12 @@ class FilterErrorProblem(InnovationLikelihood):
         if directions:
             d_dir[k + n_f + np.arange(n_d), np.arange(n_d)] += (
                 2j * COMPLEX_STEP * sigma * (1 - decay[0].real**2))
-        system = with_disturbances(system, *self._coloured_inputs(system), decay)
+        inputs, reading = self._coloured_inputs(system)
+        system = with_disturbances(system, inputs, reading, decay)
         process = np.zeros((n_dir, system.size, system.size), dtype=system.transition.dtype)
         process[:, self.noise_rows, self.noise_rows] = q_dir
-        extra = system.size - n_d + np.arange(n_d)
-        process[:, extra, extra] = d_dir
+        if n_d:
+            process += disturbance_noise(inputs, d_dir)
         system, process = lifted(system, process, self.update_every, self.structure.n_controls)
         return system, steady_state_filter(system.transition, system.output, process, r_dir)
 
@@ -338,14 +340,15 @@ class FilterErrorProblem(InnovationLikelihood):
         """How the coloured disturbances enter ``system``: state inputs (D, S, m) and output
         readings (D, p, m), the accelerations first, then the gusts.
 
-        An acceleration d held over a sample adds Pe·e_j·d (Pe = ∫₀^dt e^(As) ds on the
+        An acceleration d constant over a sample adds Pe·e_j·d (Pe = ∫₀^dt e^(As) ds on the
         equation rows, the system's ``equation_forcing``), and the outputs reading that
         equation (the accelerometers) read d. A translational gust g acts as
-        the state's negative in every derivative term: held over a sample it adds
+        the state's negative in every derivative term: constant over a sample it adds
         −(Φ − I)·e_j·g (Φ − I = Γ·A, Γ = ∫₀^dt e^(As) ds; exact because no known term and no
         delayed derivative reads the state, :func:`gust_states`), and the outputs read
         −(H − C0)·e_j·g, their derivative terms only (an output measuring the state itself
-        measures the aircraft's motion, not the air's).
+        measures the aircraft's motion, not the air's). :func:`.system.with_disturbances`
+        applies these columns to each disturbance's mean over the interval.
         """
         n_dir, size = system.transition.shape[:2]
         accelerations = system.equation_forcing[:, :, self.disturbance_columns]

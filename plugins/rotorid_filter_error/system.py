@@ -140,9 +140,17 @@ def companion_system(structure: ModelStructure, values, dt: float, hold: str,
 def with_disturbances(system: CompanionSystem, inputs: np.ndarray, reading: np.ndarray,
                       decay: np.ndarray) -> CompanionSystem:
     """``system`` with one first-order Gauss-Markov disturbance state d_j per column of
-    ``inputs`` appended: d_j,n+1 = decay[:, j]·d_j,n (plus its driving noise, which the caller
-    puts in Q), the system's states gain inputs[:, :, j]·d_j,n and the outputs read
-    reading[:, :, j]·d_j,n.
+    ``inputs`` appended: d_j,n+1 = decay[:, j]·d_j,n + η_j,n, the outputs read
+    reading[:, :, j]·d_j,n, and the system's states gain inputs[:, :, j] times the
+    disturbance's mean over the interval, (d_j,n + d_j,n+1)/2: (1 + decay)/2·d_j,n here and
+    η_j,n/2 in the process noise (:func:`disturbance_noise`).
+
+    A continuous Gauss-Markov process, given its values at both ends of an interval, has the
+    straight line between them as its mean path (a Brownian bridge for T ≫ dt), so the mean is
+    the interval's average to second order in dt. Holding d_j,n over the interval instead
+    delays its effect on the states by half a sample against the outputs' direct reading of
+    it, which biases the derivatives the disturbance acts through (a light aeroplane with a
+    2 s vertical gust at 50 Hz: Z_w and M_w 16 % low, 2 Cramér-Rao bounds).
 
     Args:
         inputs: (D, S, m) per direction (complex directions carry the parameters' derivatives).
@@ -156,7 +164,7 @@ def with_disturbances(system: CompanionSystem, inputs: np.ndarray, reading: np.n
     dtype = np.result_type(system.transition, inputs, decay)
     transition = np.zeros((n_dir, size + m, size + m), dtype)
     transition[:, :size, :size] = system.transition
-    transition[:, :size, size:] = inputs
+    transition[:, :size, size:] = inputs * (0.5 * (1.0 + decay))[:, None, :]
     transition[:, size + np.arange(m), size + np.arange(m)] = decay
     output = np.concatenate([system.output, np.broadcast_to(
         reading, system.output.shape[:2] + (m,))], axis=2)
@@ -167,6 +175,21 @@ def with_disturbances(system: CompanionSystem, inputs: np.ndarray, reading: np.n
         axis=1)
     return CompanionSystem(system.states, transition, output, system.taps, state_forcing,
                            system.output_forcing, equation_forcing)
+
+
+def disturbance_noise(inputs: np.ndarray, variance: np.ndarray) -> np.ndarray:
+    """The process-noise covariance (D, S + m, S + m) of the disturbances' driving noise η_j
+    (variance[:, j] each) in the system :func:`with_disturbances` builds: η_j drives d_j and,
+    through half the disturbance's input column, the system's states within the same
+    interval, so each adds v_j·b_j·b_jᵀ with b_j = (inputs[:, :, j]/2, e_j). A transpose, not a
+    conjugate: complex directions carry derivatives (complex step).
+
+    Args:
+        inputs: (D, S, m) as for :func:`with_disturbances`; variance: (D, m).
+    """
+    n_dir, size, m = inputs.shape
+    columns = np.concatenate([0.5 * inputs, np.broadcast_to(np.eye(m), (n_dir, m, m))], axis=1)
+    return np.einsum("dam,dm,dbm->dab", columns, variance, columns)
 
 
 def lifted(system: CompanionSystem, process: np.ndarray, every: int,
