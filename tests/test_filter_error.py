@@ -52,7 +52,7 @@ def noisy_data(process, seed=1, dt=0.02, model=None, truth=SMALL_TRUTH, variance
 
 
 def noisy_outputs(model, truth, inputs, dt, process, variance, rng, disturbances=None,
-                  gusts=None, initial_states=None):
+                  gusts=None, initial_states=None, substeps=1):
     """The outputs (N_i, p) of ``model`` at ``truth`` for each input record (N_i, m),
     simulated independently of the estimator (zero-order-hold discretisation by one matrix
     exponential) from trim, with white process noise (state → σ per sample) added to the
@@ -64,28 +64,31 @@ def noisy_outputs(model, truth, inputs, dt, process, variance, rng, disturbances
     state, held over each sample and started at zero, which enters as the state's negative in
     the derivative terms: −(A − A0)·e_j·g in the state equations (discretised with the
     controls) and −(C − C0)·e_j·g in the outputs. ``initial_states`` (records, n) starts each
-    record there instead of at trim."""
+    record there instead of at trim. ``substeps`` > 1 steps the disturbances and gusts (and
+    the states they drive) that many times per sample, each at its own Gauss-Markov decay: a
+    continuous process to within 1/substeps of a sample, not one held over the sample."""
     a, b, c, d = model.matrices(model.as_vector(truth))
     n, m = b.shape
     gust = dict(gusts or {})
     gust_columns = [model.states.index(s) for s in gust]
     gust_input = -(a - model.known_state_matrix())[:, gust_columns]
     gust_reading = -(c - model.known_output_matrix())[:, gust_columns]
-    gust_decay = np.array([np.exp(-dt / tau) for _, tau in gust.values()])
-    gust_drive = np.array([size for size, _ in gust.values()]) * np.sqrt(1 - gust_decay**2)
     coloured = dict(disturbances or {})
     coloured_rows = [model.states.index(s) for s in coloured]
     gusts_end = n + m + len(gust)
     block = np.zeros((gusts_end + len(coloured),) * 2)
     block[:n, :n], block[:n, n:n + m], block[:n, n + m:gusts_end] = a, b, gust_input
     block[coloured_rows, gusts_end + np.arange(len(coloured))] = 1.0
-    exp = scipy.linalg.expm(block * dt)
+    step = dt / substeps
+    exp = scipy.linalg.expm(block * step)
     phi, gamma = exp[:n, :n], exp[:n, n:n + m]
     gust_gamma, held = exp[:n, n + m:gusts_end], exp[:n, gusts_end:]
     rows = [model.states.index(s) for s in process]
     sigma = np.array(list(process.values()))
-    decay = np.array([np.exp(-dt / tau) for _, tau in coloured.values()])
+    decay = np.array([np.exp(-step / tau) for _, tau in coloured.values()])
     drive = np.array([size for size, _ in coloured.values()]) * np.sqrt(1 - decay**2)
+    gust_decay = np.array([np.exp(-step / tau) for _, tau in gust.values()])
+    gust_drive = np.array([size for size, _ in gust.values()]) * np.sqrt(1 - gust_decay**2)
     accelerometer = {"u": "ax", "w": "az", "v": "ay"}
     sensed = np.zeros((len(model.outputs), len(coloured)))
     for j, state in enumerate(coloured):
@@ -98,10 +101,11 @@ def noisy_outputs(model, truth, inputs, dt, process, variance, rng, disturbances
         acceleration, air = np.zeros(len(coloured)), np.zeros(len(gust))
         for k, u in enumerate(record):
             outputs[k] = c @ x + d @ u + sensed @ acceleration + gust_reading @ air
-            x = phi @ x + gamma @ u + gust_gamma @ air + held @ acceleration
+            for _ in range(substeps):
+                x = phi @ x + gamma @ u + gust_gamma @ air + held @ acceleration
+                acceleration = decay * acceleration + drive * rng.standard_normal(len(coloured))
+                air = gust_decay * air + gust_drive * rng.standard_normal(len(gust))
             x[rows] += sigma * rng.standard_normal(len(rows))
-            acceleration = decay * acceleration + drive * rng.standard_normal(len(coloured))
-            air = gust_decay * air + gust_drive * rng.standard_normal(len(gust))
         records.append(outputs + rng.standard_normal(outputs.shape) * np.sqrt(variance))
     return records
 
@@ -432,6 +436,44 @@ def test_a_fixed_wing_template_with_its_own_signals_recovers_within_3_cr():
     error = np.abs(result.values - expected) / result.cramer_rao
     assert result.converged and np.all(error < 3.0), dict(zip(result.parameter_names,
                                                               error.round(2)))
+
+
+def test_a_continuous_gust_is_fitted_without_the_bias_of_holding_it_over_a_sample():
+    """A light aeroplane (fixed-wing longitudinal, SI, 50 m/s) in a continuous vertical gust
+    (σ 1 m/s, correlation time 2 s, simulated 20 steps per sample) at 50 Hz, 16 records of
+    12 s: the gust's effect over each sample is its mean over the interval. Held over the
+    sample instead, the same fit left Z_w and M_w 16 % low (2 CR on four records), which on
+    these 16 records is 4 CR; here both, and the gust, are within 2 CR."""
+    truth = {"X_u": -0.045, "X_w": 0.1, "X_throttle": 0.02, "Z_u": -0.39, "Z_w": -2.0,
+             "Z_q": -1.2, "Z_elevator": -0.105, "M_u": 0.002, "M_w": -0.1, "M_q": -3.0,
+             "M_elevator": -0.21}
+    model = ModelStructure.populated(FlightCondition(u0=50.0), "fixed-wing-longitudinal",
+                                     "si")
+    model = model.without(*[n for n in model.names if n not in truth])
+    variance = np.array([0.1, 0.001, 0.003, 0.002, 0.01, 0.05, 0.05]) ** 2
+    t = np.arange(0.0, 12.0, 0.02)
+
+    def pulse(start, length):
+        return np.where((t >= start) & (t < start + length), 1.0, 0.0)
+
+    multistep = 3 * pulse(1, 1.5) - 2 * pulse(2.5, 1) + pulse(3.5, 0.5) - pulse(4, 0.5)
+    inputs = [np.column_stack([sign * multistep, 20.0 * pulse(6, 3) * (k % 2)])
+              for k, sign in enumerate([1, -1] * 8)]
+    outputs = noisy_outputs(model, truth, inputs, 0.02, {}, variance,
+                            np.random.default_rng(11), gusts={"w": (1.0, 2.0)}, substeps=20)
+    records = rotorid.ManeuverSet([
+        rotorid.Maneuver(f"record {k}", t, u, y, units="si", input_names=model.controls,
+                         output_names=model.outputs)
+        for k, (u, y) in enumerate(zip(inputs, outputs))])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
+        result = estimator(process_noise=(), gusts=("w",)).estimate(model, records)
+    assert result.converged, result.stop_reason
+    error = {name: (result.value(name) - value) / result.cramer_rao[result.index(name)]
+             for name, value in {**truth, "G_w": 1.0, "Tg_w": 2.0}.items()}
+    assert abs(error["Z_w"]) < 2.0 and abs(error["M_w"]) < 2.0, error
+    assert result.cramer_rao[result.index("Z_w")] < 0.04 * 2.0       # 16 % would be > 4 CR
+    assert all(abs(e) < 3.0 for e in error.values()), error
 
 
 def test_output_error_is_biased_on_the_same_data():
