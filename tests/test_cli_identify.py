@@ -311,7 +311,11 @@ def test_filter_error_options_are_checked(case, tmp_path, capsys):
     model, data, _ = case
     out = str(tmp_path / "r.json")
     base = ["identify", str(model), str(data), "--out", out, "--quiet"]
-    assert "does not accept the options gusts" in _error_line(base + ["--gusts", "w"], capsys)
+    assert _error_line(base + ["--gusts", "w"], capsys, ExitStatus.USAGE).endswith(
+        "--gusts: filter error's noise model; add --estimator filter-error (the output-error "
+        "estimator has no process noise)")
+    assert "gusts must name distinct states" in _error_line(
+        base + ["--estimator", "filter-error", "--gusts", "w,w"], capsys)
     assert "names no state" in _error_line(
         base + ["--estimator", "filter-error", "--gusts", ","], capsys, ExitStatus.USAGE)
     assert "--update-every must be at least 1" in _error_line(

@@ -99,13 +99,17 @@ _LONGEST_CORRELATION = 1000.0
 _SHORTEST_GUST_SAMPLES = 10
 
 
-def _names(value) -> tuple[str, ...] | None:
-    if value is None:
-        return None
-    states = (value,) if isinstance(value, str) else tuple(value)
-    if len(set(states)) != len(states) or not all(isinstance(s, str) for s in states):
-        raise EstimationError(f"process_noise must name distinct states, got {list(states)}")
-    return states
+def _state_names(option: str):
+    """The converter of the option ``option``: a state name or names → a tuple of distinct
+    names (None stays None), refusing repeats in the option's own name."""
+    def convert(value) -> tuple[str, ...] | None:
+        if value is None:
+            return None
+        states = (value,) if isinstance(value, str) else tuple(value)
+        if len(set(states)) != len(states) or not all(isinstance(s, str) for s in states):
+            raise EstimationError(f"{option} must name distinct states, got {list(states)}")
+        return states
+    return convert
 
 
 def process_noise_states(structure: ModelStructure, names: tuple[str, ...] | None,
@@ -482,10 +486,12 @@ class FilterErrorEstimator:
     max_iterations: int = 50
     cost_tolerance: float = 1e-7
     step_tolerance: float = 1e-9
-    process_noise: tuple[str, ...] | None = attrs.field(default=None, converter=_names)
+    process_noise: tuple[str, ...] | None = attrs.field(
+        default=None, converter=_state_names("process_noise"))
     process_noise_start: Mapping[str, float] | None = None
-    disturbances: tuple[str, ...] = attrs.field(default=(), converter=_names)
-    gusts: tuple[str, ...] = attrs.field(default=(), converter=_names)
+    disturbances: tuple[str, ...] = attrs.field(default=(),
+                                                converter=_state_names("disturbances"))
+    gusts: tuple[str, ...] = attrs.field(default=(), converter=_state_names("gusts"))
     initial_states: bool | tuple[str, ...] = attrs.field(default=False,
                                                          converter=initial_state_option)
     output_biases: bool = False

@@ -18,6 +18,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import functools
+import inspect
 from collections.abc import Iterable, Iterator
 
 import attrs
@@ -175,15 +176,25 @@ def registry(family: str, manager: pluggy.PluginManager | None = None) -> dict[s
 def create(family: str, name: str, manager: pluggy.PluginManager | None = None, **options):
     """Build the component ``name`` of ``family`` with keyword ``options``.
 
-    Raises :class:`PluginError` for an unknown name, or when the built component breaks its
-    family's contract (naming the plugin, the component and what is missing).
+    Raises :class:`PluginError` for an unknown name, an option the component does not take
+    (listing those it does), or when the built component breaks its family's contract
+    (naming the plugin, the component and what is missing).
     """
     components = registry(family, manager)
     if name not in components:
         known = ", ".join(components) or "none"
         raise PluginError(f"no {family[:-1] if family.endswith('s') else family} named "
                           f"{name!r}; available: {known} (see `rotorid plugins`)")
-    component = components[name].descriptor.factory(**options)
+    factory = components[name].descriptor.factory
+    try:
+        component = factory(**options)
+    except TypeError as error:
+        if "unexpected keyword argument" not in str(error):
+            raise
+        unknown = str(error).rsplit("unexpected keyword argument", 1)[1].strip()
+        kind = family[:-1] if family.endswith("s") else family
+        raise PluginError(f"{kind} {name!r} has no option {unknown}; its options: "
+                          f"{', '.join(_options_of(factory)) or 'none'}") from None
     problems = violations(family, component)
     if problems:
         raise PluginError(
@@ -191,6 +202,20 @@ def create(family: str, name: str, manager: pluggy.PluginManager | None = None, 
             f"satisfy the {CONTRACTS[family].__name__} contract: {'; '.join(problems)}; "
             f"see docs/plugins.md")
     return component
+
+
+def _options_of(factory) -> tuple[str, ...]:
+    """The keyword options of the component ``factory`` builds by default: its attrs fields,
+    else its ``__init__``'s keyword parameters (empty when it cannot be built bare)."""
+    try:
+        component = factory()
+    except Exception:                        # a component that needs options: none to list
+        return ()
+    if attrs.has(type(component)):
+        return tuple(f.name for f in attrs.fields(type(component)) if f.init)
+    parameters = inspect.signature(type(component).__init__).parameters.values()
+    return tuple(p.name for p in parameters if p.name != "self" and p.kind in (
+        inspect.Parameter.KEYWORD_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD))
 
 
 def notify(hook_name: str, manager: pluggy.PluginManager | None = None, **kwargs) -> None:

@@ -18,7 +18,7 @@ from rotorid.model.signals import ChannelMap
 from rotorid.estimation.reduction import RULES
 from rotorid.model.modelfile import parse_model
 from rotorid.model.structure import FlightCondition
-from rotorid.plugin.manager import registry
+from rotorid.plugin.manager import create, registry
 from rotorid.study.comparison import FREQUENCY_ESTIMATOR
 from rotorid.study.hybrid_comparison import HYBRID_OMEGA_MAX
 from rotorid.study.reference import check_reference_names
@@ -83,6 +83,8 @@ def check_case(case, where: str) -> None:
     for envelope in case.envelopes:
         check_registered("validation-envelopes", envelope, where, "[verification] envelopes")
     check_registered("estimators", case.estimator, where, "[estimator] name")
+    _wrapped(lambda: create("estimators", case.estimator, **case.estimator_options), where,
+             "[estimator]")
     for criterion, _ in case.criteria:
         check_registered("reduction-criteria", criterion, where, "[reduction] criteria")
     if case.rule not in RULES:

@@ -26,8 +26,9 @@ are converted to the model's unit system, after the trim removal and resampling 
 (:mod:`rotorid.actuators`; recorded as ``actuator_lag_s``, ``rotorid verify`` then lags the
 sweeps alike). The trim removal and resampling are recorded too (``ingestion``), and
 ``rotorid verify`` reads the sweeps with them. ``--process-noise``, ``--disturbances``,
-``--gusts`` and ``--update-every`` set the ``filter-error`` estimator's noise model (docs/estimation.md, "Filter error"); another
-estimator refuses them. The report goes to stdout; stderr gets one line per
+``--gusts`` and ``--update-every`` set the ``filter-error`` estimator's noise model
+(docs/estimation.md, "Filter error"); with another estimator they are a usage error that
+says to add ``--estimator filter-error``. The report goes to stdout; stderr gets one line per
 accepted iteration (unless ``--quiet``; an observer plugin of the
 ``rotorid_estimation_iteration`` hook, so it works with any estimator that reports through
 it), the kinematic consistency fits and one line per warning: the sanity checks of the data
@@ -165,6 +166,10 @@ def _check_outputs(chosen, outputs, model) -> None:
                          f"{model}; its outputs are {', '.join(outputs)}")
 
 
+#: The options of filter error's noise model and update rate (another estimator has none).
+FILTER_ERROR_FLAGS = ("process_noise", "disturbances", "gusts", "update_every")
+
+
 def _options(args) -> dict:
     """Estimator options the user set explicitly (the estimator's defaults stand otherwise)."""
     from rotorid.errors import UsageError
@@ -193,7 +198,12 @@ def _options(args) -> dict:
         options["output_biases"] = True
     if args.initial_states:
         options["initial_states"] = True
-    for flag in ("process_noise", "disturbances", "gusts"):
+    noise_model = [flag for flag in FILTER_ERROR_FLAGS if getattr(args, flag) is not None]
+    if noise_model and args.estimator != "filter-error":
+        given = ", ".join("--" + flag.replace("_", "-") for flag in noise_model)
+        raise UsageError(f"{given}: filter error's noise model; add --estimator filter-error "
+                         f"(the {args.estimator} estimator has no process noise)")
+    for flag in FILTER_ERROR_FLAGS[:3]:
         value = getattr(args, flag)
         if value is not None:
             options[flag] = _states(value, flag)
