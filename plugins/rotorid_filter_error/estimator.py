@@ -48,6 +48,7 @@ from rotorid.data import ManeuverSet
 from rotorid.errors import EstimationError, IdentifiabilityWarning, SimulationDivergedError
 from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.models import LinearModel
+from rotorid.estimation.whiteness import whiteness_note
 from rotorid.model.parameter_units import rate_unit
 from rotorid.model.structure import ModelStructure
 from rotorid.plugin.manager import create, notify
@@ -679,6 +680,20 @@ def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
     if every > 1:
         notes.append(f"one measurement update per {every} samples (update_every = "
                      f"{every}): {problem.n_samples} innovations per output")
+    silent = [n for n in at_bound if n.startswith("F_")]
+    if silent:
+        states = ", ".join(n[2:] for n in silent)
+        notes.append(f"{', '.join(silent)} ended at zero: the data show no white process "
+                     f"noise on {states}, so the information holds nothing about "
+                     f"{'it' if len(silent) == 1 else 'them'} (infinite bounds, not a lack of "
+                     f"excitation); leave {states} out of the process noise and refit, or "
+                     f"model the turbulence as gusts or disturbances instead")
+    if hasattr(problem, "innovations"):
+        innovations = problem.per_maneuver(problem.innovations(values)[0])
+        coloured = whiteness_note(innovations, problem.output_names,
+                                  problem.records.dt * every)
+        if coloured:
+            notes.append(coloured)
     unmeasured = unmeasured_gusts(problem)
     if unmeasured:
         notes.append(f"no output measures {', '.join(unmeasured)}: each such gust's size G "
