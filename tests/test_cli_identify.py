@@ -318,6 +318,9 @@ def test_filter_error_options_are_checked(case, tmp_path, capsys):
         base + ["--estimator", "filter-error", "--gusts", "w,w"], capsys)
     assert "names no state" in _error_line(
         base + ["--estimator", "filter-error", "--gusts", ","], capsys, ExitStatus.USAGE)
+    assert "give --resample decimate or --update-every, not both" in _error_line(
+        base + ["--estimator", "filter-error", "--update-every", "3", "--resample", "decimate",
+                "--sample-time", "0.1"], capsys, ExitStatus.USAGE)
     assert "--update-every must be at least 1" in _error_line(
         base + ["--estimator", "filter-error", "--update-every", "0"], capsys,
         ExitStatus.USAGE)

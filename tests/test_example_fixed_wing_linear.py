@@ -211,6 +211,19 @@ def test_a_study_of_the_aeroplane_speaks_about_the_aeroplane(tmp_path, capsys):
     assert status == 0, capsys.readouterr().err
 
 
+def test_a_case_without_sweeps_says_it_was_not_verified(tmp_path, capsys):
+    (tmp_path / "ident").mkdir()
+    write_records(tmp_path / "ident")
+    case = tmp_path / "case.toml"
+    case.write_text(_case_text().replace('verification = "sweeps/*.csv"\n', ""))
+    assert main(["study", str(case), "--out", str(tmp_path / "out")]) == 0, \
+        capsys.readouterr().err
+    report = (tmp_path / "out" / "aeroplane" / "report.html").read_text()
+    assert ("Frequency-domain verification: not done, the case gives no sweeps ([data] "
+            "verification).") in report
+    assert "checked pairs inside MUAD" not in report
+
+
 def test_a_declared_structure_in_a_case_needs_its_unit_system(tmp_path, capsys):
     case = tmp_path / "case.toml"
     case.write_text(_case_text().replace('units = "si"\n', ""))

@@ -668,11 +668,15 @@ def summary_html(result, claims) -> str:
              f"{result.rmse_summary()} "
              f"(delays: {html.escape(_delays_text(result).split('. ')[0])})."]
     passed, failed = _verification_verdicts(result)
-    items.append(f"Frequency-domain verification, {result.final_model_name}, in the "
-                 f"verification band "
-                 f"{html.escape(result.case.band.describe())}: {len(passed)} of "
-                 f"{len(passed) + len(failed)} checked pairs inside MUAD"
-                 + (f"; outside: {html.escape('; '.join(failed))}" if failed else "") + ".")
+    if result.verification_data is None or not len(result.verification_data):
+        items.append("Frequency-domain verification: not done, the case gives no sweeps "
+                     "([data] verification).")
+    else:
+        items.append(f"Frequency-domain verification, {result.final_model_name}, in the "
+                     f"verification band "
+                     f"{html.escape(result.case.band.describe())}: {len(passed)} of "
+                     f"{len(passed) + len(failed)} checked pairs inside MUAD"
+                     + (f"; outside: {html.escape('; '.join(failed))}" if failed else "") + ".")
     if result.data_warnings:
         items.append(f"The checks of the identification data before the fit warned "
                      f"{len(result.data_warnings)} time(s): <ul>" + "".join(

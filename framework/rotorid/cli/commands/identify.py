@@ -208,6 +208,11 @@ def _options(args) -> dict:
         if value is not None:
             options[flag] = _states(value, flag)
     if args.update_every is not None:
+        if args.update_every > 1 and args.resample == "decimate":
+            raise UsageError("give --resample decimate or --update-every, not both: the "
+                             "decimated records hold one sample per update already, and "
+                             "--update-every is for records low-passed beforehand that keep "
+                             "every sample (rotorid.resampling.low_passed)")
         if args.update_every < 1:
             raise UsageError(f"--update-every must be at least 1, got {args.update_every}")
         options["update_every"] = args.update_every
