@@ -198,3 +198,28 @@ def test_save_is_atomic_and_overwrites(tmp_path):
     save_model(ModelStructure.six_dof(FlightCondition()), path)
     assert load_model(path) == ModelStructure.six_dof(FlightCondition())
     assert [p.name for p in tmp_path.iterdir()] == ["m.toml"]
+
+
+def test_a_template_control_linked_in_degrees_is_a_control_in_degrees():
+    """A template's controls are in % of travel unless the channel map links one in another
+    unit: the elevator's column in deg makes the model's elevator, and its derivatives, per
+    deg (controls are never converted), the throttle linked in % per %; unlinked, the
+    template's own "control unit". A case's [data] channels do the same to its structure."""
+    from rotorid.model.modelfile import case_model
+    from rotorid.model.parameter_units import structure_parameter_units
+
+    channels = {"DE_deg": {"signal": "elevator", "unit": "deg"},
+                "THR_pct": {"signal": "throttle", "unit": "%"}}
+    model = parse_model({"units": "si", "condition": {"u0_mps": 50.0},
+                         "structure": {"template": "fixed-wing-longitudinal"},
+                         "channels": channels})
+    inputs = model.signals.inputs
+    assert (inputs["elevator"].unit, inputs["throttle"].unit) == ("deg", "%")
+    units = structure_parameter_units(model)
+    assert units["M_elevator"] == "rad/s² per deg" and units["M_throttle"] == "rad/s² per %"
+    case = {"structure": {"template": "fixed-wing-longitudinal"}, "data": {"channels": channels}}
+    assert case_model(case, {"u0_mps": 50.0}, "si", "case").signals.inputs == inputs
+    bare = parse_model({"units": "si", "condition": {"u0_mps": 50.0},
+                        "structure": {"template": "fixed-wing-longitudinal"}})
+    assert bare.signals.inputs["elevator"].unit == "%"
+    assert structure_parameter_units(bare)["M_elevator"] == "rad/s² per control unit"

@@ -31,7 +31,7 @@ from rotorid.errors import DataFileError, UsageError
 from rotorid.estimation.estimate import Estimate
 from rotorid.io import read_json_object
 from rotorid.model.derivatives import delay_parameter, delayed_derivative
-from rotorid.model.modelfile import load_model, parse_model
+from rotorid.model.modelfile import case_model, load_model, parse_model
 from rotorid.model.statespace import NamedStateSpace, state_space
 from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.units import unit_system
@@ -211,10 +211,8 @@ def _study_structure(record: Mapping, entry: Mapping, path: Path) -> ModelStruct
     case, condition = record.get("case"), record.get("condition")
     if not isinstance(case, Mapping) or not isinstance(condition, Mapping):
         raise DataFileError(f"{path}: a study result needs its 'case' and 'condition'")
-    mapping = {"units": entry.get("units", "flight-test"), "condition": {"airspeed_kt": 0.0},
-               "structure": dict(case.get("structure") or {}),
-               "derivatives": dict(case.get("derivatives") or {})}
-    declared = parse_model(mapping, f"{path} (the case's structure)")
+    declared = case_model(case, {"airspeed_kt": 0.0}, entry.get("units", "flight-test"),
+                          f"{path} (the case's structure)")
     try:
         return attrs.evolve(declared, condition=FlightCondition(**condition))
     except TypeError as error:

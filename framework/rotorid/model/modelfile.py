@@ -61,6 +61,8 @@ import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 
+import attrs
+
 from rotorid.errors import DataFileError, RotoridError
 from rotorid.io import atomic_write, require_file
 from rotorid.model.derivatives import Derivative
@@ -162,7 +164,9 @@ def _structure(mapping: Mapping, source: str) -> ModelStructure:
     declared = _require("table", mapping.get("derivatives", {}), f"{source}: [derivatives]")
     derivatives = [_derivative(name, value, f"{source}: [derivatives.{name}]")
                    for name, value in declared.items()]
-    _channel_map(mapping, source)
+    channels = _channel_map(mapping, source)
+    if isinstance(template, str):
+        template = _recorded_control_units(TEMPLATES[template], channels)
     condition = FlightCondition.from_mapping(condition)
     if populate == "none":
         if remove:
@@ -255,6 +259,18 @@ def _declared_template(settings: Mapping, where: str) -> StructureTemplate:
     return template
 
 
+def _recorded_control_units(template: StructureTemplate, channels: ChannelMap
+                            ) -> StructureTemplate:
+    """``template`` with each control the channel map links recorded in the link's unit
+    (``deg``, ``N``, ``%`` …): controls are never converted, so the model's control
+    derivatives, tables, figures and exports are per that unit."""
+    stated = {link.signal: link.unit for link in channels.links
+              if link.signal in template.controls}
+    if not stated:
+        return template
+    return attrs.evolve(template, control_units={**dict(template.control_units), **stated})
+
+
 def _channel_map(mapping: Mapping, source: str) -> ChannelMap:
     table = _require("table", mapping.get("channels", {}), f"{source}: [channels]")
     return ChannelMap.from_mapping(table, source)
@@ -287,6 +303,17 @@ def _read(path: str | os.PathLike) -> Mapping:
         return tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
         raise DataFileError(f"{path}: not a valid TOML file: {error}") from None
+
+
+def case_model(case: Mapping, condition: Mapping, units: str, source: str) -> ModelStructure:
+    """The structure a case's settings declare: its ``structure`` and ``derivatives`` tables
+    and its ``data`` table's ``channels`` (a case file's, or a study result's ``case``), as
+    a model file at the ``[condition]`` table ``condition`` in ``units``."""
+    data = case.get("data") if isinstance(case.get("data"), Mapping) else {}
+    return parse_model({"units": units, "condition": dict(condition),
+                        "structure": dict(case.get("structure") or {}),
+                        "derivatives": dict(case.get("derivatives") or {}),
+                        "channels": dict(data.get("channels") or {})}, source)
 
 
 def load_model(path: str | os.PathLike) -> ModelStructure:

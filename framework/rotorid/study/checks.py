@@ -16,13 +16,13 @@ from rotorid.data import HOLDS
 from rotorid.errors import DataFileError, RotoridError
 from rotorid.model.signals import ChannelMap
 from rotorid.estimation.reduction import RULES
-from rotorid.model.modelfile import parse_model
+from rotorid.model.modelfile import case_model
 from rotorid.model.structure import FlightCondition
 from rotorid.plugin.manager import create, registry
 from rotorid.study.comparison import FREQUENCY_ESTIMATOR
 from rotorid.study.hybrid_comparison import HYBRID_OMEGA_MAX
 from rotorid.study.reference import check_reference_names
-from rotorid.units import unit_fits_kind, units_of_kind
+from rotorid.units import FLIGHT_TEST, unit_fits_kind, units_of_kind
 from rotorid.verification.pairs import parse_pair
 
 #: The records' time column, which a channel map may link (in s or ms) beside the signals;
@@ -68,8 +68,9 @@ def check_case(case, where: str) -> None:
     if "source" not in case.data:
         raise DataFileError(f"{where}: [data] needs a source, e.g. source = \"files\"")
     check_registered("data-sources", case.data_source, where, "[data] source")
+    links = _channel_links(case, where)
     structure = _starting_structure(case, where)
-    _check_channels(case, structure, where)
+    _check_channels(links, structure, where)
     if "states" in case.structure and "units" not in case.data:
         raise DataFileError(f"{where}: [structure] declares its own signals, whose known terms "
                             f"are numbers in one unit system; say which in [data] units = "
@@ -194,25 +195,29 @@ def _starting_structure(case, where: str):
     at a placeholder trim), after checking ``[condition]``."""
     if case.condition:
         _wrapped(lambda: FlightCondition.from_mapping(case.condition), where)
-    mapping = {"condition": {"airspeed_kt": 0.0}, "structure": dict(case.structure),
-               "derivatives": dict(case.derivatives)}
-    structure = parse_model(mapping, where)
+    structure = case_model(case.as_dict(), {"airspeed_kt": 0.0}, FLIGHT_TEST.name, where)
     if not structure.parameter_names:
         raise DataFileError(f"{where}: [structure]/[derivatives] leave no free derivative to "
                             f"estimate; declare at least one without 'fixed'")
     return structure
 
 
-def _check_channels(case, structure, where: str) -> None:
-    """A ``[data] channels`` map (a files case's) links signals of the case's structure (or
-    the records' time), each in a unit that fits the signal's kind; its columns are checked when the files are read."""
+def _channel_links(case, where: str) -> tuple:
+    """The links of a ``[data] channels`` map (a files case's; none without one), checked as
+    a channel map before the structure reads its control units."""
     table = case.data.get("channels")
     if table is None:
-        return
+        return ()
     if not isinstance(table, Mapping):
         raise DataFileError(f"{where}: [data] channels must be a table of COLUMN = {{ signal "
                             f"= \"q\", unit = \"deg/s\" }}, got {table!r}")
-    links = _wrapped(lambda: ChannelMap.from_mapping(table, "[data] channels").links, where)
+    return _wrapped(lambda: ChannelMap.from_mapping(table, "[data] channels").links, where)
+
+
+def _check_channels(links, structure, where: str) -> None:
+    """The channel map's ``links`` name signals of the case's structure (or the records'
+    time), each in a unit that fits the signal's kind; its columns are checked when the files
+    are read."""
     signals = structure.signals.all
     for link in links:
         if link.signal != TIME and link.signal not in signals:

@@ -38,7 +38,7 @@ from rotorid.estimation.sanity import check_before_fit
 from rotorid.executors import check_executor, failure_error, run_tasks
 from rotorid.lease import hold_lease
 from rotorid.model.derivatives import delayed_derivative
-from rotorid.model.modelfile import parse_model
+from rotorid.model.modelfile import case_model
 from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.plugin.contracts import CaseData
 from rotorid.plugin.manager import create, notify, using
@@ -118,9 +118,7 @@ def base_structure(case: FlightCase, condition: FlightCondition, units: str) -> 
     """The case's starting structure at the identified trim condition."""
     trim = {"airspeed_kt": condition.airspeed_kt, "theta0_deg": math.degrees(condition.theta0),
             "phi0_deg": math.degrees(condition.phi0)}
-    mapping = {"units": units, "condition": trim, "structure": dict(case.structure),
-               "derivatives": dict(case.derivatives)}
-    return parse_model(mapping, f"case {case.name}")
+    return case_model(case.as_dict(), trim, units, f"case {case.name}")
 
 
 def checked_structure(case: FlightCase, structure: ModelStructure, ident: ManeuverSet,
