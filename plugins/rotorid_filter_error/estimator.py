@@ -603,7 +603,8 @@ class FilterErrorEstimator:
             fitted = first._fit_linear(structure, maneuvers, kept or None, GUST_FREE_STAGE)
         return (fitted.values[:problem.n_structure].copy(),
                 f"start values from a fit with accelerations in place of the gusts on "
-                f"{', '.join(accelerated)} ({fitted.iterations} iterations from equation error)")
+                f"{', '.join(accelerated)} ({fitted.iterations} iterations from equation error"
+                f"{'' if fitted.converged else ', stopped unconverged: ' + fitted.stop_reason})")
 
     def _start_values(self, problem, maneuvers, start):
         structure = problem.structure
