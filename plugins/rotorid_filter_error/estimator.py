@@ -692,7 +692,7 @@ def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
     if hasattr(problem, "innovations"):
         innovations = problem.per_maneuver(problem.innovations(values)[0])
         coloured = whiteness_note(innovations, problem.output_names,
-                                  problem.records.dt * every)
+                                  problem.sample_time * every)
         if coloured:
             notes.append(coloured)
     unmeasured = unmeasured_gusts(problem)

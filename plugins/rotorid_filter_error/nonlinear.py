@@ -161,6 +161,11 @@ class NonlinearFilterErrorProblem(InnovationLikelihood):
         return result, innovation
 
     # ------------------------------------------------------------------ the problem
+    @property
+    def sample_time(self) -> float:
+        """The records' sample interval, s (the name the linear problem gives it)."""
+        return self.dt
+
     def innovations(self, values) -> tuple[np.ndarray, np.ndarray]:
         """Time-major innovations (N, M, p) and their covariance B (p, p) at ``values``."""
         nu, b = self.run(np.asarray(values, dtype=float)[None])
