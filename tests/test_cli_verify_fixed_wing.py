@@ -46,14 +46,23 @@ def _write_sweeps(directory) -> None:
                    header=",".join(("time", "DELE_deg", "THRUST_N") + COLUMNS), comments="")
 
 
-def test_verify_checks_every_pair_of_the_aeroplane_on_its_own_columns(tmp_path, capsys):
+def _identified(tmp_path, capsys, *options, recorded=None):
+    """The example's model file and records in ``tmp_path`` (``recorded(directory)`` changes
+    the records first), identified with ``options``; the result's path."""
     model = tmp_path / "fixed_wing_linear.toml"
     shutil.copy(EXAMPLE, model)
     (tmp_path / "records").mkdir()
     write_records(tmp_path / "records")
+    if recorded is not None:
+        recorded(tmp_path / "records")
     result = tmp_path / "result.json"
     assert main(["identify", str(model), str(tmp_path / "records"), "--out", str(result),
-                 "--quiet"]) == 0, capsys.readouterr().err
+                 "--quiet", *options]) == 0, capsys.readouterr().err
+    return result
+
+
+def test_verify_checks_every_pair_of_the_aeroplane_on_its_own_columns(tmp_path, capsys):
+    result = _identified(tmp_path, capsys)
     _write_sweeps(tmp_path / "sweeps")
     out = tmp_path / "verification"
     status = main(["verify", str(result), str(tmp_path / "sweeps"), "--out", str(out),
@@ -75,13 +84,7 @@ def test_verify_checks_every_pair_of_the_aeroplane_on_its_own_columns(tmp_path, 
 def test_verify_on_multisteps_says_they_are_not_sweeps(tmp_path, capsys):
     """The identification records (3211 and doublets, no kind metadata) given as sweeps:
     verified, with a note per record that it is a step input."""
-    model = tmp_path / "fixed_wing_linear.toml"
-    shutil.copy(EXAMPLE, model)
-    (tmp_path / "records").mkdir()
-    write_records(tmp_path / "records")
-    result = tmp_path / "result.json"
-    assert main(["identify", str(model), str(tmp_path / "records"), "--out", str(result),
-                 "--quiet"]) == 0, capsys.readouterr().err
+    result = _identified(tmp_path, capsys)
     out = tmp_path / "verification"
     status = main(["verify", str(result), str(tmp_path / "records"), "--out", str(out),
                    "--no-figures"])
@@ -110,17 +113,11 @@ def test_verify_reads_the_sweeps_with_the_identifications_trim_removal(tmp_path,
     elevator): identified with --trim first-second, which the result records, the sweeps are
     read the same way; stating a trim that removes nothing (--trim theta=0) leaves the offsets
     in, and the average mismatch cost J_ave grows more than fivefold (1090 against 93)."""
-    model = tmp_path / "fixed_wing_linear.toml"
-    shutil.copy(EXAMPLE, model)
-    (tmp_path / "records").mkdir()
-    write_records(tmp_path / "records")
     _write_sweeps(tmp_path / "sweeps")
     trim = {"VTAS_mps": 40.0, "PITCH_deg": 4.0, "DELE_deg": 1.5}
-    for directory in (tmp_path / "records", tmp_path / "sweeps"):
-        _offset_records(directory, trim)
-    result = tmp_path / "result.json"
-    assert main(["identify", str(model), str(tmp_path / "records"), "--out", str(result),
-                 "--quiet", "--trim", "first-second"]) == 0, capsys.readouterr().err
+    result = _identified(tmp_path, capsys, "--trim", "first-second",
+                         recorded=lambda records: _offset_records(records, trim))
+    _offset_records(tmp_path / "sweeps", trim)
     assert json.loads(result.read_text())["ingestion"] == {"trim": "first-second"}
     capsys.readouterr()
     costs = {}
