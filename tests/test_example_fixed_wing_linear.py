@@ -197,6 +197,7 @@ def test_a_study_of_the_aeroplane_speaks_about_the_aeroplane(tmp_path, capsys):
         assert absent not in report
     assert "rad/s per m/s" in report and "q/elevator" in report       # Z_V
     assert "Trim: 50.0 m/s" in report and "RMSE values (eq. 18) are pure numbers" in report
+    assert "RMSE [-]" in report and "RMSE [mixed units]" not in report      # pure numbers
     assert "[%]" not in report.split('id="time-histories"')[1].split('id="verification"')[0]
     # no delays declared: one model, not the same model twice as "no delays" and "with delays"
     assert "none declared" in report and "identified model: value" in report

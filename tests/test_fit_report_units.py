@@ -149,3 +149,11 @@ def test_a_nonlinear_model_of_ones_own_is_reported_in_its_signals_units():
     assert estimate.rmse == pytest.approx(math.sqrt(np.mean(in_reference**2)), rel=1e-6)
     assert "(dimensionless: eq. 18 with the residuals counted in deg, deg/s)" in (
         estimate.report())
+
+
+def test_an_rmse_is_labelled_a_pure_number_only_where_every_output_has_a_reference_unit():
+    from rotorid.estimation.estimate import rmse_unit
+
+    assert rmse_unit(("deg/s", "ft/s²", "deg")) == "-"
+    assert rmse_unit(("rad/s", "m/s²")) == "-"                 # counted in deg/s and ft/s²
+    assert rmse_unit(("deg/s", "N")) == "mixed units"          # a force has no reference unit

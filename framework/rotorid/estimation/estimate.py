@@ -118,6 +118,12 @@ def rmse_counted_units(output_units) -> tuple[str, ...]:
     return tuple(dict.fromkeys(RMSE_REFERENCE_UNITS[UNITS[u][0]] for u in output_units))
 
 
+def rmse_unit(output_units) -> str:
+    """The unit label of an RMSE over outputs in ``output_units``: ``-`` where it is a pure
+    number (:func:`rmse_counted_units`), else ``mixed units``."""
+    return "-" if rmse_counted_units(output_units) else "mixed units"
+
+
 def rmse_basis(output_units) -> str:
     """What makes the RMSE over outputs in ``output_units`` a pure number: the reference
     units its residuals are counted in (:func:`rmse_counted_units`); ``""`` when an output

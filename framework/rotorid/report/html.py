@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rotorid.estimation.estimate import rmse_counted_units
+from rotorid.estimation.estimate import rmse_counted_units, rmse_unit
 from rotorid.io import atomic_write
 from rotorid.model.derivatives import delayed_derivative
 from rotorid.report.figures import (
@@ -93,7 +93,7 @@ def parameter_unit(name: str, units: str, estimate=None) -> str:
 
 
 def rmse_basis_text(estimate) -> str:
-    """What the report's RMSE values ("[mixed units]") are: the units ``estimate``'s
+    """What the report's RMSE values ("[-]" or "[mixed units]") are: the units ``estimate``'s
     residuals count in (:func:`rotorid.estimation.estimate.rmse_counted_units`)."""
     counted = rmse_counted_units(estimate.output_units)
     if counted:
@@ -104,8 +104,9 @@ def rmse_basis_text(estimate) -> str:
 
 def removed_rows(result) -> list[list[str]]:
     """Appendix B, removed parameters: step, parameter, criterion, metric, RMSE, iterations."""
+    unit = rmse_unit(result.estimates["no delays"].output_units)
     rows = [["step", "removed", "criterion", "metric [%]", "parameters [-]",
-             "RMSE [mixed units]", "iterations [-]", "selected"]]
+             f"RMSE [{unit}]", "iterations [-]", "selected"]]
     selected = result.path.selected_index
     for step in result.path.steps:
         removal = step.removal
@@ -326,8 +327,9 @@ def estimator_rows(result) -> list[list[str]]:
 def estimator_fit_rows(result) -> list[list[str]]:
     """With ``[compare] estimators``: each fit's iterations, its own cost and RMSE, and its
     model's simulation of the identification maneuvers (RMSE, det R), and its time."""
+    unit = rmse_unit(result.estimates["with delays"].output_units)
     rows = [["estimator", "iterations [-]", "converged", "own cost [-]",
-             "own RMSE [mixed units]", "simulation RMSE [mixed units]",
+             f"own RMSE [{unit}]", f"simulation RMSE [{unit}]",
              "simulation det R [mixed units]", "fit time [s]"]]
     comparison = result.estimator_comparison
     for name, estimate in comparison.estimates.items():
@@ -365,7 +367,8 @@ def hybrid_model_rows(result) -> list[list[str]]:
     det R on the identification maneuvers, and J per verification pair over 1–20 rad/s."""
     comparison = result.hybrid_comparison
     pairs = list(dict.fromkeys(p for costs in comparison.costs.values() for p in costs))
-    rows = [["model", "parameters [-]", "RMSE [mixed units]", "det R [mixed units]",
+    unit = rmse_unit(result.estimates["no delays"].output_units)
+    rows = [["model", "parameters [-]", f"RMSE [{unit}]", "det R [mixed units]",
              *(f"J {pair} [-]" for pair in pairs), "mean J [-]"]]
     for label in HYBRID_MODELS:
         simulation = comparison.simulation[label]
@@ -839,8 +842,10 @@ def write_case_outputs(result, directory: str | Path,
 def write_study_report(results: Mapping[str, object], out_dir: str | Path) -> Path:
     """Write ``<out>/report.html``: one summary per case, linking each case report."""
     out_dir = Path(out_dir)
-    rows = [["case", "trim", "parameters (removed) [-]", "RMSE no delays [mixed units]",
-             "RMSE with delays [mixed units]", "delays [s]", "claims or guidelines holding [-]"]]
+    units = {rmse_unit(r.estimates["no delays"].output_units) for r in results.values()}
+    unit = units.pop() if len(units) == 1 else "- or mixed units"
+    rows = [["case", "trim", "parameters (removed) [-]", f"RMSE no delays [{unit}]",
+             f"RMSE with delays [{unit}]", "delays [s]", "claims or guidelines holding [-]"]]
     sections, contents = [], [("overview", "Overview")]
     for name, result in results.items():
         checks = case_claims(result)

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from rotorid.data import Maneuver
+from rotorid.estimation.estimate import rmse_unit
 from rotorid.estimation.reduction import ReductionPath
 from rotorid.io import atomic_write
 from rotorid.model.signals import ModelSignals, Signal, SignalSet
@@ -113,7 +114,7 @@ def plot_rmse_path(path: ReductionPath, title: str = "Model reduction"):
     axis.set_ylim(bottom, top)
     axis.set_xlim(-0.5, removed[-1] + 0.5)
     axis.set_xlabel("number of removed parameters [-]")
-    axis.set_ylabel("RMSE (eq. 18) [mixed units]")
+    axis.set_ylabel(f"RMSE (eq. 18) [{rmse_unit(path.steps[0].estimate.output_units)}]")
     names = axis.secondary_xaxis("top")
     names.set_xticks(removed[1:], [s.removal.parameter for s in path.steps[1:]], rotation=90,
                      fontsize=7 if len(removed) < 45 else 6)
