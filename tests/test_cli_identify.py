@@ -300,6 +300,8 @@ def test_filter_error_noise_model_options(case, tmp_path, capsys):
     record = json.loads(out.read_text(encoding="utf-8"))
     names = set(record["parameters"])
     assert {"G_w", "Tg_w", "D_r", "T_r"} <= names
+    assert {k: record["estimator_options"][k] for k in ("gusts", "disturbances")} == {
+        "gusts": ["w"], "disturbances": ["r"]}
     assert not any(n.startswith("F_") for n in names)
     assert "[gust-free start] iteration" in captured.err
     for name in ("M_q", "L_p", "Z_w", "Z_coll", "N_r"):

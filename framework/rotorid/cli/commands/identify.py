@@ -25,7 +25,8 @@ are converted to the model's unit system, after the trim removal and resampling 
 (:mod:`rotorid.ingestion`), and through the actuators' known lag with ``--actuator-lag``
 (:mod:`rotorid.actuators`; recorded as ``actuator_lag_s``, ``rotorid verify`` then lags the
 sweeps alike). The trim removal and resampling are recorded too (``ingestion``), and
-``rotorid verify`` reads the sweeps with them. ``--process-noise``, ``--disturbances``,
+``rotorid verify`` reads the sweeps with them; so are the estimator options the command line
+set (``estimator_options``: the noise model, outputs, start …), to repeat the fit. ``--process-noise``, ``--disturbances``,
 ``--gusts`` and ``--update-every`` set the ``filter-error`` estimator's noise model
 (docs/estimation.md, "Filter error"); with another estimator they are a usage error that
 says to add ``--estimator filter-error``. The report goes to stdout; stderr gets one line per
@@ -335,6 +336,8 @@ def run(args) -> int:
     _print_warnings(caught)
     data_warnings = [str(warning.message) for warning in found]
     record = _record(estimate, args.model, out, data_warnings)
+    record["estimator_options"] = {k: list(v) if isinstance(v, tuple) else v
+                                   for k, v in options.items()}
     read = {k: v for k, v in _ingestion(args).items() if v is not None}
     if read:
         record["ingestion"] = read
