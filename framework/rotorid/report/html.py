@@ -367,7 +367,7 @@ def hybrid_model_rows(result) -> list[list[str]]:
     det R on the identification maneuvers, and J per verification pair over 1–20 rad/s."""
     comparison = result.hybrid_comparison
     pairs = list(dict.fromkeys(p for costs in comparison.costs.values() for p in costs))
-    unit = rmse_unit(result.estimates["no delays"].output_units)
+    unit = rmse_unit(comparison.estimate.output_units)
     rows = [["model", "parameters [-]", f"RMSE [{unit}]", "det R [mixed units]",
              *(f"J {pair} [-]" for pair in pairs), "mean J [-]"]]
     for label in HYBRID_MODELS:
