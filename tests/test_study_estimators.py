@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 from rotorid import load_result, simulate
 from rotorid.errors import DataFileError
-from rotorid.report.html import StudyReport, estimator_fit_rows, estimator_rows
+from rotorid.report.html import (StudyReport, estimator_fit_rows, estimator_rows,
+                                 write_study_report)
 from rotorid.study.case import FlightCase
 from rotorid.study.pipeline import run_case
 from rotorid.study.result import MODELS
@@ -113,6 +114,10 @@ def test_estimators_side_by_side_in_result_and_report(filtered):
         else:
             assert (directory / target).is_file(), target
     assert "tables/estimators.csv" in report and "tables/estimator_fits.csv" in report
+    # the overview gives filter error's own (innovation) RMSE with its simulation's beside it
+    overview = write_study_report({result.name: result}, directory.parent)
+    assert f"<td>{result.rmse_text('no delays')}</td>" in overview.read_text()
+    assert "(simulated " in result.rmse_text("no delays")
 
 
 def test_a_case_without_the_comparison_keeps_its_record():

@@ -853,9 +853,9 @@ def write_study_report(results: Mapping[str, object], out_dir: str | Path) -> Pa
         units = result.estimates["no delays"].units
         rows.append([name, result.condition.describe(units),
                      f"{result.path.selected.n_parameters} ({len(result.path.removed)})",
-                     f"{result.estimates['no delays'].rmse:.4f}",
-                     f"{result.estimates['with delays'].rmse:.4f}" if result.kept_delays
-                     else "–", _delays_text(result),
+                     result.rmse_text("no delays"),
+                     result.rmse_text("with delays") if result.kept_delays else "–",
+                     _delays_text(result),
                      f"{len(decided) - len(failed)}/{len(decided)}" if checks else "–"])
         link = f"{html.escape(name)}/report.html"
         anchor = "case-" + file_stem(name)
