@@ -137,5 +137,6 @@ def test_verify_reads_the_sweeps_with_the_identifications_trim_removal(tmp_path,
         else:
             assert "sweeps read with --trim: theta=0" in printed
             # the data checks of identification records, run on the sweeps, name the offset
-            assert "warning: output 'V' starts away from zero in 2 of 2 maneuvers: 40 m/s" in printed
+            assert ("warning: output 'V' starts away from zero in 2 of 2 maneuvers: 40 m/s"
+                    in printed)
     assert costs["nothing removed"] > 5 * costs["recorded"]

@@ -119,7 +119,8 @@ def case_result_html(result) -> str:
     for label in result.models:
         estimate, verification = result.estimates[label], result.verification.get(label)
         cost = None if verification is None else verification.average_cost()
-        rows.append((result.model_name(label), len(estimate.parameter_names), int(np.sum(estimate.is_delay)),
+        rows.append((result.model_name(label), len(estimate.parameter_names),
+                     int(np.sum(estimate.is_delay)),
                      _number(estimate.rmse), _number(estimate.cost, 3), _number(cost)))
     return html_table(case_result_summary(result),
                       ("model", "parameters", "delays", "RMSE", "det R", "J_ave"), rows)

@@ -689,12 +689,10 @@ def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
                      f"{'it' if len(silent) == 1 else 'them'} (infinite bounds, not a lack of "
                      f"excitation); leave {states} out of the process noise and refit, or "
                      f"model the turbulence as gusts or disturbances instead")
-    if hasattr(problem, "innovations"):
-        innovations = problem.per_maneuver(problem.innovations(values)[0])
-        coloured = whiteness_note(innovations, problem.output_names,
-                                  problem.sample_time * every)
-        if coloured:
-            notes.append(coloured)
+    innovations = problem.per_maneuver(problem.innovations(values)[0])
+    coloured = whiteness_note(innovations, problem.output_names, problem.sample_time * every)
+    if coloured:
+        notes.append(coloured)
     unmeasured = unmeasured_gusts(problem)
     if unmeasured:
         notes.append(f"no output measures {', '.join(unmeasured)}: each such gust's size G "

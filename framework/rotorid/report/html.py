@@ -224,7 +224,7 @@ def verification_rows(result) -> list[list[str]]:
 
 def _unavailable_envelopes_html(result) -> str:
     """Why an envelope column reads "not available": its source's first sentence."""
-    unavailable = {check.envelope: check.provenance.split(". ")[0].rstrip(".")
+    unavailable = {check.envelope: check.source_sentence
                    for verification in result.verification.values()
                    for item in verification.pairs for check in item.checks.values()
                    if check.status == "not available"}
@@ -726,6 +726,7 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         contents.append(("claims", title))
         body += [f'<h2 id="claims">{html.escape(title)}</h2>', claims_html(claims)]
     keys = bool(result.key_derivative_names())
+    delays = _delays_text(result)
     # the paper's tables where the case reproduces the paper
     appendix = " (Appendix B)" if case.data_source in PAPER_SOURCES else ""
     contents += [("reduction", "Model reduction"), ("delays", "Time delays"),
@@ -748,7 +749,7 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         figures_html(figures.get("reduction", [])),
         f"<h3>Removed parameters{appendix}</h3>", _html_table(removed_rows(result), 7),
         '<h2 id="delays">Time delays</h2>',
-        f"<p>{html.escape(_delays_text(result)[:1].upper() + _delays_text(result)[1:])}. "
+        f"<p>{html.escape(delays[:1].upper() + delays[1:])}. "
         f"{result.rmse_summary()}"
         f"{'' if result.kept_delays else ': one model, shown as the ' + ONE_MODEL}.</p>",
         figures_html(figures.get("delays", [])),
@@ -842,8 +843,8 @@ def write_case_outputs(result, directory: str | Path,
 def write_study_report(results: Mapping[str, object], out_dir: str | Path) -> Path:
     """Write ``<out>/report.html``: one summary per case, linking each case report."""
     out_dir = Path(out_dir)
-    units = {rmse_unit(r.estimates["no delays"].output_units) for r in results.values()}
-    unit = units.pop() if len(units) == 1 else "- or mixed units"
+    rmse_units = {rmse_unit(r.estimates["no delays"].output_units) for r in results.values()}
+    unit = rmse_units.pop() if len(rmse_units) == 1 else "- or mixed units"
     rows = [["case", "trim", "parameters (removed) [-]", f"RMSE no delays [{unit}]",
              f"RMSE with delays [{unit}]", "delays [s]", "claims or guidelines holding [-]"]]
     sections, contents = [], [("overview", "Overview")]

@@ -20,7 +20,8 @@ those conditions.
 A case about one's own aircraft (no truth model: measured data) is held against no paper.
 What its user needs is whether the model meets the accepted guidelines: :func:`case_claims`
 gives it :func:`guideline_claims`, the RMSE guideline of the models shown and the MUAD bounds
-on every pair the model with delays (or the one model) was verified on (the case's own pairs, not the paper's).
+on every pair the model with delays (or the one model) was verified on (the case's own pairs,
+not the paper's).
 """
 
 from __future__ import annotations
@@ -91,9 +92,9 @@ def rmse_claims(result) -> list[Claim]:
     """The time-domain guideline on the models shown (both, or the one model of a case that
     kept no delay: ``CaseResult.models``), each simulated on the identification maneuvers
     (``result.time_metrics``): the model's own response to the recorded inputs, not an
-    estimator's one-step predictions (filter error's innovation RMSE
-    stays small in turbulence whatever the simulation does). Not checked where the RMSE is
-    not given: it would mix units."""
+    estimator's one-step predictions (filter error's innovation RMSE stays small in
+    turbulence whatever the simulation does). Not checked where the RMSE is not given: it
+    would mix units."""
     claims = []
     for label in result.models:
         rmse = result.time_metrics[label].rmse

@@ -141,6 +141,11 @@ class EnvelopeCheck:
         return f"; outside at {low:.2g} rad/s" if low == high else \
             f"; outside at {low:.2g}–{high:.2g} rad/s"
 
+    @property
+    def source_sentence(self) -> str:
+        """The first sentence of the envelope's provenance, without its full stop."""
+        return self.provenance.split(". ")[0].rstrip(".")
+
     def summary(self) -> dict:
         """JSON-ready summary (no per-point arrays)."""
         return {
@@ -157,9 +162,8 @@ class EnvelopeCheck:
 
     def report(self) -> str:
         """One line: envelope, status, points, worst margins, source status."""
-        first_sentence = self.provenance.split(". ")[0].rstrip(".")
         source = ("verified source" if self.verified else "UNVERIFIED source") + (
-            f": {first_sentence}" if first_sentence else "")
+            f": {self.source_sentence}" if self.source_sentence else "")
         if self.status == "not available":
             return f"{self.envelope}: not available, no point checked [{source}]"
         line = (f"{self.envelope}: {self.status}; {self.n_inside}/{self.n_used} points inside "

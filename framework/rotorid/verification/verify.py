@@ -50,8 +50,8 @@ def verify_model(structure, values, sweeps, pairs: Sequence[str] | None = None,
     A slower instability is simulated in one piece. ``segment`` given explicitly simulates in
     segments of that length and uses the simulated comparison. The result's notes say which
     was done, and name any maneuver that looks like a step input rather than a sweep
-    (:func:`~rotorid.verification.pairs.step_input_notes`). Envelope names are built from ``manager`` (default the current plugin
-    manager). Every check counts the points of ``band``
+    (:func:`~rotorid.verification.pairs.step_input_notes`). Envelope names are built from
+    ``manager`` (default the current plugin manager). Every check counts the points of ``band``
     (:class:`~rotorid.verification.band.VerificationBand`). Other keyword options go to
     :func:`compare_sweeps`.
     """

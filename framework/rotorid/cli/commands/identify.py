@@ -26,8 +26,8 @@ are converted to the model's unit system, after the trim removal and resampling 
 (:mod:`rotorid.actuators`; recorded as ``actuator_lag_s``, ``rotorid verify`` then lags the
 sweeps alike). The trim removal and resampling are recorded too (``ingestion``), and
 ``rotorid verify`` reads the sweeps with them; so are the estimator options the command line
-set (``estimator_options``: the noise model, outputs, start …), to repeat the fit. ``--process-noise``, ``--disturbances``,
-``--gusts`` and ``--update-every`` set the ``filter-error`` estimator's noise model
+set (``estimator_options``: the noise model, outputs, start …), to repeat the fit.
+``--process-noise``, ``--disturbances``, ``--gusts`` and ``--update-every`` set the ``filter-error`` estimator's noise model
 (docs/estimation.md, "Filter error"); with another estimator they are a usage error that
 says to add ``--estimator filter-error``. The report goes to stdout; stderr gets one line per
 accepted iteration (unless ``--quiet``; an observer plugin of the
@@ -289,6 +289,7 @@ def run(args) -> int:
     from rotorid.cli.files import load_maneuvers, refuse_overwrite
     from rotorid.errors import DataFileError, ExitStatus, MissingFileError, RotoridWarning
     from rotorid.estimation.data_checks import check_fit_data
+    from rotorid.estimation.result_file import INGESTION_SETTINGS
     from rotorid.estimation.sanity import check_before_fit, checks_report
     from rotorid.io import atomic_write
     from rotorid.model.modelfile import load_channel_map, load_model
@@ -336,9 +337,8 @@ def run(args) -> int:
     _print_warnings(caught)
     data_warnings = [str(warning.message) for warning in found]
     record = _record(estimate, args.model, out, data_warnings)
-    record["estimator_options"] = {k: list(v) if isinstance(v, tuple) else v
-                                   for k, v in options.items()}
-    read = {k: v for k, v in _ingestion(args).items() if v is not None}
+    record["estimator_options"] = options
+    read = {k: ingestion[k] for k in INGESTION_SETTINGS if ingestion.get(k) is not None}
     if read:
         record["ingestion"] = read
     if args.actuator_lag is not None:
