@@ -10,6 +10,7 @@ from rotorid.verification.frequency import (
     default_windows,
     effective_averages,
     estimate_responses,
+    influential_inputs,
     log_grid,
     miso_response,
     moving_inputs,
@@ -175,6 +176,25 @@ def test_maneuver_front_end_conditioning_and_errors():
                            windows=(20.0,))
     with pytest.raises(VerificationError, match="NaN"):
         cross_spectra([np.column_stack([u, u * np.nan])], DT, omega, 20.0)
+
+
+def test_influential_inputs_weigh_each_input_by_the_models_response():
+    """With constant responses h and a second input c times the first, the second's share
+    is exactly c·|h_2/h_1|: in when that exceeds the fraction, out when not."""
+    u = log_sweep(duration=30.0)
+    inputs = np.column_stack([u, 0.02 * u, np.zeros_like(u), 0.5 * u])
+    sweeps = ManeuverSet([_maneuver("long1", inputs, np.zeros((u.size, 8)), axis="long")])
+    omega = log_grid(0.5, 8.0, 20)
+    model = np.tile(np.array([1.0, 3.0, 100.0, -0.09j]), (omega.size, 1))
+    # lat: 0.02·3 = 0.06 > 0.05; ped: 0.5·0.09 = 0.045 < 0.05; coll does not move
+    assert influential_inputs(sweeps, "long", omega, model, ("long", "lat", "coll", "ped")) \
+        == ("lat",)
+    assert influential_inputs(sweeps, "long", omega, model, ("long", "lat", "coll", "ped"),
+                              fraction=0.044) == ("lat", "ped")
+    assert influential_inputs(sweeps, "long", omega, 0 * model,
+                              ("long", "lat", "coll", "ped")) == ()
+    with pytest.raises(VerificationError, match="unknown input 'pitch'"):
+        influential_inputs(sweeps, "pitch", omega, model, ("long", "lat", "coll", "ped"))
 
 
 def test_noise_free_output_fully_coherent_with_two_inputs_does_not_break_conditioning():

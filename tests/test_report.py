@@ -243,8 +243,8 @@ def test_the_bode_caption_names_the_response_the_analytic_one_is_compared_with()
     from rotorid.report.figures import _bode_caption
 
     single = types.SimpleNamespace(model_source="simulated", conditioned=None, analytic=object())
-    assert ("which the measured response (no other input moved, so it is conditioned on "
-            "nothing) is compared with") in _bode_caption("p/aileron", single)
+    assert ("which the measured response (no other input moved or drives the output, so "
+            "it is conditioned on nothing) is compared with") in _bode_caption("p/aileron", single)
     loops = types.SimpleNamespace(
         model_source="simulated", analytic=object(),
         conditioned=types.SimpleNamespace(conditioned_on=("lat", "ped")))

@@ -14,7 +14,7 @@ from rotorid.report.plots.frequency import plot_bode, plot_error  # noqa: E402
 from rotorid.verification.band import VerificationBand  # noqa: E402
 from rotorid.verification.compare import compare_sweeps, envelopes_by_name  # noqa: E402
 from rotorid.verification.pairs import parse_pair  # noqa: E402
-from rotorid.verification.frequency import log_grid  # noqa: E402
+from rotorid.verification.frequency import log_grid, moving_inputs  # noqa: E402
 from sweeps import DT, analytic, log_sweep, respond  # noqa: E402
 
 OMEGA = log_grid(0.3, 15.0, 100)
@@ -348,3 +348,43 @@ def test_the_analytic_comparison_leaves_out_points_with_correlated_inputs():
     single = FrequencyResponse("ped", "r", omega, np.ones(4), coherence=np.full(4, 0.9),
                                random_error=np.zeros(4))
     assert _reliable(single) is single
+
+
+def test_a_small_input_that_drives_the_output_is_conditioned_out(envelopes):
+    """A 'roll loop' moves the lateral stick by 2 % of the longitudinal sweep's RMS, too
+    little for the RMS rule, but the stick drives p 33 times harder than the sweep does: the
+    single-input p/long is then not the model's analytic p/long, and ``auto`` must condition
+    on the stick (the model says it matters) for the analytic comparison to pass."""
+    coupling, roll, loop = ([-6.0], [1.0, 5.0]), ([200.0], [1.0, 5.0]), ([1.0], [1.0, 1.0])
+    rng = np.random.default_rng(7)
+    u = log_sweep(duration=60.0, omega_max=18.0)
+    maneuvers, outputs = [], []
+    for k in range(2):
+        inputs = np.zeros((u.size, 4))
+        inputs[:, 0] = (-1) ** k * 5.0 * u
+        coupled = respond(*coupling, inputs[:, 0])
+        inputs[:, 1] = 0.02 * respond(*loop, coupled) + 0.02 * rng.standard_normal(u.size)
+        y = np.zeros((u.size, 8))
+        y[:, P] = coupled + respond(*roll, inputs[:, 1])
+        noise = 0.05 * y.std(axis=0) * rng.standard_normal(y.shape)
+        maneuvers.append(Maneuver(f"long-{k}", np.arange(u.size) * DT, inputs, y + noise,
+                                  {"kind": "sweep", "axis": "long"}))
+        outputs.append(y)
+    sweeps = ManeuverSet(maneuvers)
+    assert moving_inputs(sweeps, "long") == ()
+
+    def response(omega):
+        full = np.zeros((len(omega), 8, 4), dtype=complex)
+        full[:, P, 0] = analytic(*coupling, omega)
+        full[:, P, 1] = analytic(*roll, omega)
+        return full
+
+    def verified(conditioning):
+        return compare_sweeps(sweeps, outputs, ["p/long"], envelopes, omega=OMEGA,
+                              analytic=response, conditioning=conditioning)["p/long"]
+
+    plain, auto = verified("none"), verified("auto")
+    assert plain.analytic_checks["muad"].status == "fail"
+    assert auto.conditioned.conditioned_on == ("lat",)
+    muad = auto.analytic_checks["muad"]
+    assert muad.status == "pass" and muad.used.sum() >= 10

@@ -102,11 +102,12 @@ def _bode_caption(pair: str, item) -> str:
     if conditioned:
         text += (f"; red: the measured response conditioned on "
                  f"{html.escape(', '.join(item.conditioned.conditioned_on))} (the other inputs "
-                 "that moved, removed by partial spectra; its partial coherence below)")
+                 "that moved or that the model says drive the output, removed by partial "
+                 "spectra; its partial coherence below)")
     if item.analytic is not None:
         text += ("; green line: the model's analytic response with exact delays, which the "
                  + ("conditioned response" if conditioned else "measured response (no other "
-                    "input moved, so it is conditioned on nothing)") + " is compared with")
+                    "input moved or drives the output, so it is conditioned on nothing)") + " is compared with")
     return text + (". Phases share one 360° branch; markers as in the error plots.")
 
 

@@ -33,6 +33,7 @@ from rotorid.verification.frequency import (
     FrequencyResponse,
     apparent_response,
     default_windows,
+    influential_inputs,
     log_grid,
     lowest_frequency,
     moving_inputs,
@@ -324,8 +325,10 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
         omega: frequency grid in rad/s; default :func:`default_omega` of the sweeps.
         windows: window lengths in s; default from the shortest sweep.
         conditioning: inputs the truth's response is conditioned on for the analytic
-            comparison: ``"auto"`` (every other input that moved, see
-            :func:`rotorid.verification.frequency.moving_inputs`), ``"none"``, or explicit input names.
+            comparison: ``"auto"`` (every other input that moved,
+            :func:`rotorid.verification.frequency.moving_inputs`, or that the model says drives
+            the output, :func:`rotorid.verification.frequency.influential_inputs`, over the
+            band's range), ``"none"``, or explicit input names.
         model_response: ``"simulated"``: the model's single-input response is estimated from
             ``model_outputs``; ``"apparent"``: it is formed from the analytic responses and
             the recorded inputs' cross-spectra (:func:`rotorid.verification.frequency.apparent_response`;
@@ -435,7 +438,7 @@ class _SweepComparison:
         their checks; ``(None, None, {})`` without an analytic response."""
         if self.analytic is None:
             return None, None, {}
-        others = self._conditioning_inputs(subset, control)
+        others = self._conditioning_inputs(subset, output, control)
         conditioned = truth if not others else response_from_maneuvers(
             subset, control, output, self.omega, windows=self.windows, conditioned_on=others)
         analytic = self.analytic[:, self.output_names.index(output),
@@ -443,9 +446,13 @@ class _SweepComparison:
         return conditioned, analytic, _envelope_checks(analytic, _reliable(conditioned),
                                                        self.band, self.envelopes)
 
-    def _conditioning_inputs(self, subset, control: str) -> tuple[str, ...]:
+    def _conditioning_inputs(self, subset, output: str, control: str) -> tuple[str, ...]:
         if isinstance(self.conditioning, str) and self.conditioning == "auto":
-            return moving_inputs(subset, control)
+            inside = (self.omega >= self.band.omega_min) & (self.omega <= self.band.omega_max)
+            chosen = set(moving_inputs(subset, control)) | set(influential_inputs(
+                subset, control, self.omega[inside],
+                self.analytic[inside, self.output_names.index(output)], self.input_names))
+            return tuple(n for n in subset.input_names if n in chosen)
         if isinstance(self.conditioning, str) and self.conditioning == "none":
             return ()
         return tuple(c for c in self.conditioning if c != control)

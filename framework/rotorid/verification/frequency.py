@@ -29,6 +29,7 @@ multi-record pooling, conditioning, random error and the composite.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import attrs
@@ -425,6 +426,35 @@ def moving_inputs(maneuvers: ManeuverSet, primary: str, fraction: float = 0.05
                                 f"the sweeps of that axis")
     return tuple(name for name, value in zip(names, rms)
                  if name != primary and value > fraction * reference)
+
+
+def influential_inputs(maneuvers: ManeuverSet, primary: str, omega: np.ndarray,
+                       model: np.ndarray, input_names: Sequence[str],
+                       fraction: float = 0.05) -> tuple[str, ...]:
+    """Inputs other than ``primary`` whose share of one output, as a model predicts it over
+    ``omega``, exceeds ``fraction`` of the primary input's share in the pooled maneuvers.
+
+    A small input can matter: a lateral stick at 3 % of a longitudinal sweep's RMS drives
+    the roll rate as hard as the sweep does. Each input's share is
+    ``sqrt(Σ_records Σ_ω |H_k(ω) U_k(ω)|²)``, ``U_k`` the record's DFT (mean removed) at the
+    frequencies ``omega`` (rad/s, shape (M,)) and ``H_k`` the model's response of the output
+    to input ``input_names[k]``, columns of ``model`` (M, m). Inputs the maneuvers lack are
+    skipped."""
+    _check_channel(primary, input_names, "input")
+    names = [n for n in input_names if n in maneuvers.input_names]
+    shares = dict.fromkeys(names, 0.0)
+    for m in maneuvers:
+        inputs = m.columns(names)
+        kernel = np.exp(-1j * np.outer(omega, np.arange(m.n_samples) * m.dt))
+        spectra = kernel @ (inputs - inputs.mean(axis=0))             # (M, len(names))
+        for j, name in enumerate(names):
+            column = model[:, list(input_names).index(name)]
+            shares[name] += float(np.sum(np.abs(column * spectra[:, j]) ** 2))
+    reference = shares.get(primary, 0.0)
+    if not reference > 0:
+        return ()
+    return tuple(n for n in names
+                 if n != primary and math.sqrt(shares[n] / reference) > fraction)
 
 
 def _check_channel(name: str, channels: Sequence[str], kind: str) -> None:
