@@ -53,6 +53,27 @@ def test_stated_trim_values_are_subtracted_and_unknown_channels_named():
         Maneuver.from_columns("bad", columns, ingestion={"trim": {"pitch": 5.0}})
 
 
+def test_stated_trim_values_are_read_in_the_models_unit_system(tmp_path):
+    """A flight-test file (deg, ft/s²) read for an SI model: the trim is given in rad and
+    m/s², as the model states its signals, and the record ends at zero in both; the
+    trim removed is recorded in those units. Controls are not converted."""
+    time = np.arange(0.0, 2.0, 0.02)
+    columns = _columns(time, lambda t, k: np.zeros_like(t))
+    columns.update(phi=np.full_like(time, 0.6), ay=np.full_like(time, 0.25),
+                   lat=np.full_like(time, 2.0))
+    path = write_maneuver(Maneuver.from_columns("trimmed", columns), tmp_path / "t.csv")
+    trim = {"phi": math.radians(0.6), "ay": 0.25 * 0.3048, "lat": 2.0}
+    source = create("data-sources", "files", units="si", ingestion={"trim": trim})
+    m = source.load(path)[0]
+    for channel in ("phi", "ay", "lat"):
+        assert np.allclose(m.channel(channel), 0.0, atol=1e-12), channel
+    assert m.metadata["trim_units"] == "si"
+    assert m.metadata["trim_removed"] == pytest.approx(trim)
+    plain = create("data-sources", "files", ingestion={"trim": {"phi": 0.6}}).load(path)[0]
+    assert np.allclose(plain.channel("phi"), 0.0)
+    assert plain.metadata["trim_units"] == "flight-test"
+
+
 def test_linear_resampling_of_jittered_time_states_the_method():
     rng = np.random.default_rng(3)
     time = np.cumsum(rng.uniform(0.015, 0.025, 500))

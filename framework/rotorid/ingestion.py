@@ -14,7 +14,8 @@ to one record's columns, in this order:
    dropouts: both are warned about (:class:`~rotorid.errors.DataWarning`) and interpolated
    across;
 3. **trim removal**: ``"first-second"`` subtracts each channel's mean over the first second;
-   a mapping subtracts stated values (in the units after step 1).
+   a mapping subtracts stated values, given in the unit system ``trim_units`` (the model's,
+   as a file source sets it) or else in the record's own (after step 1).
 
 Each step taken is stated in the returned notes (``converted_units``, ``resampled``,
 ``trim_removed``), which become the maneuver's metadata.
@@ -108,6 +109,9 @@ class Ingestion:
             one's own reads through its own channel map
             (:attr:`rotorid.estimation.integrated.IntegratedModel.columns`); a record holding
             them needs none of the inputs and outputs.
+        trim_units: the unit system stated trim values are in (``"flight-test"``, ``"si"``;
+            the model's), converted per channel kind into the record's; ``None``: the
+            record's own. Controls are in the model's unit after the channel map already.
     """
 
     trim: str | Mapping[str, float] | None = attrs.field(default=None, validator=_check_trim)
@@ -117,6 +121,7 @@ class Ingestion:
     channels: ChannelMap = attrs.field(factory=ChannelMap, converter=_channel_map)
     signals: ModelSignals | None = None
     keep_columns: tuple[str, ...] = attrs.field(default=(), converter=tuple)
+    trim_units: str | None = None
 
     def _control_factor(self, link) -> float:
         """Factor from a control column's unit into the unit the model states for that control
@@ -150,7 +155,7 @@ class Ingestion:
         if columns:
             raise DataError(f"trim value for column {columns[0]!r}, which {self.channels.source} "
                             f"links to {linked[columns[0]]!r}: give the trim of "
-                            f"{linked[columns[0]]!r} instead, in its unit after conversion")
+                            f"{linked[columns[0]]!r} instead, in the model's units")
         if self.signals is not None:
             targets = set(self.signals.all.names) | set(CHANNEL_KINDS) | set(self.keep_columns)
             strange = [link for link in self.channels.links if link.signal not in targets]
@@ -305,7 +310,12 @@ def _resample(columns: dict, ingestion: Ingestion, where: str) -> tuple[dict, st
     return resampled, note
 
 
-def _remove_trim(columns: dict, trim, where: str) -> tuple[dict, dict]:
+def _remove_trim(columns: dict, ingestion: "Ingestion", units: str, where: str
+                 ) -> tuple[dict, dict]:
+    """``columns`` (in the unit system ``units``) less their trim, and the trim removed per
+    channel, stated in ``ingestion.trim_units`` when set (else in ``units``)."""
+    trim = ingestion.trim
+    factors = {k: _trim_factor(ingestion, k, units) for k in columns if k != "time"}
     if trim == "first-second":
         time = columns["time"]
         window = time <= time[0] + TRIM_WINDOW + 1e-9
@@ -316,8 +326,19 @@ def _remove_trim(columns: dict, trim, where: str) -> tuple[dict, dict]:
             raise DataError(f"{where}: trim value for unknown channel "
                             f"{(unknown or ['time'])[0]!r}; channels: "
                             f"{', '.join(c for c in columns if c != 'time')}")
-        values = {k: float(v) for k, v in trim.items()}
-    return {k: v - values.get(k, 0.0) for k, v in columns.items()}, values
+        values = {k: float(v) * factors[k] for k, v in trim.items()}
+    removed = {k: v / factors[k] for k, v in values.items()}
+    return {k: v - values.get(k, 0.0) for k, v in columns.items()}, removed
+
+
+def _trim_factor(ingestion: "Ingestion", channel: str, units: str) -> float:
+    """Factor from ``channel``'s unit in ``ingestion.trim_units`` into its unit in ``units``
+    (1 for controls, channels of no known kind, or no ``trim_units``)."""
+    kind = ingestion.kind(channel)
+    if ingestion.trim_units is None or kind in (None, "control"):
+        return 1.0
+    return conversion_factor(unit_system(ingestion.trim_units).unit_of(kind),
+                             unit_system(units).unit_of(kind))
 
 
 def prepare_columns(columns: Mapping[str, np.ndarray], units: str,
@@ -339,5 +360,6 @@ def prepare_columns(columns: Mapping[str, np.ndarray], units: str,
         if note:
             notes["resampled"] = note
     if ingestion.trim is not None:
-        prepared, notes["trim_removed"] = _remove_trim(prepared, ingestion.trim, where)
+        prepared, notes["trim_removed"] = _remove_trim(prepared, ingestion, units, where)
+        notes["trim_units"] = unit_system(ingestion.trim_units or units).name
     return prepared, notes

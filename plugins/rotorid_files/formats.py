@@ -140,15 +140,18 @@ class FileSource:
     path_settings: ClassVar[tuple[str, ...]] = ("identification", "verification")
     #: Case settings that are attributes of the source, and those of its ingestion.
     options: ClassVar[tuple[str, ...]] = ("hold", "units")
-    ingestion_settings: ClassVar[tuple[str, ...]] = tuple(attrs.fields_dict(Ingestion))
+    ingestion_settings: ClassVar[tuple[str, ...]] = tuple(
+        k for k in attrs.fields_dict(Ingestion) if k != "trim_units")
 
     def load(self, location) -> ManeuverSet:
         """Every maneuver in ``location``: one file, a directory (its ``.csv``, ``.npz`` and
         ``.mat`` files, sorted by name), a glob pattern such as ``"data/hover_*.csv"``, or a
         list of these."""
         maneuvers, origin = [], {}
+        ingestion = (self.ingestion if self.units is None or self.ingestion.trim_units
+                     else attrs.evolve(self.ingestion, trim_units=self.units))
         for path in _expand(location):
-            maneuver = read_maneuver(path, self.ingestion)
+            maneuver = read_maneuver(path, ingestion)
             if maneuver.name in origin:
                 raise DataFileError(f"maneuver name {maneuver.name!r} is used by both "
                                     f"{origin[maneuver.name]} and {path}; rename one")
