@@ -161,6 +161,13 @@ DATA_FILES = [
     ("duplicated-channel", _csv_text(_csv_rows(header=HEADER.replace(",r", ",q"))),
      ["bad.csv", "'q' appears twice"]),
     ("short-row", _csv_text(_csv_rows() + "1.0,2.0\n"), ["bad.csv", "expected 13 values"]),
+    ("empty-field", _csv_with(""), ["bad.csv", "'long'", "empty, NaN or infinite",
+                                    "--resample linear"]),
+    ("semicolons", _csv_text(HEADER + "\n" + ";".join(["0,0"] * 13) + "\n"),
+     ["bad.csv", "expected 13 values", "semicolons", "comma-separated"]),
+    ("units-row", _csv_text(HEADER + "\ns,%,%,%,%,ft/s2,ft/s2,deg/s,deg,ft/s2,deg/s,deg,deg/s\n"
+                            + _csv_rows().split("\n", 1)[1]),
+     ["bad.csv", "'s' is not a number", "row of units", "channel map"]),
     ("comments-only", _csv_text("# name: x\n# kind: 3211\n"), ["bad.csv", "no header row"]),
     ("binary-csv", _bytes("junk.csv", bytes(range(256)) * 4), ["junk.csv"]),
     ("empty-csv", _bytes("empty.csv", b""), ["empty.csv"]),

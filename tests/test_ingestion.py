@@ -228,7 +228,7 @@ def test_nan_dropouts_are_interpolated_across_only_when_resampling(tmp_path):
         fields[header.index("q")] = "nan"
         lines[2 + row] = ",".join(fields)
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    with pytest.raises(DataFileError, match="line 23 \\(row 20\\), channel 'q': value is NaN"):
+    with pytest.raises(DataFileError, match="line 23 \\(row 20\\), channel 'q': value is empty, NaN"):
         read_maneuver(path)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", DataWarning)
@@ -264,3 +264,25 @@ def test_a_trim_naming_a_linked_column_asks_for_its_channel():
         Ingestion(trim={"DELE": 1.0}, channels={"DELE": {"signal": "long", "unit": "%"}})
     kept = Ingestion(trim={"long": 1.0}, channels={"DELE": {"signal": "long", "unit": "%"}})
     assert kept.trim == {"long": 1.0}
+
+
+def test_csv_clock_times_and_empty_dropouts_are_read(tmp_path):
+    """A range's IRIG time (day of year first) is read as seconds, and empty fields are
+    dropouts, interpolated when resampling, as a literal NaN is."""
+    time = np.arange(0.0, 2.0, 0.02)
+    columns = _columns(time, lambda t, k: 2.0 * t + k)
+    path = write_maneuver(Maneuver.from_columns("clock", columns), tmp_path / "clock.csv")
+    lines = path.read_text(encoding="utf-8").splitlines()
+    first = next(i for i, line in enumerate(lines) if line.startswith("time,"))
+    for row in range(time.size):
+        fields = lines[first + 1 + row].split(",")
+        seconds = 31.25 + time[row]
+        fields[0] = f"312:14:02:{seconds:06.3f}"
+        if row == 10:
+            fields[ALL_CHANNELS.index("q")] = ""
+        lines[first + 1 + row] = ",".join(fields)
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    with pytest.warns(DataWarning, match="NaN"):
+        m = read_maneuver(path, Ingestion(resample="linear"))
+    assert m.time[0] == pytest.approx(312 * 86400 + 14 * 3600 + 2 * 60 + 31.25, abs=1e-6)
+    assert np.allclose(m.channel("q"), columns["q"], atol=1e-9)

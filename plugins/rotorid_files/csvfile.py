@@ -14,7 +14,10 @@ JSON (``1``, ``true``, ``[0.1, 0.2]``, ``"1"``) and as plain text otherwise (``h
 ``# units: si`` declares SI-rad data (m/s², rad/s, rad); the default is flight-test units
 (ft/s², deg/s, deg, % of travel). Other leading comment lines and blank lines are ignored. The
 first other line is the header row of channel names, in any order; every following line is
-one sample.
+one sample. An empty field is a dropout, read as NaN (interpolated across when the data are
+resampled, refused otherwise). A field of the form ``DDD:HH:MM:SS.sss`` or ``HH:MM:SS.sss``
+(an IRIG or clock time, as test ranges write their time column) is read as seconds
+(days · 86400 + hours · 3600 + minutes · 60 + seconds).
 """
 
 from __future__ import annotations
@@ -31,7 +34,32 @@ from rotorid.io import parse_number
 
 from .records import KEY_PATTERN, assemble, columns_of, encode_value, header_of
 
+#: A field that starts like a number (a units row has none).
+_PLAIN_NUMBER_LIKE = re.compile(r"[+-]?\.?\d")
 _HEADER_LINE = re.compile(rf"#\s*({KEY_PATTERN.pattern})\s*:\s*(.*?)\s*")
+#: An IRIG (day of year first) or clock time: ``312:14:02:31.250``, ``14:02:31.250``.
+_CLOCK_TIME = re.compile(r"(?:(\d{1,3}):)?(\d{1,2}):(\d{2}):(\d{2}(?:\.\d*)?)", re.ASCII)
+
+
+def _field_value(field: str) -> float:
+    """A CSV field's number: empty is NaN (a dropout), a clock time its seconds."""
+    text = field.strip()
+    if not text:
+        return float("nan")
+    clock = _CLOCK_TIME.fullmatch(text)
+    if clock:
+        day, hours, minutes, seconds = clock.groups()
+        return (int(day or 0) * 86400.0 + int(hours) * 3600.0 + int(minutes) * 60.0
+                + float(seconds))
+    return parse_number(text)
+
+
+def _format_hint(line: str) -> str:
+    """What a data line that does not split into the header's channels suggests."""
+    if ";" in line or "\t" in line:
+        return ("; the file looks separated by semicolons or tabs: rotorid reads comma-"
+                "separated values with a decimal point (export the log as such)")
+    return ""
 
 
 def _decode(text: str):
@@ -81,20 +109,27 @@ def read(path: Path, ingestion: Ingestion):
         fields = line.split(",")
         if len(fields) != len(names):
             raise DataFileError(f"{path}, line {number}: expected {len(names)} values "
-                                f"(one per channel of the header row), got {len(fields)}")
+                                f"(one per channel of the header row), got {len(fields)}"
+                                f"{_format_hint(line)}")
         row = []
         for name, field in zip(names, fields):
             try:
-                row.append(parse_number(field))
+                row.append(_field_value(field))
             except ValueError:
+                units_row = not values and not any(_PLAIN_NUMBER_LIKE.match(f.strip())
+                                                   for f in fields)
+                hint = ("; it looks like a row of units under the header row: delete it and "
+                        "give the units in the model's channel map" if units_row else "")
                 raise DataFileError(f"{path}, line {number} (row {len(values)}), channel "
-                                    f"{name!r}: {field.strip()!r} is not a number") from None
+                                    f"{name!r}: {field.strip()!r} is not a number"
+                                    f"{hint}") from None
         bad = [n for n, v in zip(names, row)
                if not np.isfinite(v) and not (ingestion.resample and np.isnan(v))]
         if bad:
             raise DataFileError(f"{path}, line {number} (row {len(values)}), channel "
-                                f"{bad[0]!r}: value is NaN or infinite; a NaN gap is "
-                                f"interpolated across when the data are resampled")
+                                f"{bad[0]!r}: value is empty, NaN or infinite; a dropout "
+                                f"(empty or NaN) is interpolated across when the data are "
+                                f"resampled (--resample linear)")
         values.append(row)
     table = np.array(values, dtype=float).reshape(len(values), len(names))
     columns = {name: table[:, i] for i, name in enumerate(names)}

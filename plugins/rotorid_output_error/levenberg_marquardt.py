@@ -183,12 +183,14 @@ class Problem:
         positive definite (residuals linearly dependent: noise-free data).
         """
         weighted = np.flatnonzero(self.weights)
+        names = [self.model.output_names[k] for k in weighted]
+        dependent = self._dependent_outputs(r[np.ix_(weighted, weighted)], names)
         try:
+            if dependent:       # decided by R's spectrum, not by how inv's round-off falls
+                raise np.linalg.LinAlgError
             weighting = self.weights[:, None] * np.linalg.inv(r) * self.weights[None, :]
             np.linalg.cholesky(weighting[np.ix_(weighted, weighted)])
         except np.linalg.LinAlgError:
-            dependent = self._dependent_outputs(r[np.ix_(weighted, weighted)],
-                                                [self.model.output_names[k] for k in weighted])
             raise EstimationError(
                 f"the noise covariance R became singular to working precision: the residuals "
                 f"of the outputs {', '.join(dependent) or 'fitted'} are linearly dependent, "
