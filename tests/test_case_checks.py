@@ -156,3 +156,20 @@ def test_reference_values_are_read_from_the_case_file(tmp_path):
         "M_q": ReferenceValue(-3.9, None, "previous model"),
         "L_v": ReferenceValue(-0.41, 0.05, "tunnel")}
     assert FlightCase.load(case_file(tmp_path, "")).reference == {}
+
+
+def test_reference_rows_state_the_units_the_estimate_states():
+    """A control of one's own (an aileron in deg) is in the estimate's own unit, as in the
+    identified-parameters table; a helicopter derivative without a stated unit keeps its
+    flight-test unit."""
+    import types
+
+    from rotorid.study.reference import compare_with_reference
+
+    item = types.SimpleNamespace(value=0.3, cramer_rao=0.01)
+    estimate = type("Estimate", (), {"units": "si", "parameter_units": {"L_aileron": "rad/s² per deg"},
+                              "__contains__": lambda self, name: True,
+                              "__getitem__": lambda self, name: item})()
+    rows = compare_with_reference(estimate, {"L_aileron": ReferenceValue(0.29),
+                                             "M_q": ReferenceValue(-3.9)})
+    assert [row.unit for row in rows] == ["rad/s² per deg", "1/s"]

@@ -244,10 +244,13 @@ def test_the_bode_caption_names_the_response_the_analytic_one_is_compared_with()
 
     single = types.SimpleNamespace(model_source="simulated", conditioned=None, analytic=object())
     assert ("which the measured response (no other input moved or drives the output, so "
-            "it is conditioned on nothing) is compared with") in _bode_caption("p/aileron", single)
+            "it is conditioned on nothing) is compared with") in _bode_caption("p/aileron", single, "identified model")
     loops = types.SimpleNamespace(
         model_source="simulated", analytic=object(),
         conditioned=types.SimpleNamespace(conditioned_on=("lat", "ped")))
-    caption = _bode_caption("q/long", loops)
+    caption = _bode_caption("q/long", loops, "model with delays")
+    assert caption.startswith("q/long, model with delays. Blue")
+    assert _bode_caption("p/aileron", single, "identified model").startswith(
+        "p/aileron, identified model. Blue")
     assert "red: the measured response conditioned on lat, ped" in caption
     assert "which the conditioned response is compared with" in caption

@@ -89,14 +89,14 @@ def _error_caption(pair: str, muad_range: str, band) -> str:
             "the measured response with the band's threshold.")
 
 
-def _bode_caption(pair: str, item) -> str:
+def _bode_caption(pair: str, item, model_name: str) -> str:
     model = ("the model's response estimated from its simulation of the recorded sweep "
              "inputs, processed exactly like the measured one (simulated)"
              if item.model_source == "simulated" else
              "the model's apparent response: its analytic response to the pair's input plus "
              "the effect of the other recorded inputs, formed as in the measured estimate "
              "(used for a model that cannot be simulated over the whole sweep)")
-    text = (f"{html.escape(pair)}, model with delays. Blue: the measured response estimated "
+    text = (f"{html.escape(pair)}, {model_name}. Blue: the measured response estimated "
             f"from the sweeps (single input); orange: {model}")
     conditioned = item.conditioned is not None and bool(item.conditioned.conditioned_on)
     if conditioned:
@@ -202,8 +202,8 @@ def case_figures(result, figures_dir: Path,
                                  f"({result.final_model_name})")
         stem = f"bode_{output}_{control}"
         tally.save(figure, figures_dir / stem)
-        written["bode"].append(ReportFigure(f"{stem}.png", _bode_caption(item.pair, item),
-                                            item.pair))
+        caption = _bode_caption(item.pair, item, result.final_model_name)
+        written["bode"].append(ReportFigure(f"{stem}.png", caption, item.pair))
     if reference is not None:
         tally.group_done("errors and frequency responses of "
                          f"{counted(len(reference.pairs), 'pair')}")

@@ -134,7 +134,7 @@ def compare_with_reference(estimate, reference: Mapping[str, ReferenceValue]
     for name, value in reference.items():
         item = estimate[name] if name in estimate else None
         rows.append(ReferenceComparison(
-            name, derivative_unit(name, estimate.units),
+            name, estimate.parameter_units.get(name) or derivative_unit(name, estimate.units),
             None if item is None else item.value,
             None if item is None else item.cramer_rao, value))
     return rows
