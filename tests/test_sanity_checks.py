@@ -244,9 +244,14 @@ def test_a_study_records_its_data_warnings_and_its_report_shows_them(tmp_path):
     [outputs] = simulate(structure, structure.as_vector({"M_q": -2.0, "M_long": 0.8}), blank)
     noise = np.random.default_rng(0).normal(size=outputs.shape) * 0.05
     (tmp_path / "ident").mkdir()
-    write_maneuver(blank[0].with_outputs(outputs + noise), tmp_path / "ident" / "doublet.csv")
+    path = write_maneuver(blank[0].with_outputs(outputs + noise),
+                          tmp_path / "ident" / "doublet.csv")
+    lines = path.read_text(encoding="utf-8").splitlines()
+    lines[-100] = lines[-100].rsplit(",", 1)[0] + ","          # r drops out for a sample
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     case = tmp_path / "mine.toml"
     case.write_text('name = "mine"\n[data]\nsource = "files"\nidentification = "ident"\n'
+                    'resample = "linear"\n'
                     '[condition]\nairspeed_kt = 0.0\n[structure]\npopulate = "none"\n'
                     '[derivatives]\nM_q = {}\nM_long = {}\nZ_coll = {}\n'
                     '[delays]\nderivatives = []\n')
@@ -254,6 +259,8 @@ def test_a_study_records_its_data_warnings_and_its_report_shows_them(tmp_path):
     [warning] = [w for w in result.data_warnings if "'coll' never moves" in w]
     assert warning.startswith("input 'coll' never moves (constant 0 in every maneuver)")
     assert "drops Z_coll before the first fit" in warning
+    [dropout] = [w for w in result.data_warnings if "NaN" in w]          # from reading
+    assert "'r'" in dropout and "doublet" in dropout
     record = json.loads((tmp_path / "out" / "mine" / "result.json").read_text())
     assert record["data_warnings"] == list(result.data_warnings)
     shown = "".join(f"<li>{html.escape(w)}</li>" for w in result.data_warnings)

@@ -31,7 +31,8 @@ from typing import Protocol
 import attrs
 
 from rotorid.data import ALL_CHANNELS, ManeuverSet
-from rotorid.errors import DataError, DataWarning, IdentifiabilityWarning, StudyError
+from rotorid.errors import (DataError, DataWarning, IdentifiabilityWarning, RotoridWarning,
+                            StudyError)
 from rotorid.estimation.data_checks import check_fit_data
 from rotorid.estimation.reduction import ReductionPath, ReductionStep, reduce
 from rotorid.estimation.sanity import check_before_fit
@@ -130,10 +131,21 @@ def checked_structure(case: FlightCase, structure: ModelStructure, ident: Maneuv
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", DataWarning)
         checked = check_before_fit(ident, structure)
-    messages = tuple(str(warning.message) for warning in caught)
-    for message in messages:
-        report(case.name, f"warning: {message}")
-    return checked, messages
+    return checked, _reported_warnings(case, caught, report)
+
+
+def _reported_warnings(case: FlightCase, caught, report: Progress) -> tuple[str, ...]:
+    """The text of each of rotorid's warnings ``caught`` (others are shown as Python shows
+    them), each also a progress line of the case."""
+    messages = []
+    for warning in caught:
+        if issubclass(warning.category, RotoridWarning):
+            messages.append(str(warning.message))
+            report(case.name, f"warning: {messages[-1]}")
+        else:
+            warnings.showwarning(warning.message, warning.category, warning.filename,
+                                 warning.lineno)
+    return tuple(messages)
 
 
 def _reduce(case: FlightCase, structure: ModelStructure, ident: ManeuverSet, estimator,
@@ -324,9 +336,12 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     notify("rotorid_case_started", case=case)
     clock = {"start": time.perf_counter()}
     report(case.name, f"data: {case.data_source} ({'quick' if case.is_quick else 'full'} set)")
-    data, condition = load_data(case, directory / "data")
-    ident = case.identification_records(data.identification)
-    verif = case.actuated(data.verification)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DataWarning)
+        data, condition = load_data(case, directory / "data")
+        ident = case.identification_records(data.identification)
+        verif = case.actuated(data.verification)
+    reading_warnings = _reported_warnings(case, caught, report)
     clock["data"] = time.perf_counter()
     report(case.name, f"{len(ident)} identification and {0 if verif is None else len(verif)} "
                       f"verification maneuvers; trim {condition.describe(ident.units)}")
@@ -342,7 +357,8 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
                           f"first-order lag")
     structure = base_structure(case, condition, ident.units)
     check_fit_data(ident, case.estimator_options.get("outputs"), structure)
-    structure, data_warnings = checked_structure(case, structure, ident, report)
+    structure, check_warnings = checked_structure(case, structure, ident, report)
+    data_warnings = reading_warnings + check_warnings
     estimator = create("estimators", case.estimator, **case.estimator_options)
     path, resumed = _reduce(case, structure, ident, estimator, directory, resume, report)
     clock["reduction"] = time.perf_counter()
