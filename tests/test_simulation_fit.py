@@ -71,3 +71,5 @@ def test_an_si_model_has_the_metrics_of_the_same_model_in_flight_test_units():
                                flight_test.metrics.overall.rmse_per_output * factors,
                                rtol=1e-9)
     assert si.metrics.overall.summary()["pooled_units"]["q"] == "deg/s"
+    assert si.metrics.overall.summary()["rmse_per_output_units"]["q"] == "rad/s"
+    assert " rad/s" in si.metrics.report().splitlines()[1]

@@ -109,10 +109,11 @@ class ManeuverMetrics:
         outputs: the names of the outputs compared.
         rmse, j_rms: over all outputs, each residual in the unit ``pooled_units`` names for
             its output.
-        rmse_per_output: RMSE of each output, shape (n_o,), data units.
+        rmse_per_output: RMSE of each output, shape (n_o,), in ``units`` (the data's).
         tic: Theil's U1 of each output, shape (n_o,).
         pooled_units: the unit each output's residuals count in for ``rmse`` and ``j_rms``
             (its reference unit), or ``()``: the data's units, mixed.
+        units: each output's unit in the data (``()``: not known).
     """
 
     name: str
@@ -122,6 +123,7 @@ class ManeuverMetrics:
     tic: np.ndarray
     outputs: tuple[str, ...] = attrs.field(converter=tuple)
     pooled_units: tuple[str, ...] = attrs.field(default=(), converter=tuple)
+    units: tuple[str, ...] = attrs.field(default=(), converter=tuple)
 
     @classmethod
     def of(cls, name: str, outputs, measured, simulated, weights=None,
@@ -137,13 +139,15 @@ class ManeuverMetrics:
                            for arrays in (measured, simulated))
         return cls(name, rmse(*scaled), j_rms(*scaled, weights),
                    rmse(measured, simulated, per_output=True), tic(measured, simulated),
-                   outputs, pooled)
+                   outputs, pooled, units)
 
     def summary(self) -> dict:
         return {"maneuver": self.name, "rmse": self.rmse, "j_rms": self.j_rms,
                 "pooled_units": (dict(zip(self.outputs, self.pooled_units))
                                  if self.pooled_units else "data units"),
                 "rmse_per_output": dict(zip(self.outputs, map(float, self.rmse_per_output))),
+                "rmse_per_output_units": (dict(zip(self.outputs, self.units)) if self.units
+                                          else "data units"),
                 "tic": dict(zip(self.outputs, map(float, self.tic)))}
 
     def rows(self) -> list[str]:
@@ -178,6 +182,8 @@ class TimeDomainMetrics:
         outputs = self.overall.outputs
         lines = [f"{'maneuver':<20} {'RMSE':>8} {'J_rms':>8}       "
                  + " ".join(f"{o:>7}" for o in outputs)]
+        if self.overall.units:
+            lines.append(f"{'':<38}  in   " + " ".join(f"{u:>7}" for u in self.overall.units))
         for m in (*self.maneuvers, self.overall):
             lines.extend(m.rows())
         return "\n".join(lines)
