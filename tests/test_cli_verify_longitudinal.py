@@ -207,7 +207,8 @@ def test_verify_leaves_out_sweeps_of_controls_the_model_lacks(identified, tmp_pa
         in printed.out
     summary = json.loads((out / "verification.json").read_text(encoding="utf-8"))
     assert summary["sweeps"] == ["sweep_long", "sweep_coll"]
-    assert main(["verify", str(result), str(lateral), "--out", str(out)]) == ExitStatus.ERROR
+    assert main(["verify", str(result), str(lateral), "--out", str(out),
+                 "--force"]) == ExitStatus.ERROR
     assert "no sweep excites a control of the model: sweep_lat" in capsys.readouterr().err
 
 
@@ -228,3 +229,16 @@ def test_verify_lags_the_sweeps_as_the_identification_was(identified, tmp_path, 
     summary = json.loads((out / "verification.json").read_text(encoding="utf-8"))
     checks = {p["pair"]: p["checks"]["muad"]["passed"] for p in summary["pairs"]}
     assert checks == {"q/long": False, "az/coll": True}
+
+
+def test_verify_keeps_an_earlier_verification_unless_forced(identified, tmp_path, capsys):
+    _, result, sweeps = identified
+    out = tmp_path / "v"
+    assert main(["verify", str(result), *sweeps, "--no-figures", "--out", str(out)]) == 0
+    first = (out / "verification.json").read_bytes()
+    assert main(["verify", str(result), *sweeps, "--no-figures", "--out", str(out)]) \
+        == ExitStatus.ERROR
+    assert "verification.json exists already; give --force" in capsys.readouterr().err
+    assert (out / "verification.json").read_bytes() == first
+    assert main(["verify", str(result), *sweeps, "--no-figures", "--out", str(out),
+                 "--force"]) == 0

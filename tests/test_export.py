@@ -182,7 +182,7 @@ def test_verify_skips_a_pair_no_sweep_excites_and_fails_cleanly_without_any(flig
                                                    "coll, long)"}]
     capsys.readouterr()
     assert main(["verify", str(result), str(root / "sweeps"), "--pairs", "p/long,r/ped",
-                 "--out", str(out), "--no-figures"]) == ExitStatus.ERROR
+                 "--out", str(out), "--no-figures", "--force"]) == ExitStatus.ERROR
     err = capsys.readouterr().err
     assert err.startswith("rotorid verify: error: no pair can be verified: p/long: the model's")
     assert len(err.strip().splitlines()) == 1

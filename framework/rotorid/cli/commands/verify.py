@@ -3,7 +3,7 @@
 Usage::
 
     rotorid verify [MODEL.toml] RESULT.json SWEEPS... [--pairs q/long,p/long] [--out DIR]
-                   [--trim first-second|CH=VALUE,...]
+                   [--force] [--trim first-second|CH=VALUE,...]
 
 ``RESULT.json`` is an estimate written by ``rotorid identify`` or a study's ``result.json``
 (its model with delays, or the one ``--model`` names), read by
@@ -78,6 +78,8 @@ def add_arguments(parser) -> None:
                              "threshold and frequency range in rad/s (default 0.8,0.1,10)")
     parser.add_argument("--out", default="verification", metavar="DIR", type=output_directory,
                         help="output directory (created if needed; default ./verification)")
+    parser.add_argument("--force", action="store_true",
+                        help="overwrite an earlier verification in DIR")
     parser.add_argument("--no-figures", action="store_true",
                         help="write only verification.json (faster)")
     parser.add_argument("--strict", action="store_true",
@@ -223,6 +225,7 @@ def run(args) -> int:
     matplotlib.use("Agg")
 
     from rotorid.actuators import lagged_inputs
+    from rotorid.cli.files import refuse_overwrite
     from rotorid.errors import ExitStatus, VerificationError
     from rotorid.estimation.result_file import load_result
     from rotorid.io import atomic_write, jsonable
@@ -236,6 +239,7 @@ def run(args) -> int:
 
     model, result_path, locations = _split(args.files)
     band = parse_band(args.band)
+    refuse_overwrite(Path(args.out) / "verification.json", args.force)
     identified = load_result(result_path, args.model,
                              None if model is None else load_model(model))
     structure, values = identified.structure, identified.values
