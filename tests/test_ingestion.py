@@ -286,3 +286,18 @@ def test_csv_clock_times_and_empty_dropouts_are_read(tmp_path):
         m = read_maneuver(path, Ingestion(resample="linear"))
     assert m.time[0] == pytest.approx(312 * 86400 + 14 * 3600 + 2 * 60 + 31.25, abs=1e-6)
     assert np.allclose(m.channel("q"), columns["q"], atol=1e-9)
+
+
+def test_a_sweeps_axis_naming_a_linked_column_becomes_its_channel(tmp_path):
+    """A range file's header names the column it sweeps (``axis: PITCH_CMD``); read through
+    a channel map linking that column to ``long``, the maneuver sweeps ``long``."""
+    time = np.arange(0.0, 2.0, 0.02)
+    columns = _columns(time)
+    path = write_maneuver(Maneuver.from_columns("sweep", columns, metadata={"axis": "long"}),
+                          tmp_path / "sweep.csv")
+    text = path.read_text(encoding="utf-8").replace("# axis: long", "# axis: PITCH_CMD")
+    path.write_text(text.replace("time,long,", "time,PITCH_CMD,", 1), encoding="utf-8")
+    channels = {"PITCH_CMD": {"signal": "long", "unit": "%"}}
+    m = read_maneuver(path, Ingestion(channels=channels))
+    assert m.metadata["axis"] == "long"
+    assert np.allclose(m.channel("long"), columns["long"])

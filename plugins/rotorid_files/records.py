@@ -110,6 +110,9 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
     # extra channels
     for_model = bool(ingestion.signals is not None or ingestion.keep_columns
                      or ingestion.channels.links)
+    linked = {link.column: link.signal for link in ingestion.channels.links}
+    if isinstance(header.get("axis"), str) and header["axis"] in linked:
+        header = {**header, "axis": linked[header["axis"]]}      # the column a sweep moves
     try:
         columns, ingestion = ingestion.mapped(columns, str(path))
     except DataError as error:

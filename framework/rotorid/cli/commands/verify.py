@@ -166,7 +166,8 @@ def _not_sweeping(sweep) -> str | None:
     controls = ", ".join(sweep.input_names)
     axis = sweep.metadata.get("axis")
     if axis is not None and axis not in sweep.input_names:
-        return f"it sweeps {axis!r}, not a control of the model ({controls})"
+        return (f"it sweeps {axis!r}, not a control of the model ({controls}); name one of "
+                f"them (or the column the channel map links to it) as the file's axis")
     if not np.any(np.ptp(sweep.inputs, axis=0) > 0):
         return f"none of the model's controls ({controls}) moves in it"
     return None
