@@ -144,6 +144,22 @@ def test_options_reach_the_estimator(case, tmp_path, capsys):
     assert record["parameters"]["M_q"]["value"] <= 0.0
 
 
+def test_coloured_residuals_widen_the_bounds_and_need_output_error(case, tmp_path, capsys):
+    model, data, _ = case
+    plain, coloured = tmp_path / "plain.json", tmp_path / "coloured.json"
+    for out, extra in ((plain, []), (coloured, ["--coloured-residuals"])):
+        assert cli.main(["identify", str(model), str(data), "--out", str(out), "--quiet",
+                         *extra]) == 0, capsys.readouterr().err
+    first, second = (json.loads(p.read_text(encoding="utf-8")) for p in (plain, coloured))
+    assert second["estimator_options"] == {"coloured_residuals": True}
+    assert second["parameters"]["M_q"]["value"] == first["parameters"]["M_q"]["value"]
+    assert second["parameters"]["M_q"]["cramer_rao"] != first["parameters"]["M_q"]["cramer_rao"]
+    assert any("Morelli & Klein" in note for note in second["notes"])
+    assert cli.main(["identify", str(model), str(data), "--out", str(tmp_path / "fe.json"),
+                     "--estimator", "filter-error", "--coloured-residuals"]) == 2
+    assert "--coloured-residuals widens output error's bounds" in capsys.readouterr().err
+
+
 def test_max_iterations_limits_the_final_run(case, tmp_path, capsys):
     model, data, _ = case
     out = tmp_path / "short.json"

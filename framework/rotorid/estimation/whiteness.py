@@ -56,17 +56,26 @@ def coloured_outputs(residuals: Sequence[np.ndarray], names: Sequence[str], dt: 
     return found
 
 
-def whiteness_note(residuals: Sequence[np.ndarray], names: Sequence[str], dt: float
-                   ) -> str | None:
-    """A note naming the outputs whose innovations are not white (:func:`coloured_outputs`),
-    with what it means and what to try; None when all are white."""
+def coloured_text(residuals: Sequence[np.ndarray], names: Sequence[str], dt: float,
+                  kind: str = "innovations") -> str | None:
+    """``"<kind> not white: <outputs with their largest ρ and its lag>, where …"``, naming
+    the outputs of :func:`coloured_outputs`; None when all are white."""
     found = coloured_outputs(residuals, names, dt)
     if not found:
         return None
     count = sum(len(r) for r in residuals)
     listed = ", ".join(f"{name} (ρ {rho:+.2f} at {lag:.2g} s)" for name, rho, lag in found)
-    return (f"innovations not white: {listed}, where a white sequence keeps 95 % of its "
-            f"autocorrelations within ±{WHITE_BAND / np.sqrt(count):.2g}; the noise model "
-            f"misses coloured turbulence or the structure misses dynamics, and the Cramér-Rao "
-            f"bounds do not cover that: model the turbulence as gusts or disturbances "
-            f"(gusts, disturbances), or check the structure")
+    return (f"{kind} not white: {listed}, where a white sequence keeps 95 % of its "
+            f"autocorrelations within ±{WHITE_BAND / np.sqrt(count):.2g}")
+
+
+def whiteness_note(residuals: Sequence[np.ndarray], names: Sequence[str], dt: float
+                   ) -> str | None:
+    """A note naming the outputs whose innovations are not white (:func:`coloured_text`),
+    with what it means and what to try; None when all are white."""
+    coloured = coloured_text(residuals, names, dt)
+    if coloured is None:
+        return None
+    return (f"{coloured}; the noise model misses coloured turbulence or the structure misses "
+            f"dynamics, and the Cramér-Rao bounds do not cover that: model the turbulence as "
+            f"gusts or disturbances (gusts, disturbances), or check the structure")

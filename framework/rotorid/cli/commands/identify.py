@@ -6,6 +6,7 @@ Usage::
                      [--outputs ax,az,...] [--noise full|diagonal] [--max-iterations N]
                      [--start auto|initial|equation-error|output-error]
                      [--enforce-signs] [--output-biases] [--initial-states]
+                     [--coloured-residuals]
                      [--hold zoh|foh] [--trim first-second|CH=VALUE,...]
                      [--resample linear|decimate] [--sample-time S]
                      [--actuator-lag S [--actuator-inputs long,lat]]
@@ -115,6 +116,9 @@ def add_arguments(parser) -> None:
                         help="estimate one constant bias per maneuver and output")
     parser.add_argument("--initial-states", action="store_true",
                         help="estimate the initial perturbation state of every maneuver")
+    parser.add_argument("--coloured-residuals", action="store_true",
+                        help="output error: Cramér-Rao bounds for residuals correlated in "
+                             "time (Morelli & Klein), not only white ones")
     parser.add_argument("--hold", choices=("zoh", "foh"), default="zoh",
                         help="input hold between samples (default zoh)")
     parser.add_argument("--trim", type=trim, default=None,
@@ -199,6 +203,11 @@ def _options(args) -> dict:
         options["output_biases"] = True
     if args.initial_states:
         options["initial_states"] = True
+    if args.coloured_residuals:
+        if args.estimator != "output-error":
+            raise UsageError("--coloured-residuals widens output error's bounds; filter "
+                             "error models the correlation as process noise instead")
+        options["coloured_residuals"] = True
     noise_model = [flag for flag in FILTER_ERROR_FLAGS if getattr(args, flag) is not None]
     if noise_model and args.estimator != "filter-error":
         given = ", ".join("--" + flag.replace("_", "-") for flag in noise_model)
