@@ -86,3 +86,27 @@ def test_coloured_bounds_cover_the_scatter_that_white_bounds_understate():
     ratio = scatter / np.mean(coloured, axis=0)
     assert np.all((ratio > 0.75) & (ratio < 1.4)), ratio
     assert any("coloured residuals (Morelli & Klein)" in n for n in estimate.notes)
+
+
+def test_a_maneuver_that_fits_far_worse_is_named():
+    from rotorid.estimation.fit_notes import outlying_maneuvers
+
+    rng = np.random.default_rng(3)
+    residuals = [rng.normal(size=(200, 2)) * scale for scale in (1.0, 1.1, 0.9, 3.0)]
+    note = outlying_maneuvers(residuals, ["a", "b", "c", "gusty"], np.eye(2))
+    assert note.startswith("maneuvers fitted far worse than the others") and "gusty (" in note
+    assert "a (" not in note
+    assert outlying_maneuvers(residuals[:3], ["a", "b", "c"], np.eye(2)) is None
+
+
+def test_a_delay_an_accelerometer_reads_directly_is_named_under_the_held_input():
+    from rotorid.estimation.fit_notes import direct_delayed_terms, held_delay_note
+
+    structure = parse_model({"units": "flight-test", "condition": {"airspeed_kt": 0.0},
+                             "structure": {"populate": "none"},
+                             "derivatives": {"Z_w": {}, "Z_coll": {"delay": {"initial": 0.02}},
+                                             "M_q": {}, "M_long": {"delay": {"initial": 0.02}}}},
+                            "heave")
+    assert direct_delayed_terms(structure) == {"Z_coll": ("az",)}
+    assert "Z_coll (az)" in held_delay_note(structure, "zoh")
+    assert held_delay_note(structure, "foh") is None

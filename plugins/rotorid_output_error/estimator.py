@@ -22,6 +22,7 @@ from rotorid.data import ManeuverSet
 from rotorid.errors import DataWarning, EstimationError, SimulationDivergedError
 from rotorid.estimation.coloured_residuals import coloured_covariance
 from rotorid.estimation.estimate import Estimate
+from rotorid.estimation.fit_notes import held_delay_note, outlying_maneuvers
 from rotorid.estimation.models import (
     LinearModel,
     as_model,
@@ -136,7 +137,7 @@ class OutputErrorEstimator:
                             weights, [fitted.output_names[c] for c in columns], self.noise)
         estimate = self._estimate(fitted, base, result, start_values, notes,
                                   sum(m.n_samples for m in maneuvers), columns)
-        return self._residual_statistics(estimate, fitted, maneuvers, columns, weights)
+        return self._residual_statistics(estimate, base, fitted, maneuvers, columns, weights)
 
     # ----------------------------------------------------------------- steps
     def _best_of_starts(self, base, fitted, maneuvers, columns, weights, start_values, notes):
@@ -342,22 +343,28 @@ class OutputErrorEstimator:
             notes=tuple(notes))
 
 
-    def _residual_statistics(self, estimate, fitted, maneuvers, columns, weights):
-        """``estimate`` with a note when its residuals are not white and, with
-        :attr:`coloured_residuals`, its bounds and correlations for their correlation."""
+    def _residual_statistics(self, estimate, base, fitted, maneuvers, columns, weights):
+        """``estimate`` with notes on its residuals (maneuvers that stand out, residuals that
+        are not white), on delays the zero-order hold hides, and, with
+        :attr:`coloured_residuals`, its bounds and correlations for the residuals'
+        correlation."""
         selected = _SelectedOutputs(fitted, columns)
         measured = [z[:, columns] for z in measured_outputs(fitted, maneuvers)]
         residuals = [z - y for z, y in
                      zip(measured, selected.simulate(estimate.values, maneuvers))]
+        structure = getattr(base, "structure", None)
+        notes = [note for note in (
+            outlying_maneuvers(residuals, maneuvers.names, estimate.noise_covariance),
+            None if structure is None else held_delay_note(structure, maneuvers.hold))
+            if note is not None]
         coloured = coloured_text(residuals, selected.output_names, maneuvers[0].dt,
                                  "residuals")
         if not self.coloured_residuals:
-            if coloured is None:
-                return estimate
-            return attrs.evolve(estimate, notes=(*estimate.notes, (
-                f"{coloured}; the Cramér-Rao bounds assume white residuals and understate the "
-                f"scatter: coloured_residuals = true (identify --coloured-residuals) widens "
-                f"them for that correlation")))
+            if coloured is not None:
+                notes.append(f"{coloured}; the Cramér-Rao bounds assume white residuals and "
+                             f"understate the scatter: coloured_residuals = true (identify "
+                             f"--coloured-residuals) widens them for that correlation")
+            return attrs.evolve(estimate, notes=(*estimate.notes, *notes))
         if hasattr(fitted, "sensitivities"):
             _, sensitivities = fitted.sensitivities(estimate.values, maneuvers)
         else:
@@ -378,7 +385,7 @@ class OutputErrorEstimator:
                 f"correlation taken over {lags} lags ({lags * maneuvers[0].dt:.3g} s): "
                 f"{factor:.2f} times the white-residual bounds (median)")
         return attrs.evolve(estimate, cramer_rao=bounds, correlation=correlation,
-                            notes=(*estimate.notes, note))
+                            notes=(*estimate.notes, *notes, note))
 
 
 def _problem(model, maneuvers, columns, weights, settings) -> Problem:

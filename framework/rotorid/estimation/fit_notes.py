@@ -1,0 +1,69 @@
+"""Notes on a finished fit that point at the data or the setup: maneuvers whose residuals
+stand out, and delays the zero-order hold hides from an output."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+#: A maneuver whose residual power, per output in units of R, exceeds this multiple of the
+#: maneuvers' median stands out.
+OUTLIER_FACTOR = 4.0
+
+
+def outlying_maneuvers(residuals: Sequence[np.ndarray], names: Sequence[str],
+                       noise_covariance: np.ndarray) -> str | None:
+    """A note naming the maneuvers whose residuals (each (N_i, n_o)) carry more than
+    :data:`OUTLIER_FACTOR` times the median maneuver's power, each output counted in units of
+    its noise variance R_jj; None when none does or there are fewer than three maneuvers."""
+    if len(residuals) < 3:
+        return None
+    variance = np.maximum(np.diag(noise_covariance), 1e-300)
+    power = np.array([np.mean(np.mean(r**2, axis=0) / variance) for r in residuals])
+    median = float(np.median(power))
+    if median <= 0:
+        return None
+    ratio = power / median
+    worst = [k for k in np.argsort(-ratio) if ratio[k] > OUTLIER_FACTOR]
+    if not worst:
+        return None
+    listed = ", ".join(f"{names[k]} ({ratio[k]:.1f})" for k in worst)
+    return (f"maneuvers fitted far worse than the others, their residual power a multiple of "
+            f"the median maneuver's: {listed}; turbulence, a bad record or another trim in "
+            f"them biases every derivative: look at their time histories, leave them out, or "
+            f"fit them with filter error")
+
+
+def direct_delayed_terms(structure) -> dict[str, tuple[str, ...]]:
+    """Delayed free derivatives of ``structure`` that some output reads directly (a control
+    derivative of a force equation, read by its accelerometer): name → those outputs."""
+    names = structure.parameter_names
+    zero = np.zeros(len(names))
+    direct_zero = structure.matrices(zero)[3]
+    found = {}
+    for derivative in structure.free_delays:
+        if derivative.name not in names:
+            continue
+        one = zero.copy()
+        one[names.index(derivative.name)] = 1.0
+        rows = np.flatnonzero(np.any(structure.matrices(one)[3] != direct_zero, axis=1))
+        if rows.size:
+            found[derivative.name] = tuple(structure.outputs[i] for i in rows)
+    return found
+
+
+def held_delay_note(structure, hold: str) -> str | None:
+    """Under the zero-order hold, a note naming the delays of :func:`direct_delayed_terms`:
+    the held input is the same at every sample for any delay below one sample, so those
+    outputs see the delay only through the states; None otherwise."""
+    if hold != "zoh":
+        return None
+    found = direct_delayed_terms(structure)
+    if not found:
+        return None
+    listed = ", ".join(f"{name} ({', '.join(outputs)})" for name, outputs in found.items())
+    return (f"the delays of {listed} act on outputs directly, which under the zero-order hold "
+            f"read the same held input for any delay below one sample: those outputs see the "
+            f"delay only through the states; for inputs recorded from moving controls use the "
+            f"first-order hold (--hold foh)")
