@@ -110,6 +110,7 @@ def test_identify_recovers_the_truth_and_writes_the_json(case, tmp_path, capsys)
     assert np.allclose(noise, NOISE, rtol=0.1)
     assert (out.parent / record["structure"]).resolve() == model.resolve()
     assert "[[Parameters]]" in captured.out and "M_long" in captured.out
+    assert "[[Modes]] (A with delays set to zero, slowest first)" in captured.out
     assert record["data_warnings"] == []
     assert "Data checks before the fit: no warning" in captured.out
     assert f"estimate written to {out}" in captured.out

@@ -236,7 +236,8 @@ def test_key_derivatives_are_those_the_cases_structure_can_hold():
         handling_qualities={}, case=types.SimpleNamespace(reference=None),
         frequency_comparison=None, estimator_comparison=None, hybrid_comparison=None)
     assert aeroplane.key_derivative_names() == ()
-    assert case_table_names(aeroplane, ()) == ["removed", "parameters", "verification"]
+    assert case_table_names(aeroplane, ()) == ["removed", "parameters", "modes",
+                                                "verification"]
 
 
 def test_the_bode_caption_names_the_response_the_analytic_one_is_compared_with():

@@ -37,6 +37,7 @@ import numpy as np
 from rotorid.estimation.estimate import rmse_counted_units, rmse_unit
 from rotorid.io import atomic_write
 from rotorid.model.derivatives import delayed_derivative
+from rotorid.model.modes import modes
 from rotorid.report.figures import (
     ReportFigure,
     case_figures,
@@ -379,6 +380,37 @@ def hybrid_model_rows(result) -> list[list[str]]:
                      *(_number(costs.get(pair), 3) for pair in pairs),
                      _number(mean_cost(costs), 3)])
     return rows
+
+
+def mode_rows(result) -> list[list[str]]:
+    """Each shown model's modes (:func:`rotorid.model.modes.modes`), slowest first."""
+    rows = [["model", "eigenvalue [1/s]", "ω_n [rad/s]", "ζ", "time constant [s]",
+             "in words", "states"]]
+    for label in result.models:
+        for mode in modes(result.structures[label], result.estimates[label].values):
+            value = mode.eigenvalue
+            rows.append([
+                result.model_name(label),
+                f"{value.real:.4g} ± {value.imag:.4g}j" if mode.oscillatory
+                else f"{value.real:.4g}",
+                _number(mode.frequency, 3) if mode.oscillatory else "–",
+                _number(mode.damping, 3) if mode.oscillatory else "–",
+                "–" if mode.oscillatory else _number(mode.time_constant, 3),
+                mode.describe(), ", ".join(mode.states)])
+    return rows
+
+
+def modes_html(result) -> str:
+    """The case report's section on the identified models' modes."""
+    return "\n".join([
+        '<h2 id="modes">Modes</h2>',
+        "<p>The eigenvalues of each model's A (delays set to zero), slowest first: an "
+        "oscillatory pair by its natural frequency ω_n and damping ratio ζ, a real mode by its "
+        "time constant −1/λ (a growing one by the time it takes to double). States: those "
+        "that carry the mode, largest eigenvector component first (in the model's units), "
+        "which name its character: v and r for a Dutch roll, p for a roll subsidence, u and θ "
+        "for a phugoid.</p>",
+        _html_table(mode_rows(result))])
 
 
 def handling_quality_rows(result) -> list[list[str]]:
@@ -732,8 +764,8 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
     contents += [("reduction", "Model reduction"), ("delays", "Time delays"),
                  ("parameters", "Identified parameters"),
                  *((("key-derivatives", "Key derivatives"),) if keys else ()),
-                 ("time-histories", "Time histories"), ("verification", "Frequency-domain "
-                                                                       "verification")]
+                 ("modes", "Modes"), ("time-histories", "Time histories"),
+                 ("verification", "Frequency-domain verification")]
     key_text = (f"Identified ({result.final_model_name}) beside the truth model's residualised "
                 "6-DoF linearisation and the published Helisim Bo-105 values (Padfield 2007)."
                 if truth else f"Identified values of the {result.final_model_name} (measured "
@@ -758,7 +790,7 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         "insensitivity relative to the value.</p>", _html_table(parameter_rows(result)),
         *(('<h2 id="key-derivatives">Key derivatives</h2>', f"<p>{key_text}</p>",
             _key_table(result, truth)) if keys else ()),
-        reference_html(result),
+        reference_html(result), modes_html(result),
         '<h2 id="time-histories">Time histories of the identification maneuvers</h2>',
         figures_html(figures.get("time", [])),
         '<h2 id="verification">Frequency-domain verification on the sweeps</h2>',
@@ -804,6 +836,7 @@ _TABLE_ROWS = {
     "estimators": estimator_rows, "hybrid_models": hybrid_model_rows,
     "hybrid_terms": hybrid_term_rows, "hybrid_muad": hybrid_muad_rows,
     "hybrid_derivatives": hybrid_derivative_rows, "handling_qualities": handling_quality_rows,
+    "modes": mode_rows,
 }
 
 
@@ -812,7 +845,8 @@ def case_table_names(result, claims) -> list[str]:
     has, the key derivatives where its structure can hold any, then those of its ``claims``,
     ``[reference]`` values and comparisons it ran."""
     return ["removed", "parameters",
-            *(("key_derivatives",) if result.key_derivative_names() else ()), "verification",
+            *(("key_derivatives",) if result.key_derivative_names() else ()), "modes",
+            "verification",
             *(("handling_qualities",) if any(result.handling_qualities.values()) else ()),
             *(("checks",) if claims else ()),
             *(("reference",) if result.case.reference else ()),

@@ -160,6 +160,20 @@ def add_arguments(parser) -> None:
                              "is written all the same)")
 
 
+def _modes_report(structure, estimate) -> str:
+    """The identified model's modes, one line each (:mod:`rotorid.model.modes`)."""
+    from rotorid.model.modes import modes
+
+    values = estimate.values[:len(structure.parameter_names)]     # without record parameters
+    lines = ["[[Modes]] (A with delays set to zero, slowest first)"]
+    for mode in modes(structure, values):
+        value = mode.eigenvalue
+        text = (f"{value.real:.4g} ± {value.imag:.4g}j" if mode.oscillatory
+                else f"{value.real:.4g}")
+        lines.append(f"  {text:<22} {mode.describe():<32} {', '.join(mode.states)}")
+    return "\n".join(lines)
+
+
 def _check_outputs(chosen, outputs, model) -> None:
     """A :class:`UsageError` when ``--outputs`` names ``chosen`` outputs that ``model`` (its
     outputs ``outputs``) lacks."""
@@ -355,6 +369,8 @@ def run(args) -> int:
         record["actuator_inputs"] = _actuator_inputs(args)
     atomic_write(out, json.dumps(record, indent=2))
     print(estimate.report())
+    if not by_reference:
+        print(_modes_report(model, estimate))
     print(data_warnings_report(data_warnings))
     print(f"estimate written to {out}")
     if estimate.converged:
