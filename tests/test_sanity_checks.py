@@ -16,9 +16,10 @@ from hover_reference import closed_loop_maneuvers, true_structure
 from rotorid import Maneuver, ManeuverSet
 from rotorid.data import INPUT_CHANNELS, OUTPUT_CHANNELS
 from rotorid.errors import DataWarning
-from rotorid.estimation.kinematics import kinematic_fits
+from rotorid.estimation.kinematics import check_kinematics, kinematic_fits
 from rotorid.estimation.sanity import check_before_fit, check_data
 from rotorid.model.modelfile import parse_model
+from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.report.html import case_html, write_study_report
 from rotorid.simulation.simulator import simulate
 from rotorid.study.case import FlightCase
@@ -294,3 +295,46 @@ def _messages_of(check) -> list[str]:
         warnings.simplefilter("always", DataWarning)
         check()
     return [str(w.message) for w in caught if issubclass(w.category, DataWarning)]
+
+
+def _aeroplane_lateral(ay_factor: float):
+    """Rudder and aileron doublets of an aeroplane's lateral template at 60 m/s (SI), with
+    ``ay`` recorded ``ay_factor`` times its true value (9.81: in g, read as m/s²)."""
+    condition = FlightCondition.from_airspeed(60.0 / 0.5144444, theta0_deg=2.0)
+    structure = ModelStructure.populated(condition, "fixed-wing-lateral", "si")
+    values = dict.fromkeys(structure.parameter_names, 0.0)
+    values.update({"Y_v": -0.2, "L_v": -0.15, "L_p": -6.0, "L_r": 1.2, "N_v": 0.08,
+                   "N_p": -0.5, "N_r": -1.0})
+    controls = structure.controls
+    values.update({f"L_{controls[0]}": 0.3, f"N_{controls[1]}": -0.1,
+                   f"Y_{controls[1]}": 0.06})
+    time = np.arange(0.0, 10.0, 0.02)
+    records = []
+    for axis in range(2):
+        inputs = np.zeros((time.size, len(controls)))
+        inputs[(time > 1.0) & (time < 2.0), axis] = 2.0
+        inputs[(time >= 2.0) & (time < 3.0), axis] = -2.0
+        records.append(Maneuver(f"doublet_{controls[axis]}", time, inputs,
+                                np.zeros((time.size, len(structure.outputs))), units="si",
+                                input_names=controls, output_names=structure.outputs))
+    blank = ManeuverSet(records)
+    simulated = simulate(structure, structure.as_vector(values), blank)
+    column = structure.outputs.index("ay")
+    outputs = []
+    for y in simulated:
+        y = y.copy()
+        y[:, column] *= ay_factor
+        outputs.append(y)
+    return ManeuverSet([m.with_outputs(y) for m, y in zip(blank, outputs)]), condition
+
+
+def test_the_vanes_check_the_accelerometers_unit():
+    """v = U0·β: the lateral accelerometer integrates to the sideslip's velocity with scale 1
+    when its unit is right, and 1/9.81 when it holds g read as m/s²."""
+    right, condition = _aeroplane_lateral(1.0)
+    [v] = [f for f in kinematic_fits(right, condition) if f.channel == "v"]
+    assert v.scale == pytest.approx(1.0, abs=0.02) and v.driver.startswith("ay")
+    wrong, _ = _aeroplane_lateral(1.0 / 9.80665)
+    with pytest.warns(DataWarning, match=r"kinematic consistency: v against integrated ay"):
+        [v] = [f for f in check_kinematics(wrong, condition) if f.channel == "v"]
+    assert v.scale == pytest.approx(9.80665, rel=0.02)

@@ -3,13 +3,19 @@
 The attitudes obey the linearised Euler kinematics, θ̇ = cos Φ0 q − sin Φ0 r and
 φ̇ = p + tan Θ0 (sin Φ0 q + cos Φ0 r); where a maneuver carries the body velocities ``u v w``
 as extra channels, they obey u̇ = ax + (gravity and kinematic terms) and likewise for v and w
-(the known terms of :meth:`rotorid.model.structure.ModelStructure.known_state_matrix`). For each
-such channel y with driver f, a least-squares fit over all maneuvers of
+(the known terms of :meth:`rotorid.model.structure.ModelStructure.known_state_matrix`). An
+aeroplane's vanes give them too: at a trim speed U0 > 0, v = U0·β and w = U0·α (small
+perturbations, β and α outputs in the unit system's angle unit), so the accelerometers' units
+are checked against the vanes. For each such channel y with driver f, a least-squares fit
+over the maneuvers in which it moves (at least :data:`MOVING_FRACTION` of its largest motion
+in any maneuver: a roll attitude is checked on the roll records, not on pitch ones) of
 
     y_i(t) = y0_i + k · ∫ f_i dt − k · b_i · t
 
 gives one scale factor k (1: consistent) and a bias b_i of the driver per maneuver (the
-measured rates or accelerations minus the true ones). :func:`check_kinematics` reports every
+measured rates or accelerations minus the true ones). For a velocity the kinematic terms
+(gravity, U0·r, …, from the gyros and attitudes the attitudes' fits check) are integrated and
+taken out of y first, so that k and b_i are the accelerometer's alone. :func:`check_kinematics` reports every
 fit on the ``rotorid.checks`` logger and warns when k or the bias is off.
 """
 
@@ -36,6 +42,11 @@ BIAS_FRACTION = 0.05
 #: maneuver's mean) compares noise with noise: the channel hardly moves, it is left out.
 MOTION_FRACTION = 0.3
 ACCELERATIONS = {"u": "ax", "v": "ay", "w": "az"}
+#: Flow angles that give a body velocity at a trim speed: v = U0·β, w = U0·α.
+FLOW_ANGLES = {"v": "beta", "w": "alpha"}
+#: A maneuver takes part in a channel's fit when the channel's RMS motion (about its mean)
+#: there is at least this fraction of the largest in any maneuver.
+MOVING_FRACTION = 0.2
 
 
 #: Where a user declares a channel's unit, for the advice of the checks.
@@ -73,16 +84,30 @@ class KinematicFit:
                 f"residual RMS {self.residual:.3g}")
 
 
-def _states(maneuver) -> np.ndarray:
+def _states(maneuver, speed: float, angle_per_radian: float) -> np.ndarray:
     """(N, 8) states where known: measured q θ p φ r (those the record holds), velocities from
-    extra channels, else 0."""
+    extra channels or, at a trim ``speed`` U0 > 0 (the unit system's velocity unit), from the
+    flow angles (``angle_per_radian``: the system's angle unit), else 0."""
     x = np.zeros((maneuver.n_samples, len(STATES)))
     for i, name in enumerate(STATES):
         if name in maneuver.output_names:
             x[:, i] = maneuver.channel(name)
         elif name in maneuver.extra_channels:
             x[:, i] = maneuver.extra_channels[name]
+        elif speed > 0 and FLOW_ANGLES.get(name) in maneuver.output_names:
+            x[:, i] = speed * maneuver.channel(FLOW_ANGLES[name]) / angle_per_radian
     return x
+
+
+def _velocity_known(maneuver, channel: str, speed: float) -> bool:
+    return (channel in maneuver.extra_channels
+            or (speed > 0 and FLOW_ANGLES.get(channel) in maneuver.output_names))
+
+
+def _moving(targets) -> list[int]:
+    """The maneuvers whose target moves by at least :data:`MOVING_FRACTION` of the most."""
+    motion = np.array([np.std(y) for y in targets])
+    return [i for i, m in enumerate(motion) if m > 0 and m >= MOVING_FRACTION * motion.max()]
 
 
 def _fit(targets, drivers, times) -> tuple[float, np.ndarray, float]:
@@ -129,23 +154,32 @@ def kinematic_fits(maneuvers: ManeuverSet,
     attitude to the other, small terms (r through sin Φ0), which then explain nothing, while
     the rate's own term does with the units' ratio as its scale."""
     system = unit_system(maneuvers.units)
-    known = ModelStructure(condition or FlightCondition(), (), system).known_state_matrix()
+    condition = condition or FlightCondition()
+    known = ModelStructure(condition, (), system).known_state_matrix()
+    speed = condition.u0 * system.length_per_metre
     channels = [a for a in ("theta", "phi") if a in maneuvers.output_names]
-    channels += [v for v in ACCELERATIONS
-                 if all(v in m.extra_channels for m in maneuvers)]
-    states = [_states(m) for m in maneuvers]
-    times = [m.time for m in maneuvers]
+    channels += [v for v, a in ACCELERATIONS.items() if a in maneuvers.output_names
+                 and all(_velocity_known(m, v, speed) for m in maneuvers)]
+    all_states = [_states(m, speed, system.angle_per_radian) for m in maneuvers]
     fits = []
     for channel in channels:
         row = STATES.index(channel)
         terms = list(np.flatnonzero(known[row]))
+        chosen = _moving([x[:, row] for x in all_states])
+        taking = [maneuvers[i] for i in chosen]
+        states = [all_states[i] for i in chosen]
+        times = [m.time for m in taking]
         targets = [x[:, row] for x in states]
         if channel in ACCELERATIONS:
+            # the kinematic terms (gravity, U0·r, …) come from the gyros and attitudes, which
+            # the attitudes' fits check: taken out of the target, the scale is the
+            # accelerometer's own
             acceleration = ACCELERATIONS[channel]
-            drivers = [x @ known[row] + m.channel(acceleration)
-                       for x, m in zip(states, maneuvers)]
-            found = _channel_fit(channel, [acceleration] + [STATES[j] for j in terms], drivers,
-                                 targets, times, system.label(acceleration))
+            remainders = [y - cumulative_trapezoid(x @ known[row], t, initial=0.0)
+                          for y, x, t in zip(targets, states, times)]
+            found = _channel_fit(channel, [acceleration] + [STATES[j] for j in terms],
+                                 [m.channel(acceleration) for m in taking], remainders, times,
+                                 system.label(acceleration))
         else:
             unit = f"{system.label(channel)}/s"
             found = _channel_fit(channel, [STATES[j] for j in terms],
