@@ -338,3 +338,35 @@ def test_the_vanes_check_the_accelerometers_unit():
     with pytest.warns(DataWarning, match=r"kinematic consistency: v against integrated ay"):
         [v] = [f for f in check_kinematics(wrong, condition) if f.channel == "v"]
     assert v.scale == pytest.approx(9.80665, rel=0.02)
+
+
+def test_a_control_recorded_on_its_trim_is_named():
+    """The rudder held at its 2.07 deg trim under ±2 deg doublets: an offset the derivatives
+    would take up, named with the model's unit; the same records from zero are quiet."""
+    from rotorid.model.signals import ModelSignals, Signal, SignalSet
+
+    t = np.arange(0.0, 8.0, 0.02)
+    doublet = np.where((t > 2.0) & (t < 3.0), 2.0, 0.0) - np.where((t >= 3.0) & (t < 4.0),
+                                                                   2.0, 0.0)
+    signals = ModelSignals(
+        states=SignalSet([Signal("r", "deg/s", "rate")]),
+        inputs=SignalSet([Signal("rudder", "deg", "control")]),
+        outputs=SignalSet([Signal("r", "deg/s", "rate")]))
+
+    def records(trim):
+        return ManeuverSet([Maneuver(f"m{k}", t, (doublet + trim)[:, None],
+                                     np.cumsum(doublet)[:, None] * 0.01,
+                                     input_names=("rudder",), output_names=("r",))
+                            for k in range(2)])
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DataWarning)
+        check_data(records(2.07), signals=signals)
+    [message] = [str(w.message) for w in caught if "input 'rudder'" in str(w.message)]
+    assert message.startswith("input 'rudder' starts away from zero in 2 of 2 maneuvers: "
+                              "2.07 deg (mean of the first 1 s of m")
+    assert "--trim rudder=VALUE" in message
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DataWarning)
+        check_data(records(0.0), signals=signals)
+    assert not [w for w in caught if "input 'rudder'" in str(w.message)]

@@ -78,11 +78,25 @@ def without_unexcited(structure: ModelStructure | None,
     return structure
 
 
-def _start(maneuver, column: int) -> tuple[float, float]:
-    """Mean and standard deviation of output ``column`` over the maneuver's first second."""
-    n = max(2, int(round(START_WINDOW / maneuver.dt)) + 1)
-    window = maneuver.outputs[:n, column]
+def _start(record: np.ndarray, dt: float) -> tuple[float, float]:
+    """Mean and standard deviation of one channel's ``record`` (N,) over its first second."""
+    n = max(2, int(round(START_WINDOW / dt)) + 1)
+    window = record[:n]
     return float(np.mean(window)), float(np.std(window))
+
+
+def _largest_offset(maneuvers: ManeuverSet, records) -> tuple[int, tuple] | None:
+    """(how many maneuvers, the largest (|level|, level, swing, maneuver name)) of one channel
+    whose first second sits away from zero against its swing; ``records`` gives the channel
+    per maneuver. None when none does."""
+    offsets = []
+    for m, record in zip(maneuvers, records):
+        level, noise = _start(record, m.dt)
+        swing = float(np.ptp(record))
+        if abs(level) > OFFSET_FRACTION * swing and abs(level) > OFFSET_NOISE_RATIO * noise \
+                and swing > 0:
+            offsets.append((abs(level), level, swing, m.name))
+    return (len(offsets), max(offsets)) if offsets else None
 
 
 def _check_gravity(maneuvers: ManeuverSet) -> bool:
@@ -113,25 +127,35 @@ def _unit(maneuvers: ManeuverSet, name: str, signals: ModelSignals | None) -> st
 def _check_offsets(maneuvers: ManeuverSet, skip: tuple[str, ...],
                    signals: ModelSignals | None) -> None:
     for column, name in enumerate(maneuvers.output_names):
-        if name in skip:
+        found = None if name in skip else _largest_offset(
+            maneuvers, [m.outputs[:, column] for m in maneuvers])
+        if found is None:
             continue
-        offsets = []
-        for m in maneuvers:
-            level, noise = _start(m, column)
-            swing = float(np.ptp(m.outputs[:, column]))
-            if abs(level) > OFFSET_FRACTION * swing and abs(level) > OFFSET_NOISE_RATIO * noise \
-                    and swing > 0:
-                offsets.append((abs(level), level, swing, m.name))
-        if not offsets:
-            continue
-        _, level, swing, where = max(offsets)
+        count, (_, level, swing, where) = found
         unit = _unit(maneuvers, name, signals)
         kind = " (an absolute attitude?)" if name in ("theta", "phi") else ""
-        _warn(f"output {name!r} starts away from zero in {len(offsets)} of {len(maneuvers)} "
+        _warn(f"output {name!r} starts away from zero in {count} of {len(maneuvers)} "
               f"maneuvers{kind}: {level:.4g}{unit} (mean of the first {START_WINDOW:g} s of "
               f"{where}) against a swing of {swing:.4g}{unit}; outputs are perturbations "
               f"from trim: remove the trim (rotorid identify --trim first-second, or "
               f"--trim {name}=VALUE) or estimate output biases (--output-biases)")
+
+
+def _check_input_offsets(maneuvers: ManeuverSet, signals: ModelSignals | None) -> None:
+    """A control recorded on top of its trim acts as a constant extra input, which the
+    derivatives then take up (output biases cannot: the offset is in the inputs)."""
+    for column, name in enumerate(maneuvers.input_names):
+        found = _largest_offset(maneuvers, [m.inputs[:, column] for m in maneuvers])
+        if found is None:
+            continue
+        count, (_, level, swing, where) = found
+        unit = (f" {signals.all[name].unit}" if signals is not None and name in signals.all
+                else "")
+        _warn(f"input {name!r} starts away from zero in {count} of {len(maneuvers)} "
+              f"maneuvers: {level:.4g}{unit} (mean of the first {START_WINDOW:g} s of {where}) "
+              f"against a swing of {swing:.4g}{unit}; inputs are perturbations from trim, and "
+              f"an offset left in them biases the derivatives (output biases do not help): "
+              f"remove the trim (rotorid identify --trim first-second, or --trim {name}=VALUE)")
 
 
 def _check_rate_scale(maneuvers: ManeuverSet) -> None:
@@ -223,6 +247,7 @@ def check_data(maneuvers: ManeuverSet, condition: FlightCondition | None = None,
     ``signals`` the model's, whose units the messages give for channels of its own."""
     one_g = _check_gravity(maneuvers)
     _check_offsets(maneuvers, ("az",) if one_g else (), signals)
+    _check_input_offsets(maneuvers, signals)
     _check_rate_scale(maneuvers)
     _check_flat_runs(maneuvers, signals)
     check_kinematics(maneuvers, condition)
