@@ -339,3 +339,45 @@ def test_an_aeroplane_is_fitted_on_its_own_channels_from_sweeps():
     errors = np.abs(estimate.values - structure.as_vector(truth))
     assert np.all(errors <= 3.0 * estimate.cramer_rao), dict(zip(structure.names, errors))
     assert np.all(estimate.cramer_rao_pct < 25.0)
+
+
+def test_a_pair_the_structure_cannot_fit_is_named_with_the_others_to_keep():
+    """The truth couples roll to pitch through the pitch rate (L_q); a structure that couples
+    them through the stick (L_long) instead has the wrong shape on p/long, fits it far above
+    the guideline, and the note says which pairs to keep."""
+    truth_structure = _structure(names=("L_p", "L_lat", "L_q", "M_q", "M_long"))
+    sweeps = _sweeps(truth_structure, {**TRUTH, "L_q": 4.0}, noise=0.05, seed=3)
+    fitted = _structure(names=("L_p", "L_lat", "L_long", "M_q", "M_long"))
+    estimate = FrequencyResponseEstimator(pairs=(*PAIRS, "p/long")).estimate(fitted, sweeps)
+    [note] = [n for n in estimate.notes if n.startswith("pairs the structure does not fit")]
+    assert "p/long (J " in note
+    assert "pairs = [p/lat, phi/lat, q/long, theta/long]" in note
+
+
+def test_identify_takes_the_pairs_and_band_of_the_frequency_response_estimator(tmp_path,
+                                                                            capsys):
+    import json
+
+    from rotorid.cli import main as cli
+    from rotorid_files.formats import write_maneuver
+
+    sweeps = _sweeps(_structure(), TRUTH, noise=0.05, seed=5)
+    for m in sweeps:
+        write_maneuver(m, tmp_path / f"{m.name}.csv")
+    model = tmp_path / "model.toml"
+    model.write_text('units = "flight-test"\n[condition]\nairspeed_kt = 0.0\n[structure]\n'
+                     'populate = "none"\n[derivatives]\nL_p = {}\nL_lat = {}\nM_q = {}\n'
+                     'M_long = {}\n', encoding="utf-8")
+    out = tmp_path / "fr.json"
+    argv = ["identify", str(model), str(tmp_path / "*.csv"), "--out", str(out), "--quiet",
+            "--estimator", "frequency-response"]
+    assert cli.main([*argv, "--pairs", "p/lat,q/long", "--band", "0.5,12"]) == 0, \
+        capsys.readouterr().err
+    record = json.loads(out.read_text(encoding="utf-8"))
+    assert record["estimator_options"] == {"pairs": ["p/lat", "q/long"], "band": [0.5, 12.0]}
+    assert record["outputs"] == ["p/lat", "q/long"]
+    capsys.readouterr()
+    assert cli.main([*argv, "--force", "--band", "12,0.5"]) == 2
+    assert "--band needs two frequencies in rad/s, lowest first" in capsys.readouterr().err
+    assert cli.main([*argv[:-2], "--force", "--pairs", "p/lat"]) == 2
+    assert "--pairs: the frequency-response estimator's" in capsys.readouterr().err

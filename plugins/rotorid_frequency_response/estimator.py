@@ -27,6 +27,7 @@ from rotorid.estimation.estimate import Estimate
 from rotorid.model.statespace import state_space
 from rotorid.model.structure import ModelStructure
 from rotorid.plugin.manager import notify
+from rotorid.verification.envelopes import MISMATCH_COST_GUIDELINE
 from rotorid.verification.frequency import FrequencyResponse
 from rotorid_envelopes.cost import COST_THRESHOLD
 
@@ -240,7 +241,22 @@ class FrequencyResponseEstimator:
             at_bound=tuple(n for n, v, lo, hi in zip(names, result.values, lower, upper)
                            if (np.isfinite(lo) and v <= lo) or (np.isfinite(hi) and v >= hi)),
             notes=(*notes, "J per pair: " + ", ".join(
-                f"{p.pair} {c:.1f}" for p, c in zip(pairs, costs))))
+                f"{p.pair} {c:.1f}" for p, c in zip(pairs, costs)),
+                   *_poorly_fitted(pairs, costs)))
+
+
+def _poorly_fitted(pairs: Sequence[PairData], costs) -> list[str]:
+    """A note naming the pairs whose J exceeds the guideline for any pair (Tischler: 200 for
+    a few pairs), which pull the derivatives the other pairs determine."""
+    limit = MISMATCH_COST_GUIDELINE["few_pairs_max"]
+    poor = [(p.pair, c) for p, c in zip(pairs, costs) if c > limit]
+    if not poor or len(poor) == len(pairs):
+        return []
+    listed = ", ".join(f"{pair} (J {cost:.0f})" for pair, cost in poor)
+    kept = ", ".join(p.pair for p, c in zip(pairs, costs) if c <= limit)
+    return [f"pairs the structure does not fit (J above {limit:g}, the guideline for any "
+            f"pair): {listed}; they pull the derivatives the other pairs determine: fit without "
+            f"them (pairs = [{kept}]; identify --pairs) or extend the structure"]
 
 
 def unstable_poles_above(structure: ModelStructure, values, omega_max: float) -> np.ndarray:

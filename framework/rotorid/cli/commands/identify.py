@@ -11,7 +11,7 @@ Usage::
                      [--resample linear|decimate] [--sample-time S]
                      [--actuator-lag S [--actuator-inputs long,lat]]
                      [--process-noise w,q|none] [--disturbances p,q,r] [--gusts u,v,w]
-                     [--update-every N]
+                     [--update-every N] [--pairs q/long,p/lat] [--band LOW,HIGH]
                      [--quiet] [--strict] [--force]
 
 ``MODEL.toml`` is a model file (:mod:`rotorid.model.modelfile`); its initial values are the start
@@ -46,6 +46,7 @@ to the JSON file, so that ``rotorid verify RESULT.json SWEEPS...`` finds it; for
 from __future__ import annotations
 
 import json
+import math
 import os
 import sys
 import warnings
@@ -151,6 +152,12 @@ def add_arguments(parser) -> None:
     parser.add_argument("--update-every", type=int, default=None, metavar="N",
                         help="filter error: a measurement update at every N-th sample only "
                              "(for records low-passed to the model's band)")
+    parser.add_argument("--pairs", default=None, metavar="q/long,p/lat",
+                        help="frequency response: the output/input pairs fitted (default every "
+                             "output over every swept input)")
+    parser.add_argument("--band", default=None, metavar="OMEGA_MIN,OMEGA_MAX",
+                        help="frequency response: the frequencies in rad/s a pair's fit may "
+                             "reach (default its whole coherent range)")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress lines on stderr (warnings stay)")
     parser.add_argument("--force", action="store_true",
@@ -158,6 +165,32 @@ def add_arguments(parser) -> None:
     parser.add_argument("--strict", action="store_true",
                         help="exit with status 4 when the fit does not converge (the estimate "
                              "is written all the same)")
+
+
+def _frequency_options(args) -> dict:
+    """``--pairs`` and ``--band``, the frequency-response estimator's (a usage error with
+    another estimator or a band that is not two increasing frequencies)."""
+    from rotorid.errors import UsageError
+
+    given = {flag: getattr(args, flag) for flag in ("pairs", "band")
+             if getattr(args, flag) is not None}
+    if given and args.estimator != "frequency-response":
+        flags = ", ".join(f"--{flag}" for flag in given)
+        raise UsageError(f"{flags}: the frequency-response estimator's; add --estimator "
+                         f"frequency-response")
+    options: dict = {}
+    if "pairs" in given:
+        options["pairs"] = tuple(names(given["pairs"]))
+    if "band" in given:
+        try:
+            low, high = (float(v) for v in given["band"].split(","))
+        except ValueError:
+            low = high = math.nan
+        if not (0 <= low < high):
+            raise UsageError(f"--band needs two frequencies in rad/s, lowest first, e.g. "
+                             f"--band 0.5,12; got {given['band']!r}")
+        options["band"] = (low, high)
+    return options
 
 
 def _modes_report(structure, estimate) -> str:
@@ -222,6 +255,7 @@ def _options(args) -> dict:
             raise UsageError("--coloured-residuals widens output error's bounds; filter "
                              "error models the correlation as process noise instead")
         options["coloured_residuals"] = True
+    options.update(_frequency_options(args))
     noise_model = [flag for flag in FILTER_ERROR_FLAGS if getattr(args, flag) is not None]
     if noise_model and args.estimator != "filter-error":
         given = ", ".join("--" + flag.replace("_", "-") for flag in noise_model)
