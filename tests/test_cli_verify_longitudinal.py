@@ -227,7 +227,9 @@ def test_verify_lags_the_sweeps_as_the_identification_was(identified, tmp_path, 
     assert status == ExitStatus.OK, printed.err          # failed checks fail only with --strict
     assert "sweep inputs through the identification's 0.1 s actuator lag" in printed.out
     summary = json.loads((out / "verification.json").read_text(encoding="utf-8"))
-    checks = {p["pair"]: p["checks"]["muad"]["passed"] for p in summary["pairs"]}
+    # the lag's phase costs q/long its mismatch cost (J 163 against 0.7 without the lag; the
+    # MUAD envelope is wider than its phase at these frequencies)
+    checks = {p["pair"]: p["checks"]["mismatch-cost"]["passed"] for p in summary["pairs"]}
     assert checks == {"q/long": False, "az/coll": True}
 
 

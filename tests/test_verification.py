@@ -388,3 +388,26 @@ def test_a_small_input_that_drives_the_output_is_conditioned_out(envelopes):
     assert auto.conditioned.conditioned_on == ("lat",)
     muad = auto.analytic_checks["muad"]
     assert muad.status == "pass" and muad.used.sum() >= 10
+
+
+def test_the_default_grid_starts_where_the_sweep_does_and_reaches_its_top():
+    """Without metadata the grid starts at the input's slowest half cycle (a 0.5 rad/s sweep's
+    0.5), not in the windows' leakage below it; a recorded omega_max above 20 rad/s, within a
+    fifth of the Nyquist frequency, extends it."""
+    from rotorid.verification.compare import default_omega
+    from rotorid.verification.pairs import lowest_swept_frequency
+
+    u = log_sweep(duration=60.0, omega_min=0.5, omega_max=30.0, dt=0.01)
+    time = np.arange(u.size) * 0.01
+    plain = Maneuver("sweep", time, np.column_stack([u, 0 * u, 0 * u, 0 * u]),
+                     np.zeros((u.size, 8)), {"axis": "long"})
+    assert lowest_swept_frequency(plain) == pytest.approx(0.5, rel=0.02)
+    grid = default_omega(ManeuverSet([plain]))
+    assert grid[0] == pytest.approx(0.5, rel=0.02) and grid[-1] == pytest.approx(20.0)
+    topped = Maneuver("sweep", time, plain.inputs, plain.outputs,
+                      {"axis": "long", "omega_max": 30.0})
+    assert default_omega(ManeuverSet([topped]))[-1] == pytest.approx(30.0)
+    doublet = Maneuver("doublet", time, np.column_stack([np.sign(np.sin(time)) * (time < 6.3),
+                                                         0 * u, 0 * u, 0 * u]),
+                       np.zeros((u.size, 8)))
+    assert lowest_swept_frequency(doublet) is None

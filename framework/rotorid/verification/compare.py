@@ -40,7 +40,8 @@ from rotorid.verification.frequency import (
     response_from_maneuvers,
 )
 from rotorid.verification.metrics import TimeDomainMetrics, time_domain_metrics
-from rotorid.verification.pairs import default_pairs, parse_pair, sweeps_exciting
+from rotorid.verification.pairs import (default_pairs, lowest_swept_frequency, parse_pair,
+                                        sweeps_exciting)
 
 #: Coherence of a pair's input with the conditioning inputs above which its conditioned
 #: response is unreliable (Tischler & Remple): the analytic comparison skips such points.
@@ -282,20 +283,27 @@ def sweep_frequency(maneuver, bound: str = "omega_min") -> float | None:
 
 
 def default_omega(sweeps, n: int = 200, upper: float = 20.0) -> np.ndarray:
-    """Log grid from the lowest frequency the data support to ``upper`` rad/s or a fifth of
-    the Nyquist frequency, whichever is lower.
+    """Log grid from the lowest frequency the data support to ``upper`` rad/s (or the highest
+    the sweeps excite where their metadata records it and that is higher), at most a fifth of
+    the Nyquist frequency.
 
     The lower end is the longest default window's lowest frequency (4π/(T_rec/2)), raised to
-    the lowest frequency the sweeps excite where their metadata records it
-    (:func:`sweep_frequency`): below it the inputs' spectra hold only the window's leakage of
-    the lowest sweep frequency, not excitation at the nominal one.
+    the lowest frequency the sweeps excite: recorded in their metadata
+    (:func:`sweep_frequency`), else read from the input's slowest half cycle
+    (:func:`rotorid.verification.pairs.lowest_swept_frequency`). Below it the inputs'
+    spectra hold only the window's leakage of the lowest sweep frequency, not excitation at
+    the nominal one.
     """
     shortest = min(m.duration for m in sweeps)
     dt = max(m.dt for m in sweeps)
     low = lowest_frequency(default_windows(shortest)[0])
-    excited = [w for w in (sweep_frequency(m) for m in sweeps) if w is not None]
+    excited = [w for w in (sweep_frequency(m) or lowest_swept_frequency(m) for m in sweeps)
+               if w is not None]
     if excited:
         low = max(low, min(excited))
+    tops = [sweep_frequency(m, "omega_max") for m in sweeps]
+    if all(top is not None for top in tops):
+        upper = max(upper, min(tops))
     return log_grid(low, min(upper, 0.2 * np.pi / dt), n)
 
 
@@ -359,7 +367,8 @@ def compare_sweeps(sweeps, model_outputs: Sequence[np.ndarray],
     if len(model_outputs) != len(sweeps):
         raise VerificationError(f"{len(model_outputs)} model output arrays for {len(sweeps)} "
                                 f"sweeps; simulate every sweep")
-    omega = default_omega(sweeps) if omega is None else np.asarray(omega, dtype=float)
+    omega = (default_omega(sweeps, upper=max(20.0, band.omega_max)) if omega is None
+             else np.asarray(omega, dtype=float))
     comparison = _SweepComparison(
         sweeps, dict(zip(sweeps.names, model_outputs)), output_names, input_names, omega,
         None if analytic is None else analytic(omega), envelopes, windows, conditioning,

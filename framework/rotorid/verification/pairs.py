@@ -66,6 +66,25 @@ def input_reversals(signal: np.ndarray) -> int:
     return int(np.count_nonzero(np.diff(sides))) if len(sides) else 0
 
 
+def lowest_swept_frequency(maneuver) -> float | None:
+    """The lowest frequency a sweep's input (:func:`primary_axis`) runs through, rad/s: π over
+    its longest half cycle between reversals (:data:`REVERSAL_HYSTERESIS`), the quiet start
+    and end left out; None for an input that reverses fewer than :data:`SWEEP_REVERSALS`
+    times. A sweep's slowest cycles have its full amplitude, so the hysteresis finds them."""
+    signal = maneuver.channel(primary_axis(maneuver))
+    centred = np.asarray(signal, dtype=float) - np.median(signal)
+    threshold = REVERSAL_HYSTERESIS * 0.5 * float(np.ptp(signal))
+    if threshold <= 0.0:
+        return None
+    outside = np.flatnonzero(np.abs(centred) > threshold)
+    sides = np.sign(centred[outside])
+    changes = outside[1:][np.diff(sides) != 0]
+    if changes.size < SWEEP_REVERSALS:
+        return None
+    longest = float(np.max(np.diff(maneuver.time[changes])))
+    return float(np.pi / longest)
+
+
 def not_a_sweep(maneuver) -> str | None:
     """Why ``maneuver`` looks like a step input (multistep, doublet) rather than a frequency
     sweep: its excited input (:func:`primary_axis`) reverses fewer than
