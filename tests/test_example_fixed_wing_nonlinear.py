@@ -101,3 +101,25 @@ def test_bad_channel_maps_of_the_model_file_are_one_line_errors(example, tmp_pat
     assert status != 0
     assert len(error.splitlines()) == 1 and "Traceback" not in error, error
     assert re.search(fragment, error), error
+
+
+def test_a_time_column_of_the_ranges_own_name_is_linked_in_the_models_map(example, tmp_path,
+                                                                        capsys):
+    """The records' time column is ``IRIG_TIME`` (seconds of the day); the model file's
+    channel map links it to time, as a linear model file's may."""
+    model = tmp_path / "fixed_wing_nonlinear.py"
+    model.write_text(EXAMPLE.read_text(encoding="utf-8").replace(
+        '"VTAS_mps": ("V", "m/s")', '"IRIG_TIME": ("time", "s"), "VTAS_mps": ("V", "m/s")'),
+        encoding="utf-8")
+    records = tmp_path / "records"
+    records.mkdir()
+    for path in example.write_records(tmp_path / "all")[:1]:
+        lines = path.read_text(encoding="utf-8").splitlines()
+        first = next(i for i, line in enumerate(lines) if line.startswith("time,"))
+        lines[first] = lines[first].replace("time,", "IRIG_TIME,", 1)
+        (records / path.name).write_text("\n".join(lines) + "\n", encoding="utf-8")
+    status = main(["identify", f"{model}:AEROPLANE", str(records), "--out",
+                   str(tmp_path / "r.json"), "--quiet", "--max-iterations", "2"])
+    printed = capsys.readouterr()
+    assert status == 0, printed.err
+    assert "rotorid identify: error" not in printed.err and "Traceback" not in printed.err

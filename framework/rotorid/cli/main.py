@@ -53,7 +53,8 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand (built-in and registered by plugins)."""
     parser = _Parser(
         prog="rotorid",
-        description="Time-domain system identification of helicopter flight dynamics.")
+        description="System identification of aircraft flight dynamics, helicopters first: "
+                    "time and frequency domain, reduction, delays, verification.")
     parser.add_argument("--version", action="version", version=f"rotorid {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, summary, implementation in _subcommands():

@@ -212,8 +212,14 @@ class ChannelMap:
         return next((link for link in self.links if link.signal == signal), None)
 
     def check(self, signals: SignalSet) -> None:
-        """Every link names a signal of ``signals`` with a unit that fits its kind."""
+        """Every link names a signal of ``signals`` (or the records' ``time``) with a unit
+        that fits its kind."""
         for link in self.links:
+            if link.signal == "time":
+                if not unit_fits_kind(link.unit, "time"):
+                    raise SignalError(f"{self.source}: column {link.column!r} is linked to time "
+                                      f"in {link.unit}; give unit = \"s\" or \"ms\"")
+                continue
             if link.signal not in signals:
                 raise SignalError(f"{self.source}: column {link.column!r} is linked to unknown "
                                   f"signal {link.signal!r}; signals: {', '.join(signals.names)}")

@@ -98,7 +98,7 @@ def add_arguments(parser) -> None:
                         help="estimator plugin (default output-error; see `rotorid plugins`)")
     parser.add_argument("--out", default="result.json", metavar="RESULT.json", type=output_file,
                         help="where to write the estimate (default ./result.json)")
-    parser.add_argument("--outputs", default=None, metavar="ax,az,...",
+    parser.add_argument("--outputs", default=None, metavar="OUT1,OUT2,...",
                         help="comma-separated outputs used in the cost (default: all of the "
                              "model's)")
     parser.add_argument("--noise", choices=("full", "diagonal"), default=None,
@@ -125,8 +125,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--trim", type=trim, default=None,
                         metavar="first-second|CH=VALUE,...",
                         help="remove the trim from every file: each channel's mean over the "
-                             "first second, or stated values in the model's units (after the "
-                             "channel map's scale and unit conversion), e.g. az=-32.17")
+                             "first second, or stated values by the model's channel names in "
+                             "its unit system, e.g. az=-32.17 (ft/s², flight-test) or "
+                             "az=-9.81,rudder=2.1 (SI)")
     parser.add_argument("--resample", choices=("linear", "decimate"), default=None,
                         help="resample non-uniform time onto a uniform grid: linear "
                              "interpolation, or anti-aliased decimation to --sample-time")
@@ -137,7 +138,7 @@ def add_arguments(parser) -> None:
                         help="the actuators' known first-order time constant in s: the inputs "
                              "go through that lag before the fit (rotorid.actuators), and the "
                              "result records it for rotorid verify")
-    parser.add_argument("--actuator-inputs", default=None, metavar="long,lat",
+    parser.add_argument("--actuator-inputs", default=None, metavar="IN1,IN2",
                         help="the inputs --actuator-lag acts on (default every input)")
     parser.add_argument("--process-noise", default=None, metavar="w,q|none",
                         help="filter error: the states white process noise enters (default "
@@ -165,6 +166,16 @@ def add_arguments(parser) -> None:
     parser.add_argument("--strict", action="store_true",
                         help="exit with status 4 when the fit does not converge (the estimate "
                              "is written all the same)")
+
+
+def _time_links(model):
+    """The links of a model of one's own's channel map that name the files' time column
+    (``IRIG_TIME = { signal = "time", unit = "s" }``), for the file reader."""
+    from rotorid.model.signals import ChannelMap
+
+    channels = getattr(model, "channels", ChannelMap())
+    return ChannelMap([link for link in channels.links if link.signal == "time"],
+                      channels.source)
 
 
 def _frequency_options(args) -> dict:
@@ -374,6 +385,7 @@ def run(args) -> int:
             ingestion = _ingestion(args)
             if by_reference:
                 ingestion["keep_columns"] = getattr(model, "columns", ())
+                ingestion["channels"] = _time_links(model)
             else:
                 ingestion["channels"] = load_channel_map(args.model)
                 ingestion["signals"] = model.signals
