@@ -238,6 +238,15 @@ def test_bad_declarations_and_data():
     with pytest.raises(rotorid.SignalError, match="maneuver 'plus' has no column 'stick' for "
                                                   "signal 'stick'"):
         IntegratedModel(model).simulate(PENDULUM_TRUTH, data)
+    no_rate = ManeuverSet([Maneuver(m.name, m.time, m.inputs, m.columns(("theta",)),
+                                    input_names=m.input_names, output_names=("theta",))
+                           for m in data])
+    with pytest.raises(StructureError, match=r"state 'q' starts each maneuver from the data, "
+                                             r"but maneuver 'plus' has no column for it: give "
+                                             r"its start, InitialConditions\(fixed=\{'q': "
+                                             r"0.0\}\); with it in estimated as well"):
+        IntegratedModel(model, channels=STICK_IN_LONG, maneuvers=no_rate,
+                        initial=InitialConditions(estimated=("q",)))
     estimated = IntegratedModel(model, channels=STICK_IN_LONG, maneuvers=data,
                                 initial=InitialConditions(estimated=("q",)))
     other = ManeuverSet([attrs.evolve(data[0], name="third")])

@@ -212,6 +212,17 @@ class IntegratedModel:
     def _record(self, maneuver: Maneuver) -> Record:
         states = self.signals.states
         from_data = [s for s in states.names if s not in self.initial.fixed]
+        columns, _ = maneuver_columns(maneuver, self.signals)
+        unmeasured = [s for s in from_data
+                      if self.channels.link(s) is None and s not in columns]
+        if unmeasured:
+            how = ("; with it in estimated as well, the fit estimates it from there"
+                   if unmeasured[0] in self.initial.estimated else "")
+            raise StructureError(
+                f"state {unmeasured[0]!r} starts each maneuver from the data, but maneuver "
+                f"{maneuver.name!r} has no column for it: give its start, "
+                f"InitialConditions(fixed={{{unmeasured[0]!r}: 0.0}}){how}, or link the column "
+                f"that holds it in {self.channels.source}")
         initial = np.array([self.initial.fixed.get(s, np.nan) for s in states.names])
         initial[states.indices(from_data)] = self._read(maneuver, from_data)[0]
         return Record(maneuver.name, float(maneuver.time[0]), maneuver.dt,
