@@ -411,3 +411,14 @@ def test_the_default_grid_starts_where_the_sweep_does_and_reaches_its_top():
                                                          0 * u, 0 * u, 0 * u]),
                        np.zeros((u.size, 8)))
     assert lowest_swept_frequency(doublet) is None
+
+
+def test_an_envelope_available_on_no_pair_is_reported_once(case, envelopes):
+    sweeps, _, with_delay = case
+    report = compare_sweeps(sweeps, with_delay, ["q/long", "p/long"], envelopes,
+                            omega=OMEGA).report()
+    lines = report.splitlines()
+    assert sum("AEE" in line for line in lines) == 1
+    assert any(line.startswith("AEE: not available on any pair, no point checked")
+               for line in lines)
+    assert sum("MUAD" in line for line in lines) == 2

@@ -241,6 +241,13 @@ class VerificationResult:
     def report(self) -> str:
         lines = [f"note: {note}" for note in self.notes]
         lines.append(f"verification band (every check): {self.band.describe()}")
+        every = [c for p in self.pairs for checks in (p.checks, p.analytic_checks)
+                 for c in checks.values()]
+        absent = {c.envelope for c in every} - {c.envelope for c in every
+                                                if c.status != "not available"}
+        for name in sorted(absent):            # said once, not on every pair
+            lines.append(next(c for c in every if c.envelope == name).report().replace(
+                "not available, no point checked", "not available on any pair, no point checked"))
         for p in self.pairs:
             correlation = p.input_coherence()
             note = "" if correlation is None else (
@@ -252,7 +259,8 @@ class VerificationResult:
                          f"conditioned on {', '.join(others) or 'nothing'}{note})")
             for label, checks in (("simulated", p.checks), ("analytic", p.analytic_checks)):
                 for check in checks.values():
-                    lines.append(f"  [{label}] {check.report()}")
+                    if check.envelope not in absent:
+                        lines.append(f"  [{label}] {check.report()}")
         average = self.average_cost()
         if average is not None:
             lines.append(f"J_ave (simulated) = {average:.1f}; guideline "
