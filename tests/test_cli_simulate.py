@@ -114,3 +114,35 @@ def test_bad_values_files_are_named(tmp_path, capsys, content, message):
                        "--out", str(tmp_path / "out")])
     assert status == ExitStatus.ERROR
     assert message in capsys.readouterr().err
+
+
+def test_the_inputs_are_read_as_the_identification_records_were(tmp_path, capsys):
+    """A result that records a first-second trim has its inputs read with it, so records
+    carrying a 3 % stick trim simulate as the same records without it; --trim given on the
+    command line takes the recorded trim's place."""
+    result = {"parameters": {n: {"value": v} for n, v in VALUES.items()
+                             if not n.startswith("tau_")},
+              "delays": {"L_lat": {"value": 0.037}}, "ingestion": {"trim": "first-second"}}
+    model, values, inputs = _setup(tmp_path, result)
+    trimmed = tmp_path / "trimmed"
+    trimmed.mkdir()
+    for i in range(2):
+        record = read_maneuver(inputs / f"m{i}.csv")
+        write_maneuver(rotorid.Maneuver(record.name, record.time, record.inputs + 3.0,
+                                        record.outputs, metadata=record.metadata),
+                       trimmed / f"m{i}.csv")
+
+    def simulated(records, name, *extra):
+        out = tmp_path / name
+        assert cli.main(["simulate", str(model), str(records), "--values", str(values),
+                         "--out", str(out), *extra]) == 0
+        return [read_maneuver(out / f"m{i}.csv").outputs for i in range(2)]
+
+    recorded = simulated(trimmed, "recorded")
+    assert "inputs read with trim first-second" in capsys.readouterr().out
+    for a, b in zip(recorded, simulated(inputs, "original", "--trim", "first-second")):
+        assert np.allclose(a, b, atol=1e-9)
+    stated = simulated(trimmed, "stated", "--trim", "long=3,lat=3,coll=3,ped=3")
+    for a, b in zip(stated, simulated(inputs, "untrimmed", "--trim", "long=0")):
+        assert np.allclose(a, b, atol=1e-9)
+    assert not np.allclose(recorded[0], stated[0])

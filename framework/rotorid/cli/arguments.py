@@ -92,3 +92,44 @@ def seconds(text: str) -> float:
     """A positive time in s."""
     return _number(text, parse_number, lambda value: value > 0,
                    "a time in s is a positive number")
+
+
+def add_ingestion_arguments(parser, what: str = "file") -> None:
+    """``--trim``, ``--resample`` and ``--sample-time``: how every ``what`` is read
+    (:mod:`rotorid.ingestion`); :func:`ingestion_settings` turns them into settings."""
+    parser.add_argument("--trim", type=trim, default=None,
+                        metavar="first-second|CH=VALUE,...",
+                        help=f"remove the trim from every {what}: each channel's mean over the "
+                             "first second, or stated values by the model's channel names in "
+                             "its unit system, e.g. az=-32.17 (ft/s², flight-test) or "
+                             "az=-9.81,rudder=2.1 (SI)")
+    parser.add_argument("--resample", choices=("linear", "decimate"), default=None,
+                        help="resample non-uniform time onto a uniform grid: linear "
+                             "interpolation, or anti-aliased decimation to --sample-time")
+    parser.add_argument("--sample-time", type=seconds, default=None, metavar="S",
+                        help="the grid's interval in s for --resample (default: the median "
+                             "step)")
+
+
+def ingestion_settings(args) -> dict:
+    """The settings :func:`add_ingestion_arguments` read, those given only (a usage error for
+    a --sample-time without --resample)."""
+    from rotorid.errors import UsageError
+
+    if args.sample_time is not None and args.resample is None:
+        raise UsageError("--sample-time needs --resample linear or --resample decimate")
+    settings = {"trim": args.trim, "resample": args.resample, "sample_time": args.sample_time}
+    return {k: v for k, v in settings.items() if v is not None}
+
+
+def trim_text(removed) -> str:
+    """``first-second``, or the stated trim values as ``theta=3.1, az=-32.1``."""
+    if isinstance(removed, str):
+        return removed
+    return ", ".join(f"{name}={value:g}" for name, value in removed.items())
+
+
+def ingestion_text(settings) -> str:
+    """Ingestion settings in words: ``trim first-second, resample linear, sample_time 0.02``."""
+    return ", ".join(f"{key} {trim_text(value) if key == 'trim' else value}"
+                     for key, value in settings.items())

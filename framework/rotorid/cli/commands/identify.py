@@ -52,22 +52,14 @@ import sys
 import warnings
 from pathlib import Path
 
-from rotorid.cli.arguments import names, output_file, seconds, trim
+from rotorid.cli.arguments import (add_ingestion_arguments, ingestion_settings, names,
+                                   output_file, seconds)
 from rotorid.plugin.hookspecs import hookimpl
 from rotorid.progress import counted
 
 NAME = "identify"
 HELP = ("estimate the derivatives and delays of a model file from maneuver files; print the "
         "report and write the estimate as JSON")
-
-
-def _ingestion(args) -> dict:
-    """The files' ingestion settings from the command line (:mod:`rotorid.ingestion`)."""
-    from rotorid.errors import UsageError
-
-    if args.sample_time is not None and args.resample is None:
-        raise UsageError("--sample-time needs --resample linear or --resample decimate")
-    return {"trim": args.trim, "resample": args.resample, "sample_time": args.sample_time}
 
 
 def _actuator_inputs(args) -> list[str] | None:
@@ -122,18 +114,7 @@ def add_arguments(parser) -> None:
                              "time (Morelli & Klein), not only white ones")
     parser.add_argument("--hold", choices=("zoh", "foh"), default="zoh",
                         help="input hold between samples (default zoh)")
-    parser.add_argument("--trim", type=trim, default=None,
-                        metavar="first-second|CH=VALUE,...",
-                        help="remove the trim from every file: each channel's mean over the "
-                             "first second, or stated values by the model's channel names in "
-                             "its unit system, e.g. az=-32.17 (ft/s², flight-test) or "
-                             "az=-9.81,rudder=2.1 (SI)")
-    parser.add_argument("--resample", choices=("linear", "decimate"), default=None,
-                        help="resample non-uniform time onto a uniform grid: linear "
-                             "interpolation, or anti-aliased decimation to --sample-time")
-    parser.add_argument("--sample-time", type=seconds, default=None, metavar="S",
-                        help="the grid's interval in s for --resample (default: the median "
-                             "step)")
+    add_ingestion_arguments(parser)
     parser.add_argument("--actuator-lag", type=seconds, default=None, metavar="S",
                         help="the actuators' known first-order time constant in s: the inputs "
                              "go through that lag before the fit (rotorid.actuators), and the "
@@ -382,7 +363,7 @@ def run(args) -> int:
         estimator = _estimator(args.estimator, options)
         with warnings.catch_warnings(record=True) as found, checks_report(shown=not args.quiet):
             warnings.simplefilter("always", RotoridWarning)
-            ingestion = _ingestion(args)
+            ingestion = ingestion_settings(args)
             if by_reference:
                 ingestion["keep_columns"] = getattr(model, "columns", ())
                 ingestion["channels"] = _time_links(model)

@@ -3,6 +3,8 @@
 Usage::
 
     rotorid simulate MODEL.toml INPUTS... --values VALUES.json --out DIR [--format csv|npz|mat]
+                     [--hold zoh|foh] [--trim first-second|CH=VALUE,...]
+                     [--resample linear|decimate] [--sample-time S]
 
 ``MODEL.toml`` is a model file (:mod:`rotorid.model.modelfile`). INPUTS are maneuver files,
 directories or glob patterns (the ``files`` data source); their inputs drive the model and
@@ -14,7 +16,11 @@ their outputs are replaced by the simulation. ``VALUES.json`` holds the paramete
   "delays": {"L_lat": {"value": …}}, "fixed": {…}}``): free derivatives it does not list were
   removed by the reduction, and its delays are added to the model.
 
-Without ``--values`` the model file's initial values are simulated. Each maneuver is written
+The inputs are read as the estimate's identification records were (its ``ingestion``: trim
+removal, resampling), or as ``--trim``, ``--resample`` and ``--sample-time`` say, which take
+precedence: a model of perturbations is driven by perturbations, and a record with dropouts
+needs resampling. Without ``--values`` the model file's initial values are simulated. Each
+maneuver is written
 atomically to ``DIR/<name>.<format>`` with the inputs and metadata of its source file. A model
 that diverges stops the command with a one-line error.
 """
@@ -24,7 +30,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
-from rotorid.cli.arguments import output_directory
+from rotorid.cli.arguments import (add_ingestion_arguments, ingestion_settings, ingestion_text,
+                                   output_directory)
 
 NAME = "simulate"
 HELP = ("simulate a linear model over recorded inputs and write the simulated outputs as "
@@ -45,10 +52,12 @@ def add_arguments(parser) -> None:
                         help="format of the written maneuver files (default csv)")
     parser.add_argument("--hold", choices=("zoh", "foh"), default="zoh",
                         help="input hold between samples (default zoh)")
+    add_ingestion_arguments(parser, "input file")
 
 
 def read_values(path: Path, structure):
-    """The structure and the parameter vector that ``path`` (a values JSON file) describes."""
+    """The structure, the parameter vector and the recorded ingestion settings (none for a
+    flat mapping) that ``path`` (a values JSON file) describes."""
     from rotorid.errors import DataFileError
     from rotorid.estimation.result_file import load_result
     from rotorid.io import read_json_object
@@ -57,14 +66,15 @@ def read_values(path: Path, structure):
                                                     "'parameters' table")
     if isinstance(content.get("parameters"), Mapping):
         identified = load_result(path, structure=structure)
-        return identified.structure, identified.structure.as_vector(identified.values)
+        return (identified.structure, identified.structure.as_vector(identified.values),
+                dict(identified.ingestion))
     bad = [name for name, value in content.items()
            if not isinstance(value, (int, float)) or isinstance(value, bool)]
     if bad:
         raise DataFileError(f"values file {path}: {', '.join(sorted(bad))} must be numbers; "
                             f"give a flat name → value mapping or an estimate with a "
                             f"'parameters' table")
-    return structure, structure.as_vector(content)
+    return structure, structure.as_vector(content), {}
 
 
 def run(args) -> int:
@@ -75,11 +85,14 @@ def run(args) -> int:
     from rotorid.simulation.simulator import simulated_maneuvers
 
     structure = load_model(args.model)
-    values = None
+    values, recorded = None, {}
     if args.values is not None:
-        structure, values = read_values(Path(args.values), structure)
+        structure, values, recorded = read_values(Path(args.values), structure)
+    ingestion = {**recorded, **ingestion_settings(args)}
+    if ingestion:
+        print(f"inputs read with {ingestion_text(ingestion)}")
     maneuvers = load_maneuvers(args.inputs, args.hold, structure.units.name,
-                               {"signals": structure.signals,
+                               {**ingestion, "signals": structure.signals,
                                 "channels": load_channel_map(args.model)})
     check_delays(structure, maneuvers, values)
     simulated = simulated_maneuvers(structure, values, maneuvers)

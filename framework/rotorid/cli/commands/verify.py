@@ -86,13 +86,6 @@ def add_arguments(parser) -> None:
                         help="exit with status 1 when a verified envelope check fails")
 
 
-def trim_text(removed) -> str:
-    """``first-second``, or the stated trim values as ``theta=3.1, az=-32.1``."""
-    if isinstance(removed, str):
-        return removed
-    return ", ".join(f"{name}={value:g}" for name, value in removed.items())
-
-
 def parse_band(text: str | None):
     """The :class:`~rotorid.verification.band.VerificationBand` of ``--band`` (default when
     None)."""
@@ -226,6 +219,7 @@ def run(args) -> int:
     matplotlib.use("Agg")
 
     from rotorid.actuators import lagged_inputs
+    from rotorid.cli.arguments import trim_text
     from rotorid.cli.files import refuse_overwrite
     from rotorid.errors import ExitStatus, VerificationError
     from rotorid.estimation.result_file import load_result
