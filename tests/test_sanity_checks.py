@@ -370,3 +370,14 @@ def test_a_control_recorded_on_its_trim_is_named():
         warnings.simplefilter("always", DataWarning)
         check_data(records(0.0), signals=signals)
     assert not [w for w in caught if "input 'rudder'" in str(w.message)]
+
+
+def test_an_attitude_that_never_moves_is_left_out_of_the_kinematic_fits():
+    t = np.arange(0.0, 5.0, 0.02)
+    outputs = np.zeros((t.size, 8))
+    outputs[:, 2] = np.sin(t)                       # q
+    outputs[:, 3] = 1.0 - np.cos(t)                 # θ = ∫q
+    inputs = np.zeros((t.size, 4))
+    inputs[:, 0] = np.sin(t)
+    fits = kinematic_fits(ManeuverSet([Maneuver("pitch", t, inputs, outputs)]))
+    assert [f.channel for f in fits] == ["theta"]      # φ, all zero, is not fitted

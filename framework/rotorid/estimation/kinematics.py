@@ -166,6 +166,8 @@ def kinematic_fits(maneuvers: ManeuverSet,
         row = STATES.index(channel)
         terms = list(np.flatnonzero(known[row]))
         chosen = _moving([x[:, row] for x in all_states])
+        if not chosen:                                  # the channel never moves
+            continue
         taking = [maneuvers[i] for i in chosen]
         states = [all_states[i] for i in chosen]
         times = [m.time for m in taking]
