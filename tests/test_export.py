@@ -7,6 +7,7 @@ verification. The lateral channels carry sensor noise only, as they would in fli
 
 import csv
 import json
+import math
 import runpy
 import sys
 from pathlib import Path
@@ -422,3 +423,35 @@ def test_a_study_of_the_longitudinal_files_skips_the_pairs_it_cannot_verify(flig
     summary = _strict_json(root / "study-verification" / "verification.json")
     assert summary["pairs"][0]["checks"] == record["frequency_verification"]["no delays"][
         "pairs"][0]["checks"]
+
+
+def test_exports_say_how_each_signal_is_read_from_the_recorded_columns(flight):
+    """A model file whose channel map reads the stick in inches (25.4 % per inch), q in rad/s
+    and az in g with its sign flipped and 1 g taken out: every format carries
+    signal = factor · column + offset in the exported units."""
+    root, result = flight
+    model = root / "geared.toml"
+    model.write_text(MODEL + '[channels]\nSTICK_IN = { signal = "long", unit = "%", '
+                             'scale = 25.4 }\nQ_RAD = { signal = "q", unit = "rad/s" }\n'
+                             'NZ = { signal = "az", unit = "g", scale = -1.0, offset = 1.0 }\n',
+                     encoding="utf-8")
+    record = json.loads(result.read_text(encoding="utf-8"))
+    record["structure"] = model.name
+    geared = root / "geared.json"
+    geared.write_text(json.dumps(record), encoding="utf-8")
+    g = 9.80665 / 0.3048
+    expected = {"long": (25.4, 0.0), "q": (math.degrees(1.0), 0.0), "az": (-g, g)}
+    exported = _strict_json(_export(root, geared, "json", "geared_model.json"))
+    channels = {c["signal"]: (c["factor"], c["offset"]) for c in exported["channels"]}
+    assert channels.keys() == expected.keys()
+    for name, (factor, offset) in expected.items():
+        assert channels[name] == pytest.approx((factor, offset), rel=1e-12), name
+    content = loadmat(_export(root, geared, "mat", "geared_model.mat"))
+    assert [str(x[0]) for x in content["ChannelColumn"][0]] == [
+        next(c["column"] for c in exported["channels"] if c["signal"] == s)
+        for s in [str(x[0]) for x in content["ChannelSignal"][0]]]
+    assert content["ChannelFactor"][0] == pytest.approx([c["factor"]
+                                                         for c in exported["channels"]])
+    script = runpy.run_path(str(_export(root, geared, "python-control", "geared_model.py")))
+    assert script["CHANNELS"]["long"] == {"column": "STICK_IN", "factor": 25.4, "offset": 0.0}
+    assert "channels.csv" in {p.name for p in _export(root, geared, "csv", "geared_csv").iterdir()}

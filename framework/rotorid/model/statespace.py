@@ -42,6 +42,38 @@ class DelayedTerm:
     seconds: float
 
 
+@attrs.frozen
+class RecordedChannel:
+    """How a signal is read from the recorded data: ``signal = factor · column + offset`` in
+    the signal's unit (a channel map's scale, offset and unit conversion in one, e.g. a stick
+    recorded in inches read in %)."""
+
+    signal: str
+    column: str
+    factor: float
+    offset: float
+
+
+def recorded_channels(channel_map, units: Mapping[str, str]) -> tuple[RecordedChannel, ...]:
+    """The links of ``channel_map`` (:class:`rotorid.model.signals.ChannelMap`) for the
+    signals of ``units`` (name → the system's unit), as :class:`RecordedChannel`s; a control
+    whose unit does not convert (% of travel, a unit of one's own) keeps the link's."""
+    from rotorid.errors import SignalError
+    from rotorid.units import conversion_factor
+
+    found = []
+    for link in channel_map.links:
+        if link.signal not in units:
+            continue
+        try:
+            unit_factor = conversion_factor(link.unit, units[link.signal])
+        except SignalError:
+            unit_factor = 1.0
+        found.append(RecordedChannel(link.signal, link.column, link.scale * unit_factor,
+                                     link.offset * unit_factor))
+    return tuple(found)
+
+
 @attrs.frozen(eq=False)
 class NamedStateSpace:
     """``ẋ = A x + B u``, ``y = C x + D u`` with named signals (immutable).
@@ -50,7 +82,8 @@ class NamedStateSpace:
     ``inputs`` and p ``outputs``. ``units`` maps every signal name to its unit label (the
     structure's unit system, e.g. ``deg/s``; controls in ``%``). ``delays`` lists every delayed
     term; ``pade_order`` is the order of their realisation among the states, 0 when the
-    matrices ignore them.
+    matrices ignore them. ``channels`` says how the inputs and outputs are read from the
+    recorded data, where a channel map links them (:meth:`with_channels`).
     """
 
     a: np.ndarray = attrs.field(converter=_readonly)
@@ -64,6 +97,12 @@ class NamedStateSpace:
     unit_system: str
     delays: tuple[DelayedTerm, ...] = attrs.field(default=(), converter=tuple)
     pade_order: int = 0
+    channels: tuple[RecordedChannel, ...] = attrs.field(default=(), converter=tuple)
+
+    def with_channels(self, channel_map) -> "NamedStateSpace":
+        """This system with the links of ``channel_map`` that read its inputs and outputs."""
+        units = {n: self.units[n] for n in self.inputs + self.outputs}
+        return attrs.evolve(self, channels=recorded_channels(channel_map, units))
 
     def __repr__(self) -> str:
         delays = (f", {len(self.delays)} delays" + (f" (Padé order {self.pade_order})"
@@ -90,7 +129,8 @@ class NamedStateSpace:
                 "A": self.a.tolist(), "B": self.b.tolist(), "C": self.c.tolist(),
                 "D": self.d.tolist(),
                 "delays": [attrs.asdict(term) for term in self.delays],
-                "pade_order": self.pade_order}
+                "pade_order": self.pade_order,
+                "channels": [attrs.asdict(channel) for channel in self.channels]}
 
 
 def pade_realisation(seconds: float, order: int):

@@ -7,9 +7,10 @@ terms and the order of their Padé realisation (0: the matrices ignore the delay
 - ``mat``: a MATLAB file with ``A B C D``, ``StateName InputName OutputName`` and
   ``StateUnit InputUnit OutputUnit`` (cell arrays, as MATLAB's ``ss`` names them),
   ``DelayDerivative DelayEquation DelaySource`` (cell arrays), ``DelaySeconds``, ``PadeOrder``,
-  ``UnitSystem`` and ``Source``;
+  ``UnitSystem``, ``Source`` and the recorded channels, ``ChannelSignal ChannelColumn``
+  (cell arrays), ``ChannelFactor ChannelOffset`` (signal = factor · column + offset);
 - ``csv``: a directory with ``A.csv B.csv C.csv D.csv`` (row and column names in the first
-  column and row), ``signals.csv`` (role, name, unit) and ``delays.csv``;
+  column and row), ``signals.csv`` (role, name, unit), ``delays.csv`` and ``channels.csv``;
 - ``python-control``: a Python file defining the matrices and names and ``system()``, which
   returns ``control.ss(A, B, C, D, states=..., inputs=..., outputs=...)``.
 
@@ -71,6 +72,10 @@ def _write_mat(system: NamedStateSpace, path: Path, source: str) -> None:
         "DelaySeconds": np.array([[t.seconds for t in system.delays]]),
         "PadeOrder": float(system.pade_order), "UnitSystem": system.unit_system,
         "Source": source,
+        "ChannelSignal": _cell([c.signal for c in system.channels]),
+        "ChannelColumn": _cell([c.column for c in system.channels]),
+        "ChannelFactor": np.array([[c.factor for c in system.channels]]),
+        "ChannelOffset": np.array([[c.offset for c in system.channels]]),
     }
     atomic_write(path, lambda handle: savemat(handle, content, oned_as="row"))
 
@@ -103,12 +108,16 @@ def _write_csv(system: NamedStateSpace, path: Path, source: str) -> None:
         [t.derivative, t.equation, t.source, repr(t.seconds), system.pade_order]
         for t in system.delays]
     atomic_write(path / "delays.csv", _csv_text(delays))
+    channels = [["signal", "column", "factor", "offset"]] + [
+        [c.signal, c.column, repr(c.factor), repr(c.offset)] for c in system.channels]
+    atomic_write(path / "channels.csv", _csv_text(channels))
 
 
 _PYTHON = '''"""State-space model exported by rotorid from {source}.
 
 {unit_system} units; states, inputs and outputs with their units in UNITS. DELAYS lists the
-delayed derivative terms (s); {delays_note}
+delayed derivative terms (s); {delays_note} CHANNELS says how a signal is read from the
+recorded data: signal = factor · column + offset, in the signal's unit.
 
     import runpy
     system = runpy.run_path("{name}")["system"]()    # needs python-control
@@ -120,6 +129,7 @@ OUTPUTS = {outputs!r}
 UNITS = {units!r}
 DELAYS = {delays!r}
 PADE_ORDER = {pade_order!r}
+CHANNELS = {channels!r}
 
 A = {a!r}
 B = {b!r}
@@ -145,6 +155,8 @@ def _write_python(system: NamedStateSpace, path: Path, source: str) -> None:
         states=list(system.states), inputs=list(system.inputs), outputs=list(system.outputs),
         units={n: system.units[n] for n in system.states + system.inputs + system.outputs},
         delays=[attrs.asdict(t) for t in system.delays], pade_order=system.pade_order,
+        channels={c.signal: {"column": c.column, "factor": c.factor, "offset": c.offset}
+                  for c in system.channels},
         a=system.a.tolist(), b=system.b.tolist(), c=system.c.tolist(), d=system.d.tolist(),
         system_name=path.stem)
     atomic_write(path, text)

@@ -56,8 +56,24 @@ def run(args) -> int:
     out = refuse_overwrite(args.out, args.force)
     structure = None if args.structure is None else load_model(args.structure)
     identified = load_result(args.result, args.model, structure)
-    system = identified.state_space(args.pade)
+    system = identified.state_space(args.pade).with_channels(
+        _channel_map(args, identified))
     source = args.result + (f", model {identified.model!r}" if identified.model else "")
     write_state_space(system, out, args.format, source)
     print(f"{system!r} written to {out}")
     return ExitStatus.OK
+
+
+def _channel_map(args, identified):
+    """The channel map the identification records were read with: the model file's
+    (``--structure``, else the one the result names), else a study case's ``[data]
+    channels``; empty when there is none."""
+    from rotorid.estimation.result_file import named_model_file
+    from rotorid.model.modelfile import load_channel_map
+    from rotorid.model.signals import ChannelMap
+
+    model_file = args.structure or named_model_file(args.result)
+    if model_file is not None:
+        return load_channel_map(model_file)
+    recorded = identified.ingestion.get("channels")
+    return ChannelMap.from_mapping(recorded) if recorded else ChannelMap()
