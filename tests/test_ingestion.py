@@ -301,3 +301,22 @@ def test_a_sweeps_axis_naming_a_linked_column_becomes_its_channel(tmp_path):
     m = read_maneuver(path, Ingestion(channels=channels))
     assert m.metadata["axis"] == "long"
     assert np.allclose(m.channel("long"), columns["long"])
+
+
+def test_epoch_times_and_microseconds_are_read_as_uniform_time():
+    """A logger's epoch clock (1.76e9 s at 100 Hz, steps jittering by its round-off) is
+    uniform; a time column in µs converts to s; a real jump still stops the read."""
+    from rotorid.data import check_time
+
+    epoch = 1.764e9 + np.arange(500) * 0.01
+    assert check_time(epoch, "log") == pytest.approx(0.01, rel=1e-6)
+    jumped = epoch.copy()
+    jumped[250:] += 0.003
+    with pytest.raises(DataError, match="not uniformly sampled at row 250"):
+        check_time(jumped, "log")
+    time = np.arange(0.0, 2.0, 0.02)
+    columns = _columns(time)
+    columns["TIME_us"] = columns.pop("time") * 1e6
+    m = Maneuver.from_columns("px4", columns, ingestion={
+        "channels": {"TIME_us": {"signal": "time", "unit": "µs"}}})
+    assert m.dt == pytest.approx(0.02)

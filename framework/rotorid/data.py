@@ -51,12 +51,14 @@ def check_time(time: np.ndarray, where: str) -> float:
         raise DataError(f"{where}: channel 'time' does not increase at row {row} "
                         f"({time[row - 1]} → {time[row]})")
     dt = (time[-1] - time[0]) / (time.size - 1)
-    off = np.abs(steps - dt) > UNIFORM_TOLERANCE * max(dt, 1e-12) + 1e-9
+    # differences of large clock times (epoch seconds: 1.8e9 s) carry their round-off
+    rounding = 8.0 * np.finfo(float).eps * float(np.max(np.abs(time)))
+    off = np.abs(steps - dt) > UNIFORM_TOLERANCE * max(dt, 1e-12) + 1e-9 + rounding
     if np.any(off):
         # The first interval that differs from the typical (median) one: a single jump makes
         # every interval differ from the mean.
         typical = float(np.median(steps))
-        far = np.abs(steps - typical) > UNIFORM_TOLERANCE * typical + 1e-9
+        far = np.abs(steps - typical) > UNIFORM_TOLERANCE * typical + 1e-9 + rounding
         row = int(np.flatnonzero(far if far.any() else off)[0]) + 1
         raise DataError(f"{where}: channel 'time' is not uniformly sampled at row {row} "
                         f"(step {steps[row - 1]:.6g} s, expected {typical:.6g} s); resample "

@@ -36,7 +36,7 @@ UNITS = {
     "rad/s²": ("angular acceleration", 1.0), "deg/s²": ("angular acceleration", DEGREE),
     "%": ("travel", 1.0),
     "N": ("force", 1.0), "lbf": ("force", POUND_FORCE),
-    "s": ("time", 1.0), "ms": ("time", 1e-3),
+    "s": ("time", 1.0), "ms": ("time", 1e-3), "us": ("time", 1e-6),
 }
 
 #: Physical kinds of named signals and the dimensions their units may have. A control is a
@@ -193,7 +193,7 @@ def convert_state_space(a, b, states, controls, target: UnitSystem, source: Unit
 
 def canonical_unit(label: str) -> str:
     """The :data:`UNITS` label of ``label`` (``"ft/s^2"`` → ``"ft/s²"``); unknown labels raise."""
-    unit = str(label).strip().replace("^2", "²")
+    unit = str(label).strip().replace("^2", "²").replace("µs", "us")
     if unit not in UNITS:
         raise SignalError(f"unknown unit {label!r}; use one of {', '.join(UNITS)}")
     return unit
