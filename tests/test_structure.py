@@ -274,3 +274,18 @@ def test_a_condition_states_its_airspeed_in_the_unit_systems_speed():
 
     assert flight_label(condition, "si") == "40 m/s"
     assert flight_label(FlightCondition.from_airspeed(0.0), "si") == "hover"
+
+
+def test_figure_titles_name_the_case_where_its_name_says_more_than_its_condition():
+    import types
+
+    from rotorid.report.figures import case_title
+
+    def result(name, airspeed_kt):
+        return types.SimpleNamespace(
+            name=name, condition=FlightCondition.from_airspeed(airspeed_kt),
+            estimates={"no delays": types.SimpleNamespace(units="flight-test")})
+
+    assert case_title(result("hover", 0.0)) == "hover"
+    assert case_title(result("quad-hover", 0.0)) == "quad-hover (hover)"
+    assert case_title(result("forward", 70.0)) == "forward (70 kt)"

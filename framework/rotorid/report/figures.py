@@ -41,6 +41,13 @@ def flight_label(condition, units: str = "flight-test") -> str:
     return "hover" if abs(condition.airspeed_kt) < 0.5 else condition.airspeed_text(units, 0)
 
 
+def case_title(result) -> str:
+    """How figure titles name a case: its flight condition (:func:`flight_label`), after the
+    case's name where that says something else (``"quad-hover (hover)"``)."""
+    label = flight_label(result.condition, result.estimates["no delays"].units)
+    return label if result.name == label else f"{result.name} ({label})"
+
+
 def rmse_caption(path) -> str:
     return ("RMSE (eq. 18) of each converged structure against the number of removed "
             "parameters; the name on the top axis is the parameter removed at that step. The "
@@ -156,7 +163,7 @@ def case_figures(result, figures_dir: Path,
     tally = FigureTally(case_figure_count(result), progress)
     written = {"reduction": [], "delays": [], "time": [], "frequency": [], "bode": []}
     signals = result.structures["with delays"].signals
-    flight = flight_label(result.condition, result.estimates["no delays"].units)
+    flight = case_title(result)
     figure = plot_rmse_path(result.path, title=f"{flight}: RMSE versus removed parameters")
     tally.save(figure, figures_dir / "rmse")
     written["reduction"].append(ReportFigure("rmse.png", rmse_caption(result.path)))
