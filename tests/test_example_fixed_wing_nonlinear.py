@@ -123,3 +123,50 @@ def test_a_time_column_of_the_ranges_own_name_is_linked_in_the_models_map(exampl
     printed = capsys.readouterr()
     assert status == 0, printed.err
     assert "rotorid identify: error" not in printed.err and "Traceback" not in printed.err
+
+
+def test_verify_compares_the_models_simulation_with_its_sweeps(example, tmp_path, capsys):
+    """A result of the model of one's own (here its true coefficients) verified on an
+    elevator sweep flown by the independent solver, in the range's own columns: every pair
+    of the swept elevator is compared through the model's simulation, q/elevator within
+    MUAD."""
+    shutil.copy(EXAMPLE, tmp_path / "fixed_wing_nonlinear.py")
+    result = tmp_path / "result.json"
+    result.write_text(json.dumps({
+        "model": "fixed_wing_nonlinear.py:AEROPLANE",
+        "parameters": {n: {"value": v} for n, v in example.TRUTH.items()}}), encoding="utf-8")
+    alpha, elevator, thrust = example.trim()
+    time = np.arange(0.0, 45.0, 0.02)
+    frequency = 0.5 + (8.0 - 0.5) * time / time[-1]
+    inputs = np.tile([elevator, thrust], (time.size, 1))
+    inputs[:, 0] += 0.01 * np.sin(np.cumsum(frequency) * 0.02)
+    outputs = example.fly(time, inputs, np.array([50.0, alpha, alpha, 0.0]))
+    noisy = outputs + np.random.default_rng(2).normal(size=outputs.shape) * list(
+        example.NOISE.values())
+    sweeps = tmp_path / "sweeps"
+    sweeps.mkdir()
+    np.savetxt(sweeps / "elevator_sweep.csv", np.column_stack([time, noisy, inputs]),
+               delimiter=",", comments="", fmt="%.10g",
+               header="# axis: DELE_rad\n" + ",".join(["time", *example.NOISE, "DELE_rad",
+                                                       "THRUST_N"]))
+    out = tmp_path / "verification"
+    status = main(["verify", str(result), str(sweeps), "--no-figures", "--out", str(out)])
+    printed = capsys.readouterr()
+    assert status == 0, printed.err
+    assert "a model of one's own: compared through its simulation" in printed.out
+    summary = json.loads((out / "verification.json").read_text(encoding="utf-8"))
+    pairs = {p["pair"]: p for p in summary["pairs"]}
+    assert set(pairs) == {f"{o}/elevator" for o in ("V", "alpha", "theta", "q", "q_dot", "ax",
+                                                    "az")}
+    assert pairs["q/elevator"]["checks"]["muad"]["passed"] is True
+
+
+def test_export_of_a_model_of_ones_own_says_what_it_needs(tmp_path, capsys):
+    result = tmp_path / "result.json"
+    result.write_text(json.dumps({"model": "fixed_wing_nonlinear.py:AEROPLANE",
+                                  "parameters": {"C_L0": {"value": 0.25}}}), encoding="utf-8")
+    assert main(["export", str(result), "--format", "json", "--out",
+                 str(tmp_path / "m.json")]) == 3
+    error = capsys.readouterr().err
+    assert "a model of one's own (fixed_wing_nonlinear.py:AEROPLANE), which has no linear " \
+           "structure: rotorid verify compares its simulation" in error

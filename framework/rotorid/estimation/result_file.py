@@ -187,6 +187,20 @@ def named_model_file(path: str | os.PathLike) -> Path | None:
     return _model_file(read_json_object(path, "result file"), path)
 
 
+def named_model_reference(path: str | os.PathLike) -> str | None:
+    """The model of one's own that the ``rotorid identify`` result ``path`` names
+    (``file.py:Name`` with the file relative to the result's folder, or
+    ``package.module:Name``), or None when it names none."""
+    path = Path(path)
+    named = read_json_object(path, "result file").get("model")
+    if not isinstance(named, str) or ":" not in named:
+        return None
+    where, _, name = named.rpartition(":")
+    if where.endswith(".py") and not Path(where).is_absolute():
+        where = str(path.parent / where)
+    return f"{where}:{name}"
+
+
 def _model_file(record: Mapping, path: Path) -> Path | None:
     described = record.get("structure")
     if not isinstance(described, str):
@@ -202,6 +216,11 @@ def _described_structure(record: Mapping, path: Path) -> ModelStructure:
     described = record.get("structure")
     if isinstance(described, Mapping):
         return parse_model(described, f"{path} (embedded structure)")
+    if isinstance(record.get("model"), str):
+        raise DataFileError(f"{path}: the result is of a model of one's own "
+                            f"({record['model']}), which has no linear structure: rotorid "
+                            f"verify compares its simulation with sweeps; export and the "
+                            f"structure-based tools need a model file")
     raise DataFileError(f"{path}: the result names no model structure; give the model file "
                         f"it was estimated with")
 

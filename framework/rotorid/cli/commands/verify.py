@@ -118,7 +118,7 @@ def _split(files: list[str]):
     return model, Path(rest[0]), rest[1:]
 
 
-def load_sweeps(locations, units: str | None = None, ingestion=None):
+def load_sweeps(locations, units: str | None = None, ingestion=None, convert=None):
     """(sweeps, left out): the maneuvers of files, directories or patterns
     (:func:`rotorid.cli.files.load_maneuvers`), only the ``sweep`` ones when the maneuvers carry
     ``kind`` metadata, without those that sweep none of the model's controls
@@ -128,6 +128,8 @@ def load_sweeps(locations, units: str | None = None, ingestion=None):
     from rotorid.errors import VerificationError
 
     sweeps = load_maneuvers(locations, units=units, ingestion=ingestion)
+    if convert is not None:                  # into a model of one's own's signals
+        sweeps = convert(sweeps)
     if any("kind" in m.metadata for m in sweeps):
         sweeps = sweeps.select(kind="sweep")
     left_out = {m.name: reason for m in sweeps if (reason := _not_sweeping(m)) is not None}
@@ -218,63 +220,128 @@ def run(args) -> int:
 
     matplotlib.use("Agg")
 
-    from rotorid.actuators import lagged_inputs
-    from rotorid.cli.arguments import trim_text
     from rotorid.cli.files import refuse_overwrite
-    from rotorid.errors import ExitStatus, VerificationError
-    from rotorid.estimation.result_file import load_result
-    from rotorid.io import atomic_write, jsonable
-    from rotorid.model.modelfile import load_channel_map, load_model
-    from rotorid.progress import Countdown
-    from rotorid.report.plots.case import save_figure
-    from rotorid.report.plots.frequency import plot_bode, plot_error
+    from rotorid.estimation.result_file import named_model_reference
     from rotorid.verification.compare import envelopes_by_name
-    from rotorid.verification.verify import verify_model
-    from rotorid.verification.producible import producible_pairs
 
     model, result_path, locations = _split(args.files)
     band = parse_band(args.band)
     refuse_overwrite(Path(args.out) / "verification.json", args.force)
+    envelopes = envelopes_by_name(names(args.envelopes), band=band)
+    reference = None if model is not None else named_model_reference(result_path)
+    if reference is not None:
+        verification, signals, sweeps, skipped = _verify_own_model(
+            args, reference, result_path, locations, band, envelopes)
+    else:
+        verification, signals, sweeps, skipped = _verify_structure(
+            args, model, result_path, locations, band, envelopes)
+    return _write(args, verification, signals, sweeps, skipped, result_path, envelopes)
+
+
+def _read_sweeps(args, locations, units, ingestion, warnings_of, convert=None):
+    """The sweeps as :func:`load_sweeps` reads them with ``ingestion`` (``--trim`` in place of
+    the recorded trim), with a line for each trim, left-out sweep and data warning
+    (``warnings_of(sweeps)``)."""
+    from rotorid.cli.arguments import trim_text
+
+    if args.trim is not None:
+        ingestion["trim"] = args.trim
+    if ingestion.get("trim") is not None:
+        how = "--trim" if args.trim is not None else "the identification records' trim removal"
+        print(f"sweeps read with {how}: {trim_text(ingestion['trim'])}")
+    sweeps, left_out = load_sweeps(locations, units, ingestion, convert)
+    for name, reason in left_out.items():
+        print(f"left out {name}: {reason}")
+    for warning in warnings_of(sweeps):
+        print(f"warning: {warning}")
+    return sweeps
+
+
+def _verify_structure(args, model, result_path, locations, band, envelopes):
+    """(verification, signals, sweeps, skipped pairs) of a linear structure's result."""
+    from rotorid.actuators import lagged_inputs
+    from rotorid.errors import VerificationError
+    from rotorid.estimation.result_file import load_result
+    from rotorid.model.modelfile import load_channel_map, load_model
+    from rotorid.progress import Countdown
+    from rotorid.verification.producible import producible_pairs
+    from rotorid.verification.verify import verify_model
+
     identified = load_result(result_path, args.model,
                              None if model is None else load_model(model))
     structure, values = identified.structure, identified.values
     model_file = _model_file(model, result_path)
     ingestion = {"signals": structure.signals, **identified.ingestion}
-    if args.trim is not None:
-        ingestion["trim"] = args.trim
     if model_file is not None:
         ingestion["channels"] = load_channel_map(model_file)
-    if ingestion.get("trim") is not None:
-        how = "--trim" if args.trim is not None else "the identification records' trim removal"
-        print(f"sweeps read with {how}: {trim_text(ingestion['trim'])}")
-    sweeps, left_out = load_sweeps(locations, structure.units.name, ingestion)
+    sweeps = _read_sweeps(args, locations, structure.units.name, ingestion,
+                          lambda read: _data_warnings(read, structure))
     if identified.actuator_lag_s is not None:
         sweeps = lagged_inputs(sweeps, identified.actuator_lag_s, identified.actuator_inputs)
         print(f"sweep inputs through the identification's {identified.actuator_lag_s:g} s "
               f"actuator lag")
-    for name, reason in left_out.items():
-        print(f"left out {name}: {reason}")
-    for warning in _data_warnings(sweeps, structure):
-        print(f"warning: {warning}")
     selection = producible_pairs(structure, values, sweeps,
                                  chosen_pairs(args.pairs, sweeps, structure.outputs,
                                               structure.controls))
     if not selection.pairs:
         raise VerificationError("no pair can be verified: " + "; ".join(
             f"{pair}: {reason}" for pair, reason in selection.skipped.items()))
-    envelopes = envelopes_by_name(names(args.envelopes), band=band)
     log = logging.getLogger("rotorid.verify")
     log.info("verifying %s on %d sweep(s)", ", ".join(selection.pairs), len(sweeps))
     compared = Countdown(len(selection.pairs))
     verification = verify_model(
         structure, values, sweeps, selection.pairs, envelopes, band=band,
         on_pair=lambda item: log.info("%s compared %s", item.pair, compared.step()))
+    return verification, structure.signals, sweeps, selection.skipped
 
+
+def _verify_own_model(args, reference, result_path, locations, band, envelopes):
+    """(verification, signals, sweeps, no skipped pairs) of a model of one's own's result
+    (:mod:`rotorid.verification.integrated`)."""
+    from rotorid.data import ManeuverSet
+    from rotorid.errors import UsageError
+    from rotorid.io import read_json_object
+    from rotorid.model.reference import load_model_reference
+    from rotorid.model.signals import ChannelMap
+    from rotorid.verification.integrated import signal_sweeps, verify_integrated
+
+    if args.model is not None:
+        raise UsageError(f"{result_path} is a `rotorid identify` result holding one model; "
+                         f"--model applies to study results only")
+    own = load_model_reference(reference)
+    record = read_json_object(result_path, "result file")
+    values = {name: entry["value"] for name, entry in record.get("parameters", {}).items()
+              if isinstance(entry, dict) and "value" in entry}
+    recorded = record.get("ingestion") if isinstance(record.get("ingestion"), dict) else {}
+    ingestion = {**recorded, "keep_columns": own.columns,
+                 "channels": ChannelMap([link for link in own.channels.links
+                                         if link.signal == "time"], own.channels.source)}
+    recorded = {}
+
+    def in_signals(read):                   # the sweeps are chosen by the model's inputs
+        recorded.update({m.name: m for m in read})
+        return signal_sweeps(own, read)
+
+    sweeps = _read_sweeps(args, locations, None, ingestion, lambda read: [], in_signals)
+    raw = ManeuverSet([recorded[m.name] for m in sweeps], hold=sweeps.hold)
+    pairs = None if args.pairs is None else names(args.pairs)
+    verification = verify_integrated(own, values, raw, pairs, envelopes, band=band)
+    return verification, own.signals, sweeps, {}
+
+
+def _write(args, verification, signals, sweeps, skipped, result_path, envelopes) -> int:
+    """Figures, ``verification.json`` and the report of ``verification``; the exit status."""
+    from rotorid.errors import ExitStatus
+    from rotorid.io import atomic_write, jsonable
+    from rotorid.progress import Countdown
+    from rotorid.report.plots.case import save_figure
+    from rotorid.report.plots.frequency import plot_bode, plot_error
+
+    log = logging.getLogger("rotorid.verify")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     shown = [e for e in envelopes.values() if e.kind == "bounds"]
     drawn = Countdown(len(verification.pairs))
-    signals = structure.signals
     for item in () if args.no_figures else verification.pairs:
         stem = item.pair.replace("/", "_")
         save_figure(plot_error(item, shown), out / f"error_{stem}", formats=("png",))
@@ -286,12 +353,12 @@ def run(args) -> int:
     for entry, item in zip(summary["pairs"], verification.pairs):
         entry["frequency_response"] = response_arrays(item)
     summary["skipped_pairs"] = [{"pair": pair, "reason": reason}
-                                for pair, reason in selection.skipped.items()]
+                                for pair, reason in skipped.items()]
     summary["result"] = str(result_path)
     summary["sweeps"] = list(sweeps.names)
     atomic_write(out / "verification.json",
                  json.dumps(jsonable(summary), indent=1, allow_nan=False))
-    for pair, reason in selection.skipped.items():
+    for pair, reason in skipped.items():
         print(f"skipped {pair}: {reason}")
     print(verification.report())
     print(f"{'verification.json' if args.no_figures else 'figures and verification.json'} "
