@@ -387,7 +387,9 @@ def mode_rows(result) -> list[list[str]]:
     rows = [["model", "eigenvalue [1/s]", "ω_n [rad/s]", "ζ", "time constant [s]",
              "in words", "states"]]
     for label in result.models:
-        for mode in modes(result.structures[label], result.estimates[label].values):
+        structure, estimate = result.structures[label], result.estimates[label]
+        values = [estimate[name].value for name in structure.parameter_names]
+        for mode in modes(structure, values):
             value = mode.eigenvalue
             rows.append([
                 result.model_name(label),

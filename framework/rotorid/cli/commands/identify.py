@@ -189,7 +189,7 @@ def _modes_report(structure, estimate) -> str:
     """The identified model's modes, one line each (:mod:`rotorid.model.modes`)."""
     from rotorid.model.modes import modes
 
-    values = estimate.values[:len(structure.parameter_names)]     # without record parameters
+    values = [estimate[name].value for name in structure.parameter_names]  # not noise, records
     lines = ["[[Modes]] (A with delays set to zero, slowest first)"]
     for mode in modes(structure, values):
         value = mode.eigenvalue
