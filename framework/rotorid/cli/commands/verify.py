@@ -24,7 +24,9 @@ the model uses (a ``longitudinal`` model verifies on sweeps without lateral colu
 of a control the model lacks (``axis`` metadata, or none of the model's controls moving in
 it) is left out with a line saying so, so a directory holding every axis's sweeps can be
 given. A result identified with the actuators' lag (``actuator_lag_s``,
-:mod:`rotorid.actuators`) has the sweeps' inputs put through the same lag.
+:mod:`rotorid.actuators`) has the sweeps' inputs put through the same lag. A result of a
+model of one's own (``model``: ``file.py:Name``) is verified through its simulation of the
+sweeps, read through its own channel map (:mod:`rotorid.verification.integrated`).
 
 Pairs are ``OUTPUT/INPUT`` names of the model's signals; by default the paper's pairs the model
 has (q/long and az/coll for the ``longitudinal`` template), else every output over every input
