@@ -170,7 +170,7 @@ FLAT_PROFILE = 0.01
 def _undetermined_at(profile, value: float) -> bool:
     """Whether the data cannot tell delay ``value`` (s) from the identified one: the profile,
     interpolated at ``value``, costs less than :data:`FLAT_PROFILE` more RMSE."""
-    return float(np.interp(value, profile.grid, profile.relative_rmse())) < FLAT_PROFILE
+    return float(np.interp(value, profile.grid, profile.relative_rmse)) < FLAT_PROFILE
 
 
 @pytest.mark.slow
