@@ -110,9 +110,8 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
     # extra channels
     for_model = bool(ingestion.signals is not None or ingestion.keep_columns
                      or ingestion.channels.links)
-    linked = {link.column: link.signal for link in ingestion.channels.links}
-    if isinstance(header.get("axis"), str) and header["axis"] in linked:
-        header = {**header, "axis": linked[header["axis"]]}      # the column a sweep moves
+    if isinstance(header.get("axis"), str):                     # the column a sweep moves
+        header = {**header, "axis": ingestion.channels.signal_of(header["axis"])}
     try:
         columns, ingestion = ingestion.mapped(columns, str(path))
     except DataError as error:

@@ -26,9 +26,9 @@ from rotorid.estimation.fit_notes import held_delay_note, outlying_maneuvers
 from rotorid.estimation.models import (
     LinearModel,
     as_model,
-    finite_difference_sensitivities,
     gauss_newton_products,
     measured_outputs,
+    output_sensitivities,
 )
 from rotorid.estimation.whiteness import coloured_text
 from rotorid.model.derivatives import delayed_derivative
@@ -133,11 +133,13 @@ class OutputErrorEstimator:
         elif result.iterations == 0:
             result = attrs.evolve(result, converged=True, stop_reason=(
                 "the earlier stages already reached the minimum of the full records"))
-        _warn_exact_outputs(result, [z[:, columns] for z in measured_outputs(fitted, maneuvers)],
-                            weights, [fitted.output_names[c] for c in columns], self.noise)
+        measured = [z[:, columns] for z in measured_outputs(fitted, maneuvers)]
+        _warn_exact_outputs(result, measured, weights,
+                            [fitted.output_names[c] for c in columns], self.noise)
         estimate = self._estimate(fitted, base, result, start_values, notes,
                                   sum(m.n_samples for m in maneuvers), columns)
-        return self._residual_statistics(estimate, base, fitted, maneuvers, columns, weights)
+        return self._residual_statistics(estimate, base, fitted, maneuvers, measured, columns,
+                                         weights)
 
     # ----------------------------------------------------------------- steps
     def _best_of_starts(self, base, fitted, maneuvers, columns, weights, start_values, notes):
@@ -342,14 +344,13 @@ class OutputErrorEstimator:
             units=structure.units.name if structure is not None else "model",
             notes=tuple(notes))
 
-
-    def _residual_statistics(self, estimate, base, fitted, maneuvers, columns, weights):
+    def _residual_statistics(self, estimate, base, fitted, maneuvers, measured, columns,
+                             weights):
         """``estimate`` with notes on its residuals (maneuvers that stand out, residuals that
         are not white), on delays the zero-order hold hides, and, with
         :attr:`coloured_residuals`, its bounds and correlations for the residuals'
-        correlation."""
+        correlation; ``measured`` are the fitted outputs ``columns`` per maneuver."""
         selected = _SelectedOutputs(fitted, columns)
-        measured = [z[:, columns] for z in measured_outputs(fitted, maneuvers)]
         residuals = [z - y for z, y in
                      zip(measured, selected.simulate(estimate.values, maneuvers))]
         structure = getattr(base, "structure", None)
@@ -365,11 +366,7 @@ class OutputErrorEstimator:
                              f"understate the scatter: coloured_residuals = true (identify "
                              f"--coloured-residuals) widens them for that correlation")
             return attrs.evolve(estimate, notes=(*estimate.notes, *notes))
-        if hasattr(fitted, "sensitivities"):
-            _, sensitivities = fitted.sensitivities(estimate.values, maneuvers)
-        else:
-            _, sensitivities = finite_difference_sensitivities(fitted, estimate.values,
-                                                               maneuvers)
+        _, sensitivities = output_sensitivities(fitted, estimate.values, maneuvers)
         sensitivities = [s[:, :, columns] for s in sensitivities]
         weighting = weights[:, None] * np.linalg.inv(estimate.noise_covariance) * weights
         covariance, lags = coloured_covariance(sensitivities, residuals, weighting,

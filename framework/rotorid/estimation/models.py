@@ -74,6 +74,14 @@ def finite_difference_sensitivities(model, values, maneuvers: ManeuverSet,
     return outputs, sens
 
 
+def output_sensitivities(model, values, maneuvers: ManeuverSet):
+    """Outputs (N_i, n_o) and sensitivities (N_i, P, n_o) per maneuver: the model's own
+    ``sensitivities`` where it has them, else central differences."""
+    if hasattr(model, "sensitivities"):
+        return model.sensitivities(values, maneuvers)
+    return finite_difference_sensitivities(model, values, maneuvers)
+
+
 def gauss_newton_products(model, values, maneuvers: ManeuverSet, residuals, weighting):
     """F = Σ Jᵀ Q J and G = −Σ Jᵀ Q e over all samples of all maneuvers, J = ∂y/∂θ.
 
@@ -88,10 +96,7 @@ def gauss_newton_products(model, values, maneuvers: ManeuverSet, residuals, weig
     """
     if hasattr(model, "gauss_newton"):
         return model.gauss_newton(values, maneuvers, residuals, weighting)
-    if hasattr(model, "sensitivities"):
-        _, sens = model.sensitivities(values, maneuvers)
-    else:
-        _, sens = finite_difference_sensitivities(model, values, maneuvers)
+    _, sens = output_sensitivities(model, values, maneuvers)
     factor = weighting_factor(weighting)
     p = len(values)
     f = np.zeros((p, p))

@@ -44,6 +44,13 @@ class Mode:
         """For a real mode, −1/λ in s (negative: it grows); inf at λ = 0."""
         return -1.0 / self.eigenvalue.real if self.eigenvalue.real else math.inf
 
+    @property
+    def eigenvalue_text(self) -> str:
+        """``"-1.133 ± 2.301j"`` for a pair, ``"-6.915"`` for a real mode."""
+        value = self.eigenvalue
+        return (f"{value.real:.4g} ± {value.imag:.4g}j" if self.oscillatory
+                else f"{value.real:.4g}")
+
     def describe(self) -> str:
         """``"ω_n 2.59 rad/s, ζ 0.227"`` or ``"time constant 0.17 s"`` (``"doubles in 3.1 s"``
         when it grows)."""

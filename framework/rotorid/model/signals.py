@@ -207,6 +207,14 @@ class ChannelMap:
                 raise SignalError(f"{source}: channel {column!r}: {error}") from None
         return cls(links, source)
 
+    def signal_of(self, column: str) -> str:
+        """The signal ``column`` is linked to, else the column's own name."""
+        return next((link.signal for link in self.links if link.column == column), column)
+
+    def time_links(self) -> "ChannelMap":
+        """This map's links of the records' time column only (for a file reader)."""
+        return ChannelMap([link for link in self.links if link.signal == "time"], self.source)
+
     def link(self, signal: str) -> ChannelLink | None:
         """The link of ``signal``, or None when it is read from its own column name."""
         return next((link for link in self.links if link.signal == signal), None)

@@ -390,11 +390,8 @@ def mode_rows(result) -> list[list[str]]:
         structure, estimate = result.structures[label], result.estimates[label]
         values = [estimate[name].value for name in structure.parameter_names]
         for mode in modes(structure, values):
-            value = mode.eigenvalue
             rows.append([
-                result.model_name(label),
-                f"{value.real:.4g} ± {value.imag:.4g}j" if mode.oscillatory
-                else f"{value.real:.4g}",
+                result.model_name(label), mode.eigenvalue_text,
                 _number(mode.frequency, 3) if mode.oscillatory else "–",
                 _number(mode.damping, 3) if mode.oscillatory else "–",
                 "–" if mode.oscillatory else _number(mode.time_constant, 3),

@@ -24,13 +24,12 @@ def signal_sweeps(model: IntegratedModel, sweeps: ManeuverSet) -> ManeuverSet:
     """``sweeps`` in the model's own signals: its inputs and measured outputs read through
     its channel map (signal units), a sweep's ``axis`` naming a linked column read as the
     input it links."""
-    linked = {link.column: link.signal for link in model.channels.links}
     inputs = model.signals.inputs.names
     read = []
     for m in sweeps:
         metadata = dict(m.metadata)
-        if metadata.get("axis") in linked:
-            metadata["axis"] = linked[metadata["axis"]]
+        if isinstance(metadata.get("axis"), str):
+            metadata["axis"] = model.channels.signal_of(metadata["axis"])
         [record] = model.records(ManeuverSet([m]))
         read.append(Maneuver(m.name, m.time, record.inputs, model.measured(ManeuverSet([m]))[0],
                              units=m.units, metadata=metadata, input_names=inputs,

@@ -149,16 +149,6 @@ def add_arguments(parser) -> None:
                              "is written all the same)")
 
 
-def _time_links(model):
-    """The links of a model of one's own's channel map that name the files' time column
-    (``IRIG_TIME = { signal = "time", unit = "s" }``), for the file reader."""
-    from rotorid.model.signals import ChannelMap
-
-    channels = getattr(model, "channels", ChannelMap())
-    return ChannelMap([link for link in channels.links if link.signal == "time"],
-                      channels.source)
-
-
 def _frequency_options(args) -> dict:
     """``--pairs`` and ``--band``, the frequency-response estimator's (a usage error with
     another estimator or a band that is not two increasing frequencies)."""
@@ -192,10 +182,8 @@ def _modes_report(structure, estimate) -> str:
     values = [estimate[name].value for name in structure.parameter_names]  # not noise, records
     lines = ["[[Modes]] (A with delays set to zero, slowest first)"]
     for mode in modes(structure, values):
-        value = mode.eigenvalue
-        text = (f"{value.real:.4g} ± {value.imag:.4g}j" if mode.oscillatory
-                else f"{value.real:.4g}")
-        lines.append(f"  {text:<22} {mode.describe():<32} {', '.join(mode.states)}")
+        lines.append(f"  {mode.eigenvalue_text:<22} {mode.describe():<32} "
+                     f"{', '.join(mode.states)}")
     return "\n".join(lines)
 
 
@@ -366,7 +354,8 @@ def run(args) -> int:
             ingestion = ingestion_settings(args)
             if by_reference:
                 ingestion["keep_columns"] = getattr(model, "columns", ())
-                ingestion["channels"] = _time_links(model)
+                if hasattr(model, "channels"):     # IRIG_TIME = { signal = "time", … }
+                    ingestion["channels"] = model.channels.time_links()
             else:
                 ingestion["channels"] = load_channel_map(args.model)
                 ingestion["signals"] = model.signals

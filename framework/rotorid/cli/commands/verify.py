@@ -304,7 +304,6 @@ def _verify_own_model(args, reference, result_path, locations, band, envelopes):
     from rotorid.errors import UsageError
     from rotorid.io import read_json_object
     from rotorid.model.reference import load_model_reference
-    from rotorid.model.signals import ChannelMap
     from rotorid.verification.integrated import signal_sweeps, verify_integrated
 
     if args.model is not None:
@@ -314,18 +313,16 @@ def _verify_own_model(args, reference, result_path, locations, band, envelopes):
     record = read_json_object(result_path, "result file")
     values = {name: entry["value"] for name, entry in record.get("parameters", {}).items()
               if isinstance(entry, dict) and "value" in entry}
-    recorded = record.get("ingestion") if isinstance(record.get("ingestion"), dict) else {}
-    ingestion = {**recorded, "keep_columns": own.columns,
-                 "channels": ChannelMap([link for link in own.channels.links
-                                         if link.signal == "time"], own.channels.source)}
-    recorded = {}
+    settings = record.get("ingestion") if isinstance(record.get("ingestion"), dict) else {}
+    ingestion = {**settings, "keep_columns": own.columns, "channels": own.channels.time_links()}
+    as_recorded = {}
 
     def in_signals(read):                   # the sweeps are chosen by the model's inputs
-        recorded.update({m.name: m for m in read})
+        as_recorded.update({m.name: m for m in read})
         return signal_sweeps(own, read)
 
     sweeps = _read_sweeps(args, locations, None, ingestion, lambda read: [], in_signals)
-    raw = ManeuverSet([recorded[m.name] for m in sweeps], hold=sweeps.hold)
+    raw = ManeuverSet([as_recorded[m.name] for m in sweeps], hold=sweeps.hold)
     pairs = None if args.pairs is None else names(args.pairs)
     verification = verify_integrated(own, values, raw, pairs, envelopes, band=band)
     return verification, own.signals, sweeps, {}
