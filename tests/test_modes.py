@@ -33,3 +33,50 @@ def test_a_pitch_pair_and_a_roll_subsidence_by_their_closed_forms():
     assert pair.describe() == f"ω_n {abs(pair.eigenvalue):.3g} rad/s, ζ {pair.damping:.3g}"
     assert math.isinf(next(m for m in found if m.eigenvalue == 0).time_constant)
     assert Mode(0.2 + 0j, ("u",)).describe() == f"doubles in {math.log(2) / 0.2:.3g} s"
+
+
+def _damped_sway(y_v: float):
+    structure = parse_model({"units": "si", "condition": {"airspeed_kt": 0.0},
+                             "structure": {"populate": "none"},
+                             "derivatives": {"Y_v": {}, "Y_lat": {}, "L_v": {}, "L_p": {},
+                                             "L_lat": {}}},
+                            "sway")
+    return structure, {"Y_v": y_v, "Y_lat": 20.0, "L_v": -0.5, "L_p": -4.0, "L_lat": 5.0}
+
+
+def test_a_mode_settled_within_two_samples_is_named_with_the_derivatives_that_set_it():
+    """Y_v = −100 1/s gives a real mode at −100 (v's row holds Y_v alone: closed form) that
+    settles within two samples at 0.01 s (|λ|·dt = 1) but not at 0.001 s (0.1); the roll
+    subsidence at −4 is never named."""
+    from rotorid.estimation.fit_notes import fast_modes_note
+
+    structure, values = _damped_sway(-100.0)
+    note = fast_modes_note(structure, values, 0.01)
+    assert note is not None and "-100 1/s" in note and "time constant 0.01 s" in note
+    assert "set by Y_v;" in note and "L_p" not in note
+    assert fast_modes_note(structure, values, 0.001) is None
+    assert fast_modes_note(structure, {**values, "Y_v": -0.3}, 0.01) is None
+
+
+def test_output_error_names_the_fast_mode_of_its_fit():
+    """Fitted to data its own model simulated with Y_v = −80 1/s at 0.01 s, output error
+    recovers that mode and says so in its notes."""
+    import rotorid
+    from rotorid.data import Maneuver, ManeuverSet
+    from rotorid.simulation.simulator import simulate
+
+    structure, values = _damped_sway(-80.0)
+    time = np.arange(0.0, 6.0, 0.01)
+    pulse = np.zeros((time.size, structure.n_controls))
+    pulse[(time > 1.0) & (time < 1.5), structure.controls.index("lat")] = 1.0
+    blank = np.zeros((time.size, len(structure.outputs)))
+    plain = ManeuverSet([Maneuver(f"lat{sign:+.0f}", time, sign * pulse, blank, units="si",
+                                  input_names=structure.controls,
+                                  output_names=structure.outputs) for sign in (1.0, -1.0)])
+    rng = np.random.default_rng(7)
+    recorded = ManeuverSet([m.with_outputs(y + rng.normal(0.0, 1e-4, y.shape))
+                            for m, y in zip(plain, simulate(structure, values, plain))])
+    estimate = rotorid.create("estimators", "output-error").estimate(structure, recorded)
+    assert estimate.value("Y_v") == pytest.approx(-80.0, rel=0.05)
+    assert any(n.startswith("modes faster than the records resolve") and "Y_v" in n
+               for n in estimate.notes)

@@ -1,6 +1,7 @@
 """Study figures, tables and reports; the key-derivative sign check; the README's main command."""
 
 import csv
+import html
 import json
 import math
 import re
@@ -159,6 +160,12 @@ def test_the_quick_hover_study_writes_a_complete_linked_report(quick_study):
         assert min(profile["det_r"]) >= profile["free_det_r"] * (1 - 1e-3), profile["delay"]
     signs = {row[0]: row for row in _read_csv(case / "tables" / "key_derivatives.csv")[1:]}
     assert signs["Z_w"][8] == "agrees"      # heave damping: robustly negative in hover
+    # Every note of the final fits appears in the report's fit notes, with its models.
+    fit_section = report.split('<h2 id="fit-notes">')[1].split("<h2")[0]
+    for label, estimate in record["estimates"].items():
+        for note in estimate["notes"]:
+            item = fit_section.split(html.escape(note))[1].split("</li>")[0]
+            assert label in item, (note, item)
 
 
 #: τ_f = 16/(γΩ) of the Bo-105 rotor, s (truth-model.md §9).

@@ -47,6 +47,7 @@ from rotorid import blas
 from rotorid.data import ManeuverSet
 from rotorid.errors import EstimationError, IdentifiabilityWarning, SimulationDivergedError
 from rotorid.estimation.estimate import Estimate
+from rotorid.estimation.fit_notes import fast_modes_note
 from rotorid.estimation.models import LinearModel
 from rotorid.estimation.whiteness import whiteness_note
 from rotorid.model.parameter_units import rate_unit
@@ -693,6 +694,11 @@ def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
     coloured = whiteness_note(innovations, problem.output_names, problem.sample_time * every)
     if coloured:
         notes.append(coloured)
+    structure = getattr(problem, "structure", None)
+    if isinstance(structure, ModelStructure):
+        fast = fast_modes_note(structure, values[:structure.n_parameters], problem.sample_time)
+        if fast:
+            notes.append(fast)
     unmeasured = unmeasured_gusts(problem)
     if unmeasured:
         notes.append(f"no output measures {', '.join(unmeasured)}: each such gust's size G "

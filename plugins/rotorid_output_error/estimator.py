@@ -22,7 +22,7 @@ from rotorid.data import ManeuverSet
 from rotorid.errors import DataWarning, EstimationError, SimulationDivergedError
 from rotorid.estimation.coloured_residuals import coloured_covariance
 from rotorid.estimation.estimate import Estimate
-from rotorid.estimation.fit_notes import held_delay_note, outlying_maneuvers
+from rotorid.estimation.fit_notes import fast_modes_note, held_delay_note, outlying_maneuvers
 from rotorid.estimation.models import (
     LinearModel,
     as_model,
@@ -356,7 +356,9 @@ class OutputErrorEstimator:
         structure = getattr(base, "structure", None)
         notes = [note for note in (
             outlying_maneuvers(residuals, maneuvers.names, estimate.noise_covariance),
-            None if structure is None else held_delay_note(structure, maneuvers.hold))
+            None if structure is None else held_delay_note(structure, maneuvers.hold),
+            None if structure is None else fast_modes_note(
+                structure, _structure_values(structure, estimate), maneuvers[0].dt))
             if note is not None]
         coloured = coloured_text(residuals, selected.output_names, maneuvers[0].dt,
                                  "residuals")
@@ -383,6 +385,11 @@ class OutputErrorEstimator:
                 f"{factor:.2f} times the white-residual bounds (median)")
         return attrs.evolve(estimate, cramer_rao=bounds, correlation=correlation,
                             notes=(*estimate.notes, *notes, note))
+
+
+def _structure_values(structure: ModelStructure, estimate: Estimate) -> dict[str, float]:
+    """The structure's own parameters of ``estimate`` (the per-maneuver ones left out)."""
+    return {name: estimate.value(name) for name in structure.parameter_names}
 
 
 def _problem(model, maneuvers, columns, weights, settings) -> Problem:

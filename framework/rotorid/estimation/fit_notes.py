@@ -1,5 +1,6 @@
 """Notes on a finished fit that point at the data or the setup: maneuvers whose residuals
-stand out, and delays the zero-order hold hides from an output."""
+stand out, delays the zero-order hold hides from an output, and modes faster than the records
+resolve."""
 
 from __future__ import annotations
 
@@ -7,9 +8,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from rotorid.model.modes import modes
+
 #: A maneuver whose residual power, per output in units of R, exceeds this multiple of the
 #: maneuvers' median stands out.
 OUTLIER_FACTOR = 4.0
+#: A mode whose |λ| times the records' sample time exceeds this settles within two samples.
+FAST_MODE_STEP = 0.5
 
 
 def outlying_maneuvers(residuals: Sequence[np.ndarray], names: Sequence[str],
@@ -67,3 +72,42 @@ def held_delay_note(structure, hold: str) -> str | None:
             f"read the same held input for any delay below one sample: those outputs see the "
             f"delay only through the states; for inputs recorded from moving controls use the "
             f"first-order hold (--hold foh)")
+
+
+def _setting_derivatives(structure, vector: np.ndarray, states: Sequence[str]) -> list[str]:
+    """The free derivatives of ``structure`` that enter A where both the row and the column
+    are among ``states`` (the terms that set a mode carried by those states)."""
+    index = [structure.states.index(s) for s in states]
+    block = np.ix_(index, index)
+    nominal = structure.matrices(vector)[0][block]
+    found = []
+    for i, (name, delay) in enumerate(zip(structure.parameter_names, structure.is_delay())):
+        if delay:
+            continue
+        stepped = vector.copy()
+        stepped[i] += 1.0
+        if np.any(structure.matrices(stepped)[0][block] != nominal):
+            found.append(name)
+    return found
+
+
+def fast_modes_note(structure, values, sample_time: float) -> str | None:
+    """A note naming the modes of the fitted ``structure`` (a ModelStructure; ``values`` its
+    parameter vector or a name → value mapping) that settle within two samples of
+    ``sample_time`` s (|λ|·dt > :data:`FAST_MODE_STEP`), with the derivatives that set each;
+    None when there is none. The records show such a mode's quasi-static gain only, so those
+    derivatives are not determined one by one (a rigid body's velocity damping of 100 1/s
+    standing in for a motor's lag)."""
+    fast = [m for m in modes(structure, values) if m.frequency * sample_time > FAST_MODE_STEP]
+    if not fast:
+        return None
+    vector = structure.as_vector(values)
+    listed = "; ".join(
+        f"{mode.eigenvalue_text} 1/s ({mode.describe()}, in {', '.join(mode.states)}), set by "
+        f"{', '.join(_setting_derivatives(structure, vector, mode.states)) or 'known terms'}"
+        for mode in fast)
+    return (f"modes faster than the records resolve (settled within two samples of "
+            f"{sample_time:g} s): {listed}; the data determine such a mode's quasi-static gain, "
+            f"not the derivatives that set it. Unless the aircraft has a mode that fast, it "
+            f"stands in for dynamics the structure lacks (actuator or motor lags, delays, rotor "
+            f"states): add those (an actuator lag, delays), or fix or remove those derivatives")

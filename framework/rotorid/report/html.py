@@ -412,6 +412,32 @@ def modes_html(result) -> str:
         _html_table(mode_rows(result))])
 
 
+def fit_notes(result) -> dict[str, list[str]]:
+    """The final estimates' notes (residuals, modes, maneuvers that stand out), each once:
+    note → the model labels whose fit left it, in the estimates' order."""
+    found: dict[str, list[str]] = {}
+    for label, estimate in result.estimates.items():
+        for note in estimate.notes:
+            found.setdefault(note, []).append(label)
+    return found
+
+
+def fit_notes_html(result) -> str:
+    """The case report's section on what the final fits noted about the data and the
+    structure (empty when they noted nothing)."""
+    notes = fit_notes(result)
+    if not notes:
+        return ""
+    return "\n".join([
+        '<h2 id="fit-notes">Fit notes</h2>',
+        "<p>What the estimator recorded at the final fits: how it got there (horizons, "
+        "starts) and what it found in the data and the structure that the numbers above do "
+        "not show (the models each note concerns in brackets; docs/estimation.md, "
+        "\"The fit report\").</p>",
+        "<ul>" + "".join(f"<li>{html.escape(note)} ({html.escape(', '.join(labels))})</li>"
+                         for note, labels in notes.items()) + "</ul>"])
+
+
 def handling_quality_rows(result) -> list[list[str]]:
     """ADS-33 bandwidth and phase delay per attitude pair and source (each model's analytic
     response, and the sweeps' measured one)."""
@@ -763,7 +789,9 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
     contents += [("reduction", "Model reduction"), ("delays", "Time delays"),
                  ("parameters", "Identified parameters"),
                  *((("key-derivatives", "Key derivatives"),) if keys else ()),
-                 ("modes", "Modes"), ("time-histories", "Time histories"),
+                 ("modes", "Modes"), *((("fit-notes", "Fit notes"),) if fit_notes(result)
+                                        else ()),
+                 ("time-histories", "Time histories"),
                  ("verification", "Frequency-domain verification")]
     key_text = (f"Identified ({result.final_model_name}) beside the truth model's residualised "
                 "6-DoF linearisation and the published Helisim Bo-105 values (Padfield 2007)."
@@ -789,7 +817,7 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         "insensitivity relative to the value.</p>", _html_table(parameter_rows(result)),
         *(('<h2 id="key-derivatives">Key derivatives</h2>', f"<p>{key_text}</p>",
             _key_table(result, truth)) if keys else ()),
-        reference_html(result), modes_html(result),
+        reference_html(result), modes_html(result), fit_notes_html(result),
         '<h2 id="time-histories">Time histories of the identification maneuvers</h2>',
         figures_html(figures.get("time", [])),
         '<h2 id="verification">Frequency-domain verification on the sweeps</h2>',
