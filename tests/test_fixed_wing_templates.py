@@ -1,4 +1,4 @@
-"""Fixed-wing templates: known terms by hand, output equations (α = w/U0, q̇ = ΣM, specific
+"""Fixed-wing templates: known terms by hand, output equations (α and β about the trim, q̇ = ΣM, specific
 forces) against independent references, and sensitivities against finite differences.
 
 References: the small-perturbation body-axis equations (e.g. Etkin & Reid, *Dynamics of Flight*,
@@ -43,8 +43,11 @@ def test_longitudinal_known_terms_match_the_hand_derivation():
     np.testing.assert_allclose(structure.known_state_matrix(), expected_a, atol=1e-12)
     expected_c = np.zeros((7, 4))
     expected_c[0, 0] = expected_c[2, 2] = expected_c[3, 3] = 1.0
-    expected_c[1, 1] = 1.0 / U0
-    np.testing.assert_allclose(structure.known_output_matrix(), expected_c, atol=1e-15)
+    # α = atan(w/u) differentiated at the trim's (U0, W0) by central differences
+    h = 1e-6
+    expected_c[1, 0] = (math.atan2(W0, U0 + h) - math.atan2(W0, U0 - h)) / (2 * h)
+    expected_c[1, 1] = (math.atan2(W0 + h, U0) - math.atan2(W0 - h, U0)) / (2 * h)
+    np.testing.assert_allclose(structure.known_output_matrix(), expected_c, atol=1e-9)
     measured = structure.known_terms().measured
     assert [(structure.outputs[j], structure.states[i]) for j, i in zip(*np.nonzero(measured))] \
         == [("q_dot", "q"), ("ax", "u"), ("az", "w")]
@@ -54,9 +57,11 @@ def test_lateral_template_reads_beta_in_the_unit_systems_angle_unit():
     structure = ModelStructure.populated(CONDITION, "fixed-wing-lateral", "flight-test")
     assert structure.controls == ("aileron", "rudder")
     c = structure.known_output_matrix()
-    u0_ft = U0 / 0.3048
+    # β = asin(v/V) differentiated at v = 0, V0 = √(U0² + W0²), in ft/s
+    h, v0_ft = 1e-6, math.hypot(U0, W0) / 0.3048
+    beta = lambda v: math.asin(v / math.sqrt(v0_ft**2 + v**2))   # noqa: E731
     assert c[structure.outputs.index("beta"), structure.states.index("v")] == pytest.approx(
-        180.0 / math.pi / u0_ft)
+        math.degrees((beta(h) - beta(-h)) / (2 * h)), rel=1e-8)
     assert structure.signals.outputs["beta"].unit == "deg"
 
 
@@ -132,6 +137,9 @@ def test_frequency_sensitivities_match_central_differences():
         np.testing.assert_allclose(exact[:, k], numeric, rtol=1e-5, atol=1e-7)
 
 
+#: Δα = (u0·Δw − w0·Δu)/(u0² + w0²) at the declared trim (u0, w0) = (50, 2) m/s.
+ALPHA_GAINS = {"alpha_u": repr(-2.0 / 2504.0), "alpha_w": repr(50.0 / 2504.0)}
+
 DECLARED = """units = "si"
 [condition]
 u0_mps = 50.0
@@ -152,7 +160,7 @@ w = {{ q = 50.0, theta = {minus_g_sin} }}
 theta = {{ q = 1.0 }}
 
 [structure.output_equations]
-alpha = {{ w = 0.02 }}
+alpha = {{ u = {alpha_u}, w = {alpha_w} }}
 q_dot = {{ "d(q)" = 1.0 }}
 ax = {{ "d(u)" = 1.0, q = 2.0, theta = {g_cos} }}
 az = {{ "d(w)" = 1.0, q = -50.0, theta = {g_sin} }}
@@ -168,7 +176,8 @@ def _written_out():
 
     g_cos, g_sin = G_SI * math.cos(THETA0), G_SI * math.sin(THETA0)
     text = DECLARED.format(theta0_deg=repr(math.degrees(THETA0)), minus_w0=-W0,
-                           minus_g_cos=-g_cos, minus_g_sin=-g_sin, g_cos=g_cos, g_sin=g_sin)
+                           minus_g_cos=-g_cos, minus_g_sin=-g_sin, g_cos=g_cos, g_sin=g_sin,
+                           **ALPHA_GAINS)
     return parse_model(tomllib.loads(text), "written-out")
 
 
@@ -190,8 +199,8 @@ def test_an_output_reading_a_control_directly_is_simulated_exactly():
     from rotorid.model.modelfile import parse_model
 
     text = DECLARED.format(theta0_deg="0.0", minus_w0=-2.0, minus_g_cos=-G_SI, minus_g_sin=0.0,
-                           g_cos=G_SI, g_sin=0.0).replace(
-        'alpha = { w = 0.02 }', 'alpha = { w = 0.02, elevator = 0.5 }')
+                           g_cos=G_SI, g_sin=0.0, alpha_u=0.0, alpha_w=0.02).replace(
+        'alpha = { u = 0.0, w = 0.02 }', 'alpha = { w = 0.02, elevator = 0.5 }')
     structure = parse_model(tomllib.loads(text), "feedthrough")
     assert structure.known_feedthrough()[1, 0] == 0.5
     values = {"X_u": -0.04, "Z_w": -2.0, "M_q": -2.5, "M_w": -0.1, "M_elevator": -12.0,
@@ -213,7 +222,7 @@ def test_a_derivative_the_declared_structure_lacks_is_named_with_the_declared_fi
     from rotorid.model.modelfile import parse_model
 
     text = DECLARED.format(theta0_deg="0.0", minus_w0=-2.0, minus_g_cos=-G_SI, minus_g_sin=0.0,
-                           g_cos=G_SI, g_sin=0.0) + "\n[derivatives.M_elev]\n"
+                           g_cos=G_SI, g_sin=0.0, alpha_u=0.0, alpha_w=0.02) + "\n[derivatives.M_elev]\n"
     with pytest.raises(DataFileError, match=(
             r"written-out: derivative M_elev does not fit the declared structure written-out "
             r"\(equations X Z M; variables u w q elevator throttle\); correct its name, or "

@@ -28,7 +28,7 @@ from rotorid.notebook import (
     maneuver_set_summary,
     maneuver_summary,
 )
-from rotorid.units import unit_system
+from rotorid.units import CHANNEL_KINDS, unit_system
 
 INPUT_CHANNELS = CONTROLS
 OUTPUT_CHANNELS = OUTPUTS
@@ -240,10 +240,12 @@ class Maneuver:
             return self.outputs[:, self.output_names.index(name)]
         if name in self.extra_channels:
             return self.extra_channels[name]
-        if name in ALL_CHANNELS:
+        if name in ALL_CHANNELS or name in CHANNEL_KINDS:
             raise DataError(f"maneuver {self.name!r} has no channel {name!r}, which the model "
-                            f"uses; give the record a {name!r} column, or choose a model "
-                            f"without it (a structure template such as longitudinal or "
+                            f"uses; give the record a {name!r} column (a channel map entry), "
+                            f"leave the output out of the fit (--outputs, the estimator's "
+                            f"outputs), remove the derivatives of the control, or choose a "
+                            f"model without it (a structure template such as longitudinal or "
                             f"lateral)")
         raise DataError(f"unknown channel {name!r}; channels: "
                         f"{', '.join(self.channel_names + tuple(self.extra_channels))}")

@@ -43,8 +43,8 @@ class WithOutputBiases(_AppendedParameters):
             {f"bias_{m}_{o}": unit for m in self.maneuver_names
              for o, unit in zip(self.output_names, self.output_units)})
 
-    def measured(self, maneuvers):
-        return measured_outputs(self.model, maneuvers)
+    def measured(self, maneuvers, columns=None):
+        return measured_outputs(self.model, maneuvers, columns)
 
     def _biases(self, values):
         return np.asarray(values[self.n_base:]).reshape(len(self.maneuver_names), -1)

@@ -133,7 +133,7 @@ class OutputErrorEstimator:
         elif result.iterations == 0:
             result = attrs.evolve(result, converged=True, stop_reason=(
                 "the earlier stages already reached the minimum of the full records"))
-        measured = [z[:, columns] for z in measured_outputs(fitted, maneuvers)]
+        measured = measured_outputs(fitted, maneuvers, columns)
         _warn_exact_outputs(result, measured, weights,
                             [fitted.output_names[c] for c in columns], self.noise)
         estimate = self._estimate(fitted, base, result, start_values, notes,
@@ -396,7 +396,7 @@ def _problem(model, maneuvers, columns, weights, settings) -> Problem:
     """The run's problem on the outputs ``columns`` of ``model``, its RMSE counted in the
     outputs' reference units when they have them (:func:`rotorid.units.rmse_reference_factors`)."""
     selected = _SelectedOutputs(model, columns)
-    measured = [z[:, columns] for z in measured_outputs(model, maneuvers)]
+    measured = measured_outputs(model, maneuvers, columns)
     return Problem(selected, maneuvers, measured, weights, settings,
                    rmse_scale=rmse_reference_factors(selected.output_units))
 

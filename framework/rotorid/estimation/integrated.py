@@ -164,9 +164,12 @@ class IntegratedModel:
         return (np.concatenate([[p.lower for p in parameters], -extra]),
                 np.concatenate([[p.upper for p in parameters], extra]))
 
-    def measured(self, maneuvers: ManeuverSet) -> list[np.ndarray]:
-        """Measured outputs (N_i, ny) per maneuver, in the output signals' units."""
-        return [self._read(m, self.output_names) for m in maneuvers]
+    def measured(self, maneuvers: ManeuverSet, columns=None) -> list[np.ndarray]:
+        """Measured outputs (N_i, ny) per maneuver, in the output signals' units; with
+        ``columns`` (indices into ``output_names``) those outputs only."""
+        names = (self.output_names if columns is None
+                 else [self.output_names[i] for i in np.atleast_1d(columns)])
+        return [self._read(m, names) for m in maneuvers]
 
     def simulate(self, values, maneuvers: ManeuverSet) -> list[np.ndarray]:
         """Outputs (N_i, ny) per maneuver; non-finite where the simulation blew up.

@@ -48,12 +48,15 @@ class IdentifiableModel(Protocol):
     def simulate(self, values, maneuvers: ManeuverSet) -> list[np.ndarray]: ...
 
 
-def measured_outputs(model, maneuvers: ManeuverSet) -> list[np.ndarray]:
+def measured_outputs(model, maneuvers: ManeuverSet, columns=None) -> list[np.ndarray]:
     """The measured outputs the model's ``output_names`` select (or its ``measured``
-    gives), (N_i, n_o) per maneuver."""
+    gives), (N_i, n_o) per maneuver; with ``columns`` (indices into ``output_names``) those
+    outputs only, so that an output left out of the fit need not be recorded."""
     if hasattr(model, "measured"):
-        return model.measured(maneuvers)
-    return [m.columns(model.output_names) for m in maneuvers]
+        return model.measured(maneuvers, columns)
+    names = model.output_names
+    chosen = names if columns is None else [names[i] for i in np.atleast_1d(columns)]
+    return [m.columns(chosen) for m in maneuvers]
 
 
 def finite_difference_sensitivities(model, values, maneuvers: ManeuverSet,

@@ -456,7 +456,7 @@ class ModelStructure:
         return self.known_terms().a
 
     def known_output_matrix(self) -> np.ndarray:
-        """The known part of C (outputs that are states, α = w/U0 …), shape (p, n)."""
+        """The known part of C (outputs that are states, the flow angles α and β …), shape (p, n)."""
         return self.known_terms().c
 
     def known_feedthrough(self) -> np.ndarray:

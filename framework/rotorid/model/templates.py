@@ -9,7 +9,7 @@ multiply, and its *known terms*. The linear model is::
     y = C0·x + D0·u + W·Σ_terms        (W: weight of each equation's term sum in each output)
 
 so an accelerometer reads the force derivatives' sum (W = 1 on its equation), ``q_dot`` the
-pitch equation's, and ``alpha = w/U0`` is a known C0 coefficient. :class:`KnownTerms` holds
+pitch equation's, and ``alpha``'s gains on u and w are known C0 coefficients. :class:`KnownTerms` holds
 A0, C0, D0 and W for one flight condition and unit system. A known control term is a fixed
 derivative (``[derivatives.M_elevator] fixed = …``). Each equation's term sum may be read by
 one output at most (the sensitivities' fast path relies on it).
@@ -23,9 +23,10 @@ in the structure's unit system, :func:`rigid_body_terms`):
   ``ax az q theta``) and lateral-directional (``v p phi r``; ``lat ped``; ``ay p phi r``)
   subsets, 15 derivatives each;
 * ``fixed-wing-longitudinal``: states ``u w q theta``, controls ``elevator throttle``, outputs
-  ``u alpha q theta q_dot ax az`` (α = w/U0), 15 derivatives;
+  ``u alpha q theta q_dot ax az`` (Δα = (u0·Δw − w0·Δu)/(u0² + w0²), w/U0 at α0 = 0;
+  ``u`` the body-axis velocity, not the airspeed), 15 derivatives;
 * ``fixed-wing-lateral``: states ``v p phi r``, controls ``aileron rudder``, outputs
-  ``beta p phi r ay`` (β = v/U0), 15 derivatives;
+  ``beta p phi r ay`` (Δβ = Δv/V0), 15 derivatives;
 * ``hybrid``: the six-dof model plus the rotor's tip-path-plane tilts ``beta1c beta1s`` as
   first-order states driven by the equations ``Bc`` and ``Bs``, with the known rate feedback
   β̇1c = q, β̇1s = p (docs/hybrid.md); 96 derivatives. ``hybrid-flap`` measures the tilts
@@ -252,13 +253,31 @@ def _rigid_body_a(condition, units: UnitSystem) -> np.ndarray:
     return a
 
 
+def _flow_angle_gains(name: str, template: str, condition, units: UnitSystem) -> dict:
+    """The flow angle ``name``'s small-perturbation gains on the body velocities about the
+    trim's (u0, v0, w0), in angle unit per length unit/s: α = atan(w/u) gives
+    Δα = (u0·Δw − w0·Δu)/(u0² + w0²), β = asin(v/V) at v0 = 0 gives Δβ = Δv/V0."""
+    scale = units.length_per_metre
+    u0, v0, w0 = condition.u0 * scale, condition.v0 * scale, condition.w0 * scale
+    if u0 <= 0.0:
+        velocity = {"alpha": "w", "beta": "v"}[name]
+        raise StructureError(f"template {template!r}: output {name} from {velocity} needs "
+                             f"forward flight (U0 > 0); give the [condition] an airspeed")
+    angle = units.angle_per_radian
+    if name == "alpha":
+        square = u0**2 + w0**2
+        return {"w": angle * u0 / square, "u": -angle * w0 / square}
+    return {"v": angle / math.sqrt(u0**2 + v0**2 + w0**2)}
+
+
 def rigid_body_terms(template: StructureTemplate, condition, units: UnitSystem) -> KnownTerms:
     """The rigid body's known terms for ``template``'s states (a subset of :data:`STATES`).
 
     A0: the six-dof gravity and kinematic terms; outputs named like a state read it; ``ax``,
     ``ay``, ``az`` read the X, Y, Z term sums (specific forces); ``<state>_dot`` reads that
-    state's term sum; ``alpha`` and ``beta`` are w/U0 and v/U0 (small perturbations, in the
-    unit system's angle unit; U0 must not be 0).
+    state's term sum; ``alpha`` and ``beta`` are the flow angles' small perturbations about
+    the trim's velocities (:func:`_flow_angle_gains`; w/U0 and v/U0 at α0 = 0; in the unit
+    system's angle unit; U0 must not be 0).
     """
     rows = [STATES.index(s) for s in template.states]
     a = _rigid_body_a(condition, units)[np.ix_(rows, rows)]
@@ -273,13 +292,9 @@ def rigid_body_terms(template: StructureTemplate, condition, units: UnitSystem) 
         elif name in template.states:
             c[row, template.states.index(name)] = 1.0
         elif name in ("alpha", "beta"):
-            velocity = {"alpha": "w", "beta": "v"}[name]
-            u0 = condition.u0 * units.length_per_metre
-            if u0 <= 0.0:
-                raise StructureError(f"template {template.name!r}: output {name} = "
-                                     f"{velocity}/U0 needs forward flight (U0 > 0); give the "
-                                     f"[condition] an airspeed")
-            c[row, template.states.index(velocity)] = units.angle_per_radian / u0
+            for state, gain in _flow_angle_gains(name, template.name, condition, units).items():
+                if state in template.states:
+                    c[row, template.states.index(state)] = gain
         else:
             raise StructureError(f"template {template.name!r}: no rigid-body output equation "
                                  f"for {name!r}")
@@ -306,11 +321,11 @@ LATERAL = _rigid_body_template("lateral", ("v", "p", "phi", "r"), ("lat", "ped")
 FIXED_WING_LONGITUDINAL = _rigid_body_template(
     "fixed-wing-longitudinal", ("u", "w", "q", "theta"), ("elevator", "throttle"),
     ("u", "alpha", "q", "theta", "q_dot", "ax", "az"),
-    "fixed-wing longitudinal small perturbations (alpha = w/U0)")
+    "fixed-wing longitudinal small perturbations (alpha about the trim's u0, w0)")
 FIXED_WING_LATERAL = _rigid_body_template(
     "fixed-wing-lateral", ("v", "p", "phi", "r"), ("aileron", "rudder"),
     ("beta", "p", "phi", "r", "ay"),
-    "fixed-wing lateral-directional small perturbations (beta = v/U0)")
+    "fixed-wing lateral-directional small perturbations (beta = v/V0)")
 
 
 # ----------------------------------------------------------------- hybrid rotor-body model

@@ -43,17 +43,21 @@ _BLOCK_SAMPLES = 64
 
 class _Group:
     """Maneuvers sharing one sample time, padded to a common length (time-major arrays);
-    ``inputs`` holds the ``controls`` channels, in that order."""
+    ``inputs`` holds the ``controls`` channels, in that order, those not in ``used`` (no
+    derivative of the structure reads them) left at trim, unread."""
 
-    def __init__(self, dt: float, indices: list[int], maneuvers, initial_states, controls):
+    def __init__(self, dt: float, indices: list[int], maneuvers, initial_states, controls,
+                 used):
         self.dt = dt
         self.indices = indices
         self.lengths = [maneuvers[i].n_samples for i in indices]
         self.names = [maneuvers[i].name for i in indices]
         n = max(self.lengths)
         self.inputs = np.zeros((n, len(indices), len(controls)))
+        read = [k for k, name in enumerate(controls) if name in used]
         for b, i in enumerate(indices):
-            self.inputs[: self.lengths[b], b] = maneuvers[i].columns(controls)
+            self.inputs[: self.lengths[b], b, read] = maneuvers[i].columns(
+                [controls[k] for k in read]) if read else 0.0
         self.x0 = np.array([initial_states[i] for i in indices], dtype=float)
 
     @property
@@ -232,7 +236,8 @@ class Simulator:
         for i, m in enumerate(maneuvers):
             key = next((dt for dt in groups if abs(dt - m.dt) <= 1e-9 * dt), m.dt)
             groups.setdefault(key, []).append(i)
-        self.groups = [_Group(dt, idx, maneuvers.maneuvers, states, structure.controls)
+        used = {d.variable for d in structure.derivatives}
+        self.groups = [_Group(dt, idx, maneuvers.maneuvers, states, structure.controls, used)
                        for dt, idx in groups.items()]
         # The companion states of the last parameter vector simulated, per group: an
         # estimator asks for the sensitivities at the values it has just simulated.
