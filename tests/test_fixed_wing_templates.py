@@ -228,3 +228,32 @@ def test_a_derivative_the_declared_structure_lacks_is_named_with_the_declared_fi
             r"\(equations X Z M; variables u w q elevator throttle\); correct its name, or "
             r"declare the equation or signal it needs in \[structure\]")):
         parse_model(tomllib.loads(text), "written-out")
+
+
+def test_records_without_q_dot_and_throttle_fit_when_neither_is_used():
+    """A data system that records neither q̇ nor the throttle: with the throttle's
+    derivatives removed and q_dot left out of the fitted outputs, output error reads only
+    what the records hold and recovers the derivatives its simulation used."""
+    import rotorid
+
+    structure = _structure()
+    structure = structure.without(*[n for n in structure.names if n.endswith("_throttle")])
+    values = {n: v for n, v in VALUES.items() if n in structure.parameter_names}
+    _, _, maneuvers = _maneuvers("foh")
+    recorded_outputs = ("u", "alpha", "q", "theta", "ax", "az")
+    simulated = Simulator(structure, maneuvers).outputs(values)[0]
+    noise = np.random.default_rng(3).normal(0.0, 1e-5, simulated.shape)
+    record = maneuvers[0]
+    columns = {name: (simulated + noise)[:, structure.outputs.index(name)]
+               for name in recorded_outputs}
+    lean = ManeuverSet([Maneuver("doublet", record.time, np.zeros((record.time.size, 0)),
+                                 np.zeros((record.time.size, 0)), input_names=(),
+                                 output_names=(), units="si",
+                                 extra_channels={"elevator": record.channel("elevator"),
+                                                 **columns})], hold="foh")
+    estimate = rotorid.create("estimators", "output-error", outputs=recorded_outputs).estimate(
+        structure, lean, start={n: 0.8 * v for n, v in values.items()})
+    for name in ("Z_w", "M_q", "M_elevator"):
+        assert estimate.value(name) == pytest.approx(VALUES[name], rel=1e-3), name
+    with pytest.raises(rotorid.errors.DataError, match="leave the output out of the fit"):
+        rotorid.create("estimators", "output-error").estimate(structure, lean)
