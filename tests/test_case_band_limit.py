@@ -52,6 +52,15 @@ def test_the_study_fits_the_band_limited_records(tmp_path, data):  # noqa: F811
     # first-order hold the case asks for; held constant over 0.1 s at 5 Hz, M_q came out
     # 24 % off)
     assert result.identification.hold == "foh"
+    # the sweeps share the records' hold (unchanged without one), and a model read back from
+    # the result has it
+    assert case.verification_records(result.identification).hold == "foh"
+    plain = attrs.evolve(case, identification_hold=None)
+    assert plain.verification_records(attrs.evolve(result.identification, hold="zoh")).hold \
+        == "zoh"
+    assert case.verification_records(None) is None
+    from rotorid.estimation.result_file import load_result
+    assert load_result(tmp_path / "out" / "own" / "result.json").hold == "foh"
     estimate = result.estimates["with delays"]
     values = dict(zip(estimate.parameter_names, estimate.values))
     assert set(values) >= set(TRUE)

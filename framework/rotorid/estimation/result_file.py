@@ -27,6 +27,7 @@ from pathlib import Path
 
 import attrs
 
+from rotorid.data import HOLDS
 from rotorid.errors import DataFileError, UsageError
 from rotorid.estimation.estimate import Estimate
 from rotorid.io import read_json_object
@@ -69,6 +70,8 @@ class IdentifiedModel:
             Ingestion` settings ``trim``, ``resample``, ``sample_time``, and for a study of
             files the case's ``channels`` table), so that sweeps are read the same way; empty
             where the result names none.
+        hold: the identification records' input hold (``"zoh"`` or ``"foh"``), which sweeps
+            recorded the same way share; ``"zoh"`` where the result names none.
     """
 
     structure: ModelStructure
@@ -80,6 +83,7 @@ class IdentifiedModel:
     actuator_lag_s: float | None = None
     actuator_inputs: tuple[str, ...] | None = None
     ingestion: Mapping[str, object] = attrs.field(factory=dict, converter=dict)
+    hold: str = "zoh"
 
     def __repr__(self) -> str:
         label = f", model {self.model!r}" if self.model else ""
@@ -159,6 +163,7 @@ def load_result(path: str | os.PathLike, model: str | None = None,
         settings = record.get("case") if isinstance(record.get("case"), Mapping) else {}
         data = settings.get("data") if isinstance(settings.get("data"), Mapping) else {}
         ingestion = {k: data[k] for k in (*INGESTION_SETTINGS, "channels") if k in data}
+        hold = settings.get("identification_hold") or data.get("hold") or "zoh"
     else:
         if model is not None:
             raise UsageError(f"{path} is a `rotorid identify` result holding one model; "
@@ -168,6 +173,9 @@ def load_result(path: str | os.PathLike, model: str | None = None,
         ingestion = ({k: v for k, v in read.items() if k in INGESTION_SETTINGS}
                      if isinstance(read, Mapping) else {})
         declared = structure or _described_structure(record, path)
+        hold = record.get("hold") or "zoh"
+    if hold not in HOLDS:
+        raise DataFileError(f"{path}: hold {hold!r} is not one of {', '.join(HOLDS)}")
     if not isinstance(entry.get("parameters"), Mapping):
         raise DataFileError(f"{path}: no 'parameters' table; give a result written by "
                             f"`rotorid identify` or `rotorid study`")
@@ -176,7 +184,7 @@ def load_result(path: str | os.PathLike, model: str | None = None,
     lag, inputs = settings.get("actuator_lag_s"), settings.get("actuator_inputs")
     return IdentifiedModel(identified, values, estimate, str(path), chosen, noise,
                            None if lag is None else float(lag),
-                           None if inputs is None else tuple(inputs), ingestion)
+                           None if inputs is None else tuple(inputs), ingestion, hold)
 
 
 def named_model_file(path: str | os.PathLike) -> Path | None:

@@ -212,6 +212,15 @@ class FlightCase:
             return maneuvers
         return lagged_inputs(maneuvers, self.actuator_lag_s, self.actuator_inputs)
 
+    def verification_records(self, maneuvers):
+        """The verification ``maneuvers`` (or None) as the models see them: through the
+        actuators' lag (:meth:`actuated`) and with ``identification_hold``, the records' input
+        hold, which the sweeps share with the identification records."""
+        maneuvers = self.actuated(maneuvers)
+        if maneuvers is None or self.identification_hold is None:
+            return maneuvers
+        return attrs.evolve(maneuvers, hold=self.identification_hold)
+
     @property
     def frequency_pairs(self) -> tuple[str, ...]:
         """The pairs the frequency-domain comparison compares (``[compare] pairs``, default

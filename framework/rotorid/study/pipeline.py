@@ -340,7 +340,7 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
         warnings.simplefilter("always", DataWarning)
         data, condition = load_data(case, directory / "data")
         ident = case.identification_records(data.identification)
-        verif = case.actuated(data.verification)
+        verif = case.verification_records(data.verification)
     reading_warnings = _reported_warnings(case, caught, report)
     clock["data"] = time.perf_counter()
     report(case.name, f"{len(ident)} identification and {0 if verif is None else len(verif)} "

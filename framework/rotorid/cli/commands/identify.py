@@ -377,6 +377,7 @@ def run(args) -> int:
     data_warnings = [str(warning.message) for warning in found]
     record = _record(estimate, args.model, out, data_warnings)
     record["estimator_options"] = options
+    record["hold"] = maneuvers.hold
     read = {k: ingestion[k] for k in INGESTION_SETTINGS if ingestion.get(k) is not None}
     if read:
         record["ingestion"] = read

@@ -17,8 +17,8 @@ their outputs are replaced by the simulation. ``VALUES.json`` holds the paramete
   removed by the reduction, and its delays are added to the model.
 
 The inputs are read as the estimate's identification records were (its ``ingestion``: trim
-removal, resampling), or as ``--trim``, ``--resample`` and ``--sample-time`` say, which take
-precedence: a model of perturbations is driven by perturbations, and a record with dropouts
+removal, resampling; its ``hold``), or as ``--trim``, ``--resample``, ``--sample-time`` and
+``--hold`` say, which take precedence: a model of perturbations is driven by perturbations, and a record with dropouts
 needs resampling. Without ``--values`` the model file's initial values are simulated. Each
 maneuver is written
 atomically to ``DIR/<name>.<format>`` with the inputs and metadata of its source file. A model
@@ -50,8 +50,9 @@ def add_arguments(parser) -> None:
                         help="output directory (created if needed)")
     parser.add_argument("--format", choices=("csv", "npz", "mat"), default="csv",
                         help="format of the written maneuver files (default csv)")
-    parser.add_argument("--hold", choices=("zoh", "foh"), default="zoh",
-                        help="input hold between samples (default zoh)")
+    parser.add_argument("--hold", choices=("zoh", "foh"), default=None,
+                        help="input hold between samples (default: the estimate's "
+                             "identification records', else zoh)")
     add_ingestion_arguments(parser, "input file")
 
 
@@ -67,14 +68,14 @@ def read_values(path: Path, structure):
     if isinstance(content.get("parameters"), Mapping):
         identified = load_result(path, structure=structure)
         return (identified.structure, identified.structure.as_vector(identified.values),
-                dict(identified.ingestion))
+                dict(identified.ingestion), identified.hold)
     bad = [name for name, value in content.items()
            if not isinstance(value, (int, float)) or isinstance(value, bool)]
     if bad:
         raise DataFileError(f"values file {path}: {', '.join(sorted(bad))} must be numbers; "
                             f"give a flat name → value mapping or an estimate with a "
                             f"'parameters' table")
-    return structure, structure.as_vector(content), {}
+    return structure, structure.as_vector(content), {}, None
 
 
 def run(args) -> int:
@@ -85,18 +86,21 @@ def run(args) -> int:
     from rotorid.simulation.simulator import simulated_maneuvers
 
     structure = load_model(args.model)
-    values, recorded = None, {}
+    values, recorded, recorded_hold = None, {}, None
     if args.values is not None:
-        structure, values, recorded = read_values(Path(args.values), structure)
+        structure, values, recorded, recorded_hold = read_values(Path(args.values), structure)
     ingestion = {**recorded, **ingestion_settings(args)}
     if ingestion:
         print(f"inputs read with {ingestion_text(ingestion)}")
-    maneuvers = load_maneuvers(args.inputs, args.hold, structure.units.name,
+    hold = args.hold or recorded_hold or "zoh"
+    if args.hold is None and recorded_hold == "foh":
+        print("inputs held as the identification records were: foh")
+    maneuvers = load_maneuvers(args.inputs, hold, structure.units.name,
                                {**ingestion, "signals": structure.signals,
                                 "channels": load_channel_map(args.model)})
     check_delays(structure, maneuvers, values)
     simulated = simulated_maneuvers(structure, values, maneuvers)
-    paths = create("data-sources", "files", hold=args.hold).save(simulated, args.out, format=args.format)
+    paths = create("data-sources", "files", hold=hold).save(simulated, args.out, format=args.format)
     print(f"simulated {len(paths)} maneuver(s) with {structure.n_parameters} parameters; "
           f"wrote {Path(args.out)}")
     return 0

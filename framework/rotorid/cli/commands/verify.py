@@ -3,7 +3,7 @@
 Usage::
 
     rotorid verify [MODEL.toml] RESULT.json SWEEPS... [--pairs q/long,p/long] [--out DIR]
-                   [--force] [--trim first-second|CH=VALUE,...]
+                   [--force] [--trim first-second|CH=VALUE,...] [--hold zoh|foh]
 
 ``RESULT.json`` is an estimate written by ``rotorid identify`` or a study's ``result.json``
 (its model with delays, or the one ``--model`` names), read by
@@ -16,7 +16,8 @@ are dropped; output biases and initial states of the identification records are 
 SWEEPS are maneuver files, directories or glob patterns, read through the model file's
 ``[channels]`` map (a study's result: its case's ``[data] channels``) and converted to its unit
 system, with the trim removal and resampling the identification records had (the result's
-``ingestion``; ``--trim`` states another trim). When the maneuvers carry ``kind`` metadata
+``ingestion``; ``--trim`` states another trim) and simulated with their input hold (the
+result's ``hold``; ``--hold`` states another). When the maneuvers carry ``kind`` metadata
 only the ``sweep`` ones are used; without it, a maneuver whose input reverses only a few
 times (a multistep or doublet) gets a note, since its frequency responses rest on few
 frequencies (:func:`rotorid.verification.pairs.step_input_notes`). They need only the channels
@@ -47,6 +48,7 @@ import json
 import logging
 from pathlib import Path
 
+from rotorid.data import HOLDS
 from rotorid.cli.arguments import names, output_directory, trim
 
 NAME = "verify"
@@ -73,6 +75,9 @@ def add_arguments(parser) -> None:
                         help="remove the trim from every sweep: each channel's mean over the "
                              "first second, or stated values in the model's units (default: "
                              "as the result's identification records were)")
+    parser.add_argument("--hold", choices=HOLDS, default=None,
+                        help="the sweeps' input hold between samples (default: the "
+                             "identification records', as the result records it)")
     parser.add_argument("--envelopes", default=DEFAULT_ENVELOPES,
                         help=f"comma-separated envelope names ({DEFAULT_ENVELOPES})")
     parser.add_argument("--band", default=None, metavar="COHERENCE,OMEGA_MIN,OMEGA_MAX",
@@ -120,16 +125,18 @@ def _split(files: list[str]):
     return model, Path(rest[0]), rest[1:]
 
 
-def load_sweeps(locations, units: str | None = None, ingestion=None, convert=None):
+def load_sweeps(locations, units: str | None = None, ingestion=None, convert=None,
+                hold: str = "zoh"):
     """(sweeps, left out): the maneuvers of files, directories or patterns
-    (:func:`rotorid.cli.files.load_maneuvers`), only the ``sweep`` ones when the maneuvers carry
+    (:func:`rotorid.cli.files.load_maneuvers`, with input ``hold``), only the ``sweep`` ones
+    when the maneuvers carry
     ``kind`` metadata, without those that sweep none of the model's controls
     (:func:`_not_sweeping`: a lateral sweep in a directory read for a longitudinal model);
     left out: name → reason. Raises VerificationError when no sweep is left."""
     from rotorid.cli.files import load_maneuvers
     from rotorid.errors import VerificationError
 
-    sweeps = load_maneuvers(locations, units=units, ingestion=ingestion)
+    sweeps = load_maneuvers(locations, hold, units=units, ingestion=ingestion)
     if convert is not None:                  # into a model of one's own's signals
         sweeps = convert(sweeps)
     if any("kind" in m.metadata for m in sweeps):
@@ -240,9 +247,11 @@ def run(args) -> int:
     return _write(args, verification, signals, sweeps, skipped, result_path, envelopes)
 
 
-def _read_sweeps(args, locations, units, ingestion, warnings_of, convert=None):
+def _read_sweeps(args, locations, units, ingestion, warnings_of, convert=None,
+                 recorded_hold: str = "zoh"):
     """The sweeps as :func:`load_sweeps` reads them with ``ingestion`` (``--trim`` in place of
-    the recorded trim), with a line for each trim, left-out sweep and data warning
+    the recorded trim) and the identification's ``recorded_hold`` (``--hold`` in its place),
+    with a line for each trim, hold other than zoh, left-out sweep and data warning
     (``warnings_of(sweeps)``)."""
     from rotorid.cli.arguments import trim_text
 
@@ -251,7 +260,11 @@ def _read_sweeps(args, locations, units, ingestion, warnings_of, convert=None):
     if ingestion.get("trim") is not None:
         how = "--trim" if args.trim is not None else "the identification records' trim removal"
         print(f"sweeps read with {how}: {trim_text(ingestion['trim'])}")
-    sweeps, left_out = load_sweeps(locations, units, ingestion, convert)
+    hold = args.hold or recorded_hold
+    if hold != "zoh":
+        how = "--hold" if args.hold is not None else "the identification records' hold"
+        print(f"sweeps simulated with {how}: {hold}")
+    sweeps, left_out = load_sweeps(locations, units, ingestion, convert, hold)
     for name, reason in left_out.items():
         print(f"left out {name}: {reason}")
     for warning in warnings_of(sweeps):
@@ -277,7 +290,8 @@ def _verify_structure(args, model, result_path, locations, band, envelopes):
     if model_file is not None:
         ingestion["channels"] = load_channel_map(model_file)
     sweeps = _read_sweeps(args, locations, structure.units.name, ingestion,
-                          lambda read: _data_warnings(read, structure))
+                          lambda read: _data_warnings(read, structure),
+                          recorded_hold=identified.hold)
     if identified.actuator_lag_s is not None:
         sweeps = lagged_inputs(sweeps, identified.actuator_lag_s, identified.actuator_inputs)
         print(f"sweep inputs through the identification's {identified.actuator_lag_s:g} s "
@@ -321,7 +335,8 @@ def _verify_own_model(args, reference, result_path, locations, band, envelopes):
         as_recorded.update({m.name: m for m in read})
         return signal_sweeps(own, read)
 
-    sweeps = _read_sweeps(args, locations, None, ingestion, lambda read: [], in_signals)
+    sweeps = _read_sweeps(args, locations, None, ingestion, lambda read: [], in_signals,
+                          record.get("hold") or "zoh")
     raw = ManeuverSet([as_recorded[m.name] for m in sweeps], hold=sweeps.hold)
     pairs = None if args.pairs is None else names(args.pairs)
     verification = verify_integrated(own, values, raw, pairs, envelopes, band=band)
