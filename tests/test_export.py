@@ -455,3 +455,29 @@ def test_exports_say_how_each_signal_is_read_from_the_recorded_columns(flight):
     script = runpy.run_path(str(_export(root, geared, "python-control", "geared_model.py")))
     assert script["CHANNELS"]["long"] == {"column": "STICK_IN", "factor": 25.4, "offset": 0.0}
     assert "channels.csv" in {p.name for p in _export(root, geared, "csv", "geared_csv").iterdir()}
+
+
+def test_a_stated_trim_is_taken_off_the_exported_offsets(flight, capsys):
+    """Identified with stated trim values (in the model's units), the export's channels give
+    the model's perturbations: az read from g with the sign flipped and 1 g out, then the
+    stated az trim off; theta, which no link reads, from its own column less its trim."""
+    root, result = flight
+    model = root / "trimmed.toml"
+    model.write_text(MODEL + '[channels]\nNZ = { signal = "az", unit = "g", scale = -1.0, '
+                             'offset = 1.0 }\n', encoding="utf-8")
+    record = json.loads(result.read_text(encoding="utf-8"))
+    record["structure"] = model.name
+    record["ingestion"] = {"trim": {"az": -2.5, "theta": 4.0}}
+    trimmed = root / "trimmed.json"
+    trimmed.write_text(json.dumps(record), encoding="utf-8")
+    exported = _strict_json(_export(root, trimmed, "json", "trimmed_model.json"))
+    channels = {c["signal"]: (c["column"], c["factor"], c["offset"])
+                for c in exported["channels"]}
+    g = 9.80665 / 0.3048
+    assert channels["az"] == ("NZ", pytest.approx(-g), pytest.approx(g + 2.5))
+    assert channels["theta"] == ("theta", 1.0, -4.0)
+    assert "offsets take off the identification's stated trim (az=-2.5, theta=4)" in \
+        capsys.readouterr().out
+    # a column of 1.1 g reads az = −1.1·g + g + 2.5, the perturbation from the −2.5 trim
+    _, factor, offset = channels["az"]
+    assert factor * 1.1 + offset == pytest.approx(-0.1 * g + 2.5)

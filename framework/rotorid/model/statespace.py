@@ -46,7 +46,8 @@ class DelayedTerm:
 class RecordedChannel:
     """How a signal is read from the recorded data: ``signal = factor · column + offset`` in
     the signal's unit (a channel map's scale, offset and unit conversion in one, e.g. a stick
-    recorded in inches read in %)."""
+    recorded in inches read in %, and the trim the identification records had removed, so
+    that the signal is the model's perturbation)."""
 
     signal: str
     column: str
@@ -54,13 +55,17 @@ class RecordedChannel:
     offset: float
 
 
-def recorded_channels(channel_map, units: Mapping[str, str]) -> tuple[RecordedChannel, ...]:
+def recorded_channels(channel_map, units: Mapping[str, str],
+                      trim: Mapping[str, float] | None = None) -> tuple[RecordedChannel, ...]:
     """The links of ``channel_map`` (:class:`rotorid.model.signals.ChannelMap`) for the
     signals of ``units`` (name → the system's unit), as :class:`RecordedChannel`s; a control
-    whose unit does not convert (% of travel, a unit of one's own) keeps the link's."""
+    whose unit does not convert (% of travel, a unit of one's own) keeps the link's. ``trim``
+    (signal → value in the system's unit) is taken off each offset; a trimmed signal without
+    a link is read from the column of its own name."""
     from rotorid.errors import SignalError
     from rotorid.units import conversion_factor
 
+    trim = {k: float(v) for k, v in (trim or {}).items() if k in units}
     found = []
     for link in channel_map.links:
         if link.signal not in units:
@@ -70,7 +75,10 @@ def recorded_channels(channel_map, units: Mapping[str, str]) -> tuple[RecordedCh
         except SignalError:
             unit_factor = 1.0
         found.append(RecordedChannel(link.signal, link.column, link.scale * unit_factor,
-                                     link.offset * unit_factor))
+                                     link.offset * unit_factor - trim.get(link.signal, 0.0)))
+    linked = {channel.signal for channel in found}
+    found += [RecordedChannel(name, name, 1.0, -value) for name, value in trim.items()
+              if name not in linked]
     return tuple(found)
 
 
@@ -99,10 +107,12 @@ class NamedStateSpace:
     pade_order: int = 0
     channels: tuple[RecordedChannel, ...] = attrs.field(default=(), converter=tuple)
 
-    def with_channels(self, channel_map) -> "NamedStateSpace":
-        """This system with the links of ``channel_map`` that read its inputs and outputs."""
+    def with_channels(self, channel_map, trim: Mapping[str, float] | None = None
+                      ) -> "NamedStateSpace":
+        """This system with the links of ``channel_map`` that read its inputs and outputs,
+        less ``trim`` (signal → value in the system's units, :func:`recorded_channels`)."""
         units = {n: self.units[n] for n in self.inputs + self.outputs}
-        return attrs.evolve(self, channels=recorded_channels(channel_map, units))
+        return attrs.evolve(self, channels=recorded_channels(channel_map, units, trim))
 
     def __repr__(self) -> str:
         delays = (f", {len(self.delays)} delays" + (f" (Padé order {self.pade_order})"

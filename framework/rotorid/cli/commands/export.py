@@ -16,6 +16,8 @@ beside them. The formats: :mod:`rotorid.model.statespace_files` and docs/export.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 NAME = "export"
 HELP = ("write an identified model's A, B, C, D with signal names, units and delays as MATLAB, "
         "CSV, JSON or a python-control script")
@@ -56,11 +58,20 @@ def run(args) -> int:
     out = refuse_overwrite(args.out, args.force)
     structure = None if args.structure is None else load_model(args.structure)
     identified = load_result(args.result, args.model, structure)
+    trim = identified.ingestion.get("trim")
     system = identified.state_space(args.pade).with_channels(
-        _channel_map(args, identified))
+        _channel_map(args, identified), trim if isinstance(trim, Mapping) else None)
     source = args.result + (f", model {identified.model!r}" if identified.model else "")
     write_state_space(system, out, args.format, source)
     print(f"{system!r} written to {out}")
+    if isinstance(trim, Mapping):
+        print(f"the channels' offsets take off the identification's stated trim "
+              f"({', '.join(f'{k}={v:g}' for k, v in trim.items())}): they give the model's "
+              f"perturbations")
+    elif trim == "first-second":
+        print("note: the identification records' trim was each record's mean over its first "
+              "second; take that mean off each channel's signal before driving the model, "
+              "which is in perturbations from trim")
     return ExitStatus.OK
 
 
