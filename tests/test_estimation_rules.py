@@ -205,6 +205,36 @@ def test_each_reduced_structure_restarts_from_the_initial_values():
     assert warm.starts == [None, {"M_u": 1.0, "L_p": 1.0}, {"M_u": 1.0}]
 
 
+class RefusingWithout(ConstructedEstimator):
+    """Refuses a structure without ``needed`` (as filter error refuses a structure whose
+    Kalman filter does not exist)."""
+
+    def __init__(self, needed: str):
+        super().__init__()
+        self.needed = needed
+
+    def estimate(self, structure, maneuvers, *, start=None):
+        if self.needed not in structure.parameter_names:
+            raise EstimationError("no stabilising Kalman filter: a mode that does not decay "
+                                  "moves no output")
+        return super().estimate(structure, maneuvers, start=start)
+
+
+def test_a_structure_the_estimator_refuses_ends_the_path_at_the_step_before():
+    """Continuing to zero removes M_q, then L_p; without L_p the estimator refuses: the path
+    ends at step 1 with the reason, and the rules select among the steps reached."""
+    lenient = [rotorid.create("reduction-criteria", "cramer-rao", threshold=1e6)]
+    structure = ModelStructure(HOVER, [Derivative(n) for n in NAMES])
+    t = np.arange(10) * 0.02
+    maneuvers = ManeuverSet([Maneuver("still", t, np.zeros((10, 4)), np.zeros((10, 8)))])
+    path = reduce(structure, maneuvers, RefusingWithout("L_p"), lenient, continue_to_zero=True)
+    assert [s.removal.parameter for s in path.steps[1:]] == ["M_q"]
+    assert path.stopped.startswith("stopped at step 1: removing L_p (cramer-rao ")
+    assert "no stabilising Kalman filter" in path.stopped
+    assert path.selected_index == 0 and set(path.selections().values()) <= {0, 1}
+    assert reduce(structure, maneuvers, ConstructedEstimator(), lenient).stopped == ""
+
+
 def test_selection_rules_on_a_constructed_rmse_curve():
     structure = ModelStructure(HOVER, [Derivative(n) for n in NAMES])
     steps = [ReductionStep(k, None, estimate_of(np.eye(1), [1.0], ("L_p",), rmse=rmse),

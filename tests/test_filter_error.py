@@ -183,6 +183,17 @@ def test_steady_state_filter_where_the_doubling_ends_indefinite(monkeypatch):
         (dare(0.1 + 1e-6) - dare(0.1 - 1e-6)) / 2e-6, rel=1e-5, abs=1e-9)
 
 
+def test_a_filter_without_a_steady_state_names_the_mode_no_output_sees():
+    """An integrator (λ = 1) that no output reads beside a decaying state: no filter can
+    correct it (Popov-Belevitch-Hautus); scipy's own solver refuses it too."""
+    phi, output = np.diag([1.0, 0.5]), np.array([[0.0, 1.0]])
+    with pytest.raises((np.linalg.LinAlgError, ValueError)):
+        scipy.linalg.solve_discrete_are(phi.T, output.T, np.eye(2), np.eye(1))
+    with pytest.raises(EstimationError, match=r"a mode that does not decay \(discrete "
+                                              r"eigenvalue 1\) moves no output"):
+        steady_state_filter(phi[None], output[None], np.eye(2)[None], np.ones((1, 1)))
+
+
 def test_slow_gust_on_an_unstable_hover_model_is_fitted():
     """A 31 s gust on v, the small hover model's only process noise: the doubling overflows
     on some steps of the fit; the fit completes with finite Cramér-Rao bounds and its

@@ -64,10 +64,33 @@ def _relative_change(new, old) -> float:
     return change
 
 
-#: Why a filter has no steady state.
+#: Why a filter has no steady state (the general case; :func:`_no_solution` tells which).
 _NO_SOLUTION = ("the Kalman filter's Riccati equation has no stabilising solution: the model "
-                "has a mode that neither the process noise excites nor the outputs observe; "
-                "add process noise on that mode's states or start from other values")
+                "has a mode that does not decay and that the outputs do not observe or the "
+                "process noise does not excite; make it observable or stable, add process "
+                "noise on its states, or start from other values")
+#: A discrete mode with |λ| at least this does not decay.
+_NEUTRAL = 1.0 - 1e-9
+
+
+def _no_solution(transition, output) -> EstimationError:
+    """The error of one real system without a stabilising DARE solution, naming a mode with
+    |λ| ≥ 1 that the outputs H do not observe (the Popov-Belevitch-Hautus test: no filter can
+    correct it) where there is one."""
+    values, vectors = np.linalg.eig(transition)
+    scale = max(1.0, float(np.max(np.abs(transition))))
+    for value, vector in zip(values, vectors.T):
+        if abs(value) < _NEUTRAL:
+            continue
+        shown = f"{value.real:.4g}" if value.imag == 0 else f"{value:.4g}"
+        seen = np.linalg.norm(output @ vector) > 1e-9 * scale * np.linalg.norm(vector)
+        if not seen:
+            return EstimationError(
+                f"no stabilising Kalman filter: a mode that does not decay (discrete "
+                f"eigenvalue {shown}) moves no output; keep a derivative that lets an "
+                f"output see its state or one that damps it (a velocity whose terms were "
+                f"removed, an integrator no output reads)")
+    return EstimationError(_NO_SOLUTION)
 
 
 def steady_state_filter(transition, output, process, measurement) -> SteadyStateFilter:
@@ -159,9 +182,9 @@ def _schur_solution(transition, output, process, measurement) -> np.ndarray:
         p = scipy.linalg.solve_discrete_are(transition.T, output.T, process,
                                             np.diag(measurement))
     except (np.linalg.LinAlgError, ValueError):
-        raise EstimationError(_NO_SOLUTION) from None
+        raise _no_solution(transition, output) from None
     if not np.all(np.isfinite(p)):
-        raise EstimationError(_NO_SOLUTION)
+        raise _no_solution(transition, output)
     return 0.5 * (p + p.T)
 
 

@@ -19,6 +19,11 @@ Selection rules:
   ``rmse_tolerance`` over its predecessor.
 
 ``ReductionPath.selections()`` gives the step every rule selects, whichever was chosen.
+
+A removal that leaves a structure the estimator refuses (an :class:`EstimationError`: e.g. a
+mode filter error's Riccati equation cannot stabilise) ends the path at the step before it;
+``ReductionPath.stopped`` says which removal and why, and the rules select among the steps
+reached.
 """
 
 from __future__ import annotations
@@ -83,6 +88,8 @@ class ReductionPath:
     steps: tuple[ReductionStep, ...] = attrs.field(converter=tuple)
     rule: str = "lowest-rmse"
     rmse_tolerance: float = 0.01
+    #: why the path ended before the criteria were satisfied ("" when it did not)
+    stopped: str = ""
 
     @property
     def selected_index(self) -> int:
@@ -192,8 +199,15 @@ def reduce(structure: ModelStructure, maneuvers, estimator, criteria: Sequence, 
             start = None
             if warm_start:
                 start = continued_start(last.estimate, last.structure, reduced)
-            estimate = (estimator.estimate(reduced, maneuvers, start=start)
-                        if reduced.parameter_names else _empty_estimate(reduced, maneuvers))
+            try:
+                estimate = (estimator.estimate(reduced, maneuvers, start=start)
+                            if reduced.parameter_names else _empty_estimate(reduced,
+                                                                            maneuvers))
+            except EstimationError as error:
+                return ReductionPath(steps, rule, rmse_tolerance, stopped=(
+                    f"stopped at step {last.index}: removing {removal.parameter} "
+                    f"({removal.criterion} {removal.metric:.1f} %) leaves a structure the "
+                    f"estimator cannot fit ({error})"))
             record(ReductionStep(len(steps), removal, estimate, reduced))
         return ReductionPath(steps, rule, rmse_tolerance)
 

@@ -805,6 +805,8 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         f"{path.selected.n_parameters} parameters, RMSE {path.selected.rmse:.4f}; "
         f"removed in order: {html.escape(', '.join(path.removed) or 'none')}. "
         f"{_other_selections(path)}</p>",
+        *([f"<p><strong>The reduction {html.escape(path.stopped)}.</strong> The selection "
+           f"is among the steps reached.</p>"] if path.stopped else []),
         figures_html(figures.get("reduction", [])),
         f"<h3>Removed parameters{appendix}</h3>", _html_table(removed_rows(result), 7),
         '<h2 id="delays">Time delays</h2>',

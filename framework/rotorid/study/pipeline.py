@@ -175,6 +175,8 @@ def _reduce(case: FlightCase, structure: ModelStructure, ident: ManeuverSet, est
                       continue_to_zero=case.continue_to_zero, warm_start=case.warm_start,
                       rule=case.rule, rmse_tolerance=case.rmse_tolerance, finished=finished,
                       on_step=on_step, case=case.name)
+    if path.stopped:
+        report(case.name, f"reduction {path.stopped}")
     return path, len(finished)
 
 

@@ -178,6 +178,7 @@ class CaseResult:
                           # the step each selection rule picks on this path
                           "selections": path.selections(),
                           "removed": list(path.removed),
+                          "stopped": path.stopped,
                           "steps": [s.summary() for s in path.steps]},
             "selected_structure": list(self.structures["no delays"].names),
             "estimates": {label: e.as_dict() for label, e in self.estimates.items()},
