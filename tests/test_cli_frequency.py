@@ -128,3 +128,14 @@ def test_a_model_file_reads_sweeps_in_a_test_ranges_names(sweep_dir, tmp_path, c
     first, second = (json.loads(p.read_text())["pairs"][0] for p in (plain, mapped))
     np.testing.assert_allclose(second["real"], first["real"], rtol=1e-6, atol=1e-9)
     np.testing.assert_allclose(second["coherence"], first["coherence"], rtol=1e-6, atol=1e-9)
+
+
+def test_an_existing_out_file_is_kept_without_force(sweep_dir, tmp_path, capsys):
+    out = tmp_path / "r.json"
+    out.write_text("earlier responses", encoding="utf-8")
+    assert main(["frequency", str(sweep_dir), "--pairs", "q/long", "--out", str(out)]) != 0
+    assert "exists already; give --force" in capsys.readouterr().err
+    assert out.read_text(encoding="utf-8") == "earlier responses"
+    assert main(["frequency", str(sweep_dir), "--pairs", "q/long", "--out", str(out),
+                 "--force"]) == 0
+    assert out.read_text(encoding="utf-8").startswith("{")

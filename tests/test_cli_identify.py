@@ -161,6 +161,14 @@ def test_coloured_residuals_widen_the_bounds_and_need_output_error(case, tmp_pat
     assert "--coloured-residuals widens output error's bounds" in capsys.readouterr().err
 
 
+def test_a_misspelt_estimator_is_named_before_its_options_are_judged(case, tmp_path, capsys):
+    model, data, _ = case
+    assert cli.main(["identify", str(model), str(data), "--out", str(tmp_path / "x.json"),
+                     "--estimator", "filter_error", "--disturbances", "q"]) == 2
+    assert ("argument --estimator: no estimator named 'filter_error'; available: "
+            "filter-error, frequency-response, output-error") in capsys.readouterr().err
+
+
 def test_max_iterations_limits_the_final_run(case, tmp_path, capsys):
     model, data, _ = case
     out = tmp_path / "short.json"

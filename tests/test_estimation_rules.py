@@ -5,6 +5,7 @@ ranking, the selection rule, and the Levenberg-Marquardt acceptance and bound ru
 import math
 import warnings
 
+import attrs
 import numpy as np
 import pytest
 import rotorid
@@ -302,3 +303,10 @@ def test_a_step_is_shortened_along_its_direction_to_stay_within_the_bounds():
     step = bounded_step(np.eye(2), np.array([-2.0, -2.0]), 0.0, np.array([0.5, 0.0]),
                          np.array([-np.inf, -np.inf]), np.array([1.0, np.inf]), shorten=False)
     np.testing.assert_allclose(step, [0.5, 2.0], rtol=1e-9)
+
+
+def test_the_summary_names_the_cost_det_r_for_output_error_only():
+    estimate = estimate_of(np.eye(1), [1.0], ("L_p",))
+    assert "det R 1" in repr(attrs.evolve(estimate, estimator="output-error"))
+    shown = repr(attrs.evolve(estimate, estimator="filter-error"))
+    assert "det R" not in shown and ", cost 1)" in shown

@@ -40,13 +40,16 @@ def _pct(value) -> str:
 # ----------------------------------------------------------------- estimates
 def estimate_summary(estimate) -> str:
     """``Estimate(output-error, 9 parameters incl. 1 delay, converged after 4 iterations,
-    RMSE 0.0652, det R 1.45e-10)``."""
+    RMSE 0.0652, det R 1.45e-10)``; other estimators' cost is named ``cost`` (filter error's
+    exp(2L/N), the frequency-response estimator's J)."""
     delays = int(np.sum(estimate.is_delay))
     state = "converged" if estimate.converged else f"not converged ({estimate.stop_reason})"
     return (f"Estimate({estimate.estimator}, {len(estimate.parameter_names)} parameters"
             + (f" incl. {counted(delays, 'delay')}" if delays else "")
             + f", {state} after {counted(estimate.iterations, 'iteration')}, RMSE "
-              f"{_number(estimate.rmse)}, det R {_number(estimate.cost, 3)})")
+              f"{_number(estimate.rmse)}, "
+              f"{'det R' if estimate.estimator == 'output-error' else 'cost'} "
+              f"{_number(estimate.cost, 3)})")
 
 
 def estimate_html(estimate) -> str:

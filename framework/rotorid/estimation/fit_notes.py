@@ -109,5 +109,7 @@ def fast_modes_note(structure, values, sample_time: float) -> str | None:
     return (f"modes faster than the records resolve (settled within two samples of "
             f"{sample_time:g} s): {listed}; the data determine such a mode's quasi-static gain, "
             f"not the derivatives that set it. Unless the aircraft has a mode that fast, it "
-            f"stands in for dynamics the structure lacks (actuator or motor lags, delays, rotor "
-            f"states): add those (an actuator lag, delays), or fix or remove those derivatives")
+            f"stands in for what the fit could not otherwise follow: dynamics the structure "
+            f"lacks (actuator or motor lags, delays, rotor states: add them), turbulence in the "
+            f"records (fit with filter error), or a poor start (start elsewhere); else fix or "
+            f"remove those derivatives")

@@ -3,7 +3,7 @@
 Usage::
 
     rotorid frequency SWEEPS... [--model MODEL.toml] [--pairs q/long,p/lat] [--conditioned]
-                      [--handling-qualities] --out responses.json
+                      [--handling-qualities] --out responses.json [--force]
 
 SWEEPS are maneuver files, directories or glob patterns (only ``kind = sweep`` maneuvers when
 the files say their kind). Each pair's composite response (:mod:`rotorid.verification.frequency`)
@@ -63,6 +63,7 @@ def add_arguments(parser) -> None:
                              "delay")
     parser.add_argument("--out", required=True, metavar="FILE", type=output_file,
                         help="responses.json, responses.csv or responses.mat")
+    parser.add_argument("--force", action="store_true", help="overwrite FILE if it exists")
 
 
 def response_columns(response) -> dict:
@@ -127,6 +128,7 @@ def _print_qualities(qualities) -> None:
 
 def run(args) -> int:
     from rotorid.cli.commands.verify import chosen_pairs, load_sweeps
+    from rotorid.cli.files import refuse_overwrite
     from rotorid.errors import UsageError
     from rotorid.io import atomic_write
     from rotorid.verification.compare import default_omega
@@ -140,6 +142,7 @@ def run(args) -> int:
     out = Path(args.out)
     if out.suffix.lower() not in FORMATS:
         raise UsageError(f"--out {out}: give a file ending in {', '.join(FORMATS)}")
+    refuse_overwrite(out, args.force)
     units, ingestion = None, None
     if args.model is not None:
         from rotorid.model.modelfile import load_channel_map, load_model

@@ -205,6 +205,7 @@ FILTER_ERROR_FLAGS = ("process_noise", "disturbances", "gusts", "update_every")
 def _options(args) -> dict:
     """Estimator options the user set explicitly (the estimator's defaults stand otherwise)."""
     from rotorid.errors import UsageError
+    from rotorid.plugin.manager import registry
 
     options: dict = {}
     if args.outputs is not None:
@@ -237,6 +238,10 @@ def _options(args) -> dict:
         options["coloured_residuals"] = True
     options.update(_frequency_options(args))
     noise_model = [flag for flag in FILTER_ERROR_FLAGS if getattr(args, flag) is not None]
+    known = registry("estimators")
+    if args.estimator not in known:
+        raise UsageError(f"argument --estimator: no estimator named {args.estimator!r}; "
+                         f"available: {', '.join(known)} (see `rotorid plugins`)")
     if noise_model and args.estimator != "filter-error":
         given = ", ".join("--" + flag.replace("_", "-") for flag in noise_model)
         raise UsageError(f"{given}: filter error's noise model; add --estimator filter-error "
