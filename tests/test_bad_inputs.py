@@ -165,6 +165,9 @@ DATA_FILES = [
                                     "--resample linear"]),
     ("semicolons", _csv_text(HEADER + "\n" + ";".join(["0,0"] * 13) + "\n"),
      ["bad.csv", "expected 13 values", "semicolons", "comma-separated"]),
+    ("semicolons-throughout", _csv_text(HEADER.replace(",", ";") + "\n"
+                                        + ";".join(["0.5"] * 13) + "\n"),
+     ["bad.csv", "is not a number", "semicolons", "comma-separated"]),
     ("units-row", _csv_text(HEADER + "\ns,%,%,%,%,ft/s2,ft/s2,deg/s,deg,ft/s2,deg/s,deg,deg/s\n"
                             + _csv_rows().split("\n", 1)[1]),
      ["bad.csv", "'s' is not a number", "row of units", "channel map"]),

@@ -335,9 +335,15 @@ def test_the_vanes_check_the_accelerometers_unit():
     [v] = [f for f in kinematic_fits(right, condition) if f.channel == "v"]
     assert v.scale == pytest.approx(1.0, abs=0.02) and v.driver.startswith("ay")
     wrong, _ = _aeroplane_lateral(1.0 / 9.80665)
-    with pytest.warns(DataWarning, match=r"kinematic consistency: v against integrated ay"):
+    with pytest.warns(DataWarning, match=r"kinematic consistency: v against integrated ay.*"
+                                         r"look recorded in g but read as m/s²"):
         [v] = [f for f in check_kinematics(wrong, condition) if f.channel == "v"]
     assert v.scale == pytest.approx(9.80665, rel=0.02)
+    # the other sign convention: scale −1, named as such
+    flipped, _ = _aeroplane_lateral(-1.0)
+    with pytest.warns(DataWarning, match=r"move with opposite signs.*scale = -1"):
+        [v] = [f for f in check_kinematics(flipped, condition) if f.channel == "v"]
+    assert v.scale == pytest.approx(-1.0, abs=0.05)
 
 
 def test_a_control_recorded_on_its_trim_is_named():

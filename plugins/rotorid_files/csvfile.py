@@ -119,7 +119,8 @@ def read(path: Path, ingestion: Ingestion):
                 units_row = not values and not any(_PLAIN_NUMBER_LIKE.match(f.strip())
                                                    for f in fields)
                 hint = ("; it looks like a row of units under the header row: delete it and "
-                        "give the units in the model's channel map" if units_row else "")
+                        "give the units in the model's channel map" if units_row
+                        else _format_hint(line))
                 raise DataFileError(f"{path}, line {number} (row {len(values)}), channel "
                                     f"{name!r}: {field.strip()!r} is not a number"
                                     f"{hint}") from None

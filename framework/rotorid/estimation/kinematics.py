@@ -32,6 +32,7 @@ from scipy.integrate import cumulative_trapezoid
 from rotorid.data import ManeuverSet
 from rotorid.errors import DataWarning
 from rotorid.model.structure import STATES, FlightCondition, ModelStructure
+from rotorid.units import FOOT, G_SI
 from rotorid.units import unit_system
 
 #: A scale factor further than this from 1 is reported.
@@ -196,6 +197,15 @@ def kinematic_fits(maneuvers: ManeuverSet,
 
 
 def _scale_advice(fit: KinematicFit) -> str:
+    if abs(fit.scale + 1) < 0.15:
+        return (f"{fit.channel} and its driver ({fit.driver}) move with opposite signs: one "
+                f"of them is recorded with the other sign convention (a normal load factor "
+                f"read as az needs scale = -1 in the channel map)")
+    for gravity, unit in ((G_SI, "m/s²"), (G_SI / FOOT, "ft/s²")):
+        if abs(abs(fit.scale) / gravity - 1) < 0.15:
+            return (f"the accelerometers among {fit.driver} look recorded in g but read as "
+                    f"{unit} (scale ≈ {gravity:.4g}): declare their unit \"g\" in the channel "
+                    f"map")
     ratio = math.degrees(1.0)
     if abs(fit.scale / ratio - 1) < 0.15:
         return (f"{fit.channel} is in deg and its driver ({fit.driver}) in rad: declare the "
