@@ -86,6 +86,15 @@ def test_az_holding_one_g_is_named_and_not_reported_as_an_offset(model, clean):
     messages = _messages(_changed(clean, gravity), model[0])
     [message] = [m for m in messages if "'az'" in m]
     assert message.startswith("output 'az' holds 1 g (median -32.")
+    # a stated trim of −1 (g given where ft/s² was meant) already taken off: the suggestion
+    # is the whole trim, not what is left
+    stated = ManeuverSet([attrs.evolve(m, metadata={**m.metadata, "trim_removed": {"az": -1.0},
+                                                    "trim_units": "flight-test"})
+                          for m in _changed(clean, gravity)])
+    [message] = [m for m in _messages(stated, model[0]) if "'az'" in m]
+    median = float(message.split("(median ")[1].split(" ")[0])
+    assert f"--trim az={median - 1.0:.4g}, which includes the -1 ft/s² already removed" \
+        in message
 
 
 def test_rates_recorded_in_rad_per_s_are_named(model, clean):

@@ -109,10 +109,28 @@ def _check_gravity(maneuvers: ManeuverSet) -> bool:
     if abs(abs(median) - system.g) > ONE_G_TOLERANCE * system.g:
         return False
     unit = system.label("az")
+    removed = _stated_trim(maneuvers, "az")
+    shown = (f"--trim az={median + removed:.4g}, which includes the {removed:.4g} {unit} "
+             f"already removed" if removed else f"--trim az={median:.4g}")
     _warn(f"output 'az' holds 1 g (median {median:.4g} {unit}, g = {system.g:.4g} {unit}): "
           f"outputs are perturbations from trim; remove the trim (rotorid identify --trim "
-          f"first-second, or --trim az={median:.4g})")
+          f"first-second, or {shown})")
     return True
+
+
+def _stated_trim(maneuvers: ManeuverSet, channel: str) -> float:
+    """The trim value every maneuver had taken off ``channel`` when reading (their
+    ``trim_removed`` metadata), in the maneuvers' units; 0 when they differ or none was."""
+    values = set()
+    for m in maneuvers:
+        removed = m.metadata.get("trim_removed")
+        stated_in = m.metadata.get("trim_units", maneuvers.units)
+        if not isinstance(removed, dict) or channel not in removed:
+            return 0.0
+        if unit_system(stated_in).name != unit_system(maneuvers.units).name:
+            return 0.0
+        values.add(float(removed[channel]))
+    return values.pop() if len(values) == 1 else 0.0
 
 
 def _unit(maneuvers: ManeuverSet, name: str, signals: ModelSignals | None) -> str:
