@@ -381,3 +381,30 @@ def test_identify_takes_the_pairs_and_band_of_the_frequency_response_estimator(t
     assert "--band needs two frequencies in rad/s, lowest first" in capsys.readouterr().err
     assert cli.main([*argv[:-2], "--force", "--pairs", "p/lat"]) == 2
     assert "--pairs: the frequency-response estimator's" in capsys.readouterr().err
+
+
+def _pair_at(output, control, low, high):
+    from rotorid_frequency_response.pairs import PairData
+
+    omega = np.geomspace(low, high, 5)
+    return PairData(output, control, omega, np.zeros(5), np.zeros(5), np.ones(5),
+                    np.ones((5, 1)), (control,))
+
+
+def test_default_pairs_leave_out_those_coherent_over_less_than_an_octave():
+    """Of the default pairs (every output over every swept input), one coherent only over
+    7.06–7.25 rad/s (the quick hover sweeps' az/long) is named with its range and left out;
+    were no broader pair left, none would be."""
+    from rotorid_frequency_response.estimator import broad_pairs
+
+    broad, narrow = _pair_at("q", "long", 0.8, 12.0), _pair_at("az", "long", 7.06, 7.25)
+    kept = broad_pairs((broad, narrow, "ay/long"))
+    assert kept[0] is broad and kept[2] == "ay/long"
+    assert kept[1] == ("az/long (coherent over 7.06–7.25 rad/s only, less than a factor 2; "
+                       "name it in pairs to fit it)")
+    assert broad_pairs((narrow,)) == (narrow,)
+    fitted, notes = FrequencyResponseEstimator()._usable(kept)
+    assert fitted == [broad]
+    assert notes == ["pairs left out: az/long (coherent over 7.06–7.25 rad/s only, less than "
+                     "a factor 2; name it in pairs to fit it), ay/long (no frequency with "
+                     "γ² ≥ 0.6)"]

@@ -41,6 +41,8 @@ START_STRATEGIES = ("auto", "initial", "equation-error")
 HESSIAN_SCALE = 10.0
 #: σ of the log-normal factors that vary the gains of the random starts.
 START_SPREAD = 0.5
+#: A default pair's coherent J points must span at least this ratio of frequencies.
+MIN_COHERENT_SPAN = 2.0
 
 
 def _check_start(instance, attribute, value):
@@ -118,7 +120,8 @@ class FrequencyResponseEstimator:
         pair's name when it has no coherent frequency. Compute it once and pass it to
         repeated fits (a reduction)."""
         if isinstance(data, ManeuverSet):
-            return sweep_pair_data(data, self.pairs, self.n_points, self.threshold, self.band)
+            found = sweep_pair_data(data, self.pairs, self.n_points, self.threshold, self.band)
+            return found if self.pairs is not None else broad_pairs(found)
         return tuple(pair_data(r, self.n_points, self.threshold, self.band) or r.pair
                      for r in self._chosen(data))
 
@@ -201,8 +204,9 @@ class FrequencyResponseEstimator:
             raise EstimationError(f"no pair has a frequency with coherence ≥ "
                                   f"{self.threshold:g}; check that the sweeps excite the "
                                   f"chosen pairs")
-        notes = [f"pairs without coherent frequencies (γ² ≥ {self.threshold:g}) left out: "
-                 f"{', '.join(empty)}"] if empty else []
+        described = [name if " (" in name else
+                     f"{name} (no frequency with γ² ≥ {self.threshold:g})" for name in empty]
+        notes = [f"pairs left out: {', '.join(described)}"] if empty else []
         return fitted, notes
 
     def _bounds(self, model: ModelStructure):
@@ -243,6 +247,19 @@ class FrequencyResponseEstimator:
             notes=(*notes, "J per pair: " + ", ".join(
                 f"{p.pair} {c:.1f}" for p, c in zip(pairs, costs)),
                    *_poorly_fitted(pairs, costs)))
+
+
+def broad_pairs(found: Sequence[PairData | str]) -> tuple[PairData | str, ...]:
+    """``found`` with each pair coherent over less than :data:`MIN_COHERENT_SPAN` in
+    frequency replaced by its name and that range (left out of the default pairs: its J
+    points would all weigh one frequency), unless no broader pair is left."""
+    usable = [p for p in found if isinstance(p, PairData) and p.omega.size]
+    narrow = {p.pair for p in usable if p.omega.max() < MIN_COHERENT_SPAN * p.omega.min()}
+    if len(narrow) == len(usable):
+        return tuple(found)
+    return tuple(f"{p.pair} (coherent over {p.omega.min():.3g}–{p.omega.max():.3g} rad/s "
+                 f"only, less than a factor {MIN_COHERENT_SPAN:g}; name it in pairs to fit it)"
+                 if isinstance(p, PairData) and p.pair in narrow else p for p in found)
 
 
 def _poorly_fitted(pairs: Sequence[PairData], costs) -> list[str]:
