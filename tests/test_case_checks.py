@@ -36,6 +36,9 @@ def case_file(tmp_path, text: str):
      r"\[estimator\]: estimator 'output-error' has no option 'process_noise'"),
     ('[estimator]\nname = "filter-error"\ngusts = ["w", "w"]\n',
      r"\[estimator\]: gusts must name distinct states"),
+    ('[structure]\ntemplate = "longitudinal"\n[estimator]\nname = "filter-error"\n'
+     'disturbances = ["u", "v", "q"]\n',
+     r"\[estimator\]: disturbances names v, not states of the structure \(u, w, q, theta\)"),
     ('[delays]\nderivatives = ["L_lt"]\n', r"\[delays\] derivatives L_lt are not in the case"),
     ('[delays]\nupper = -0.1\n', r"\[delays\] upper must be a positive time"),
     ('[delays]\nupper = 0.2\ninitial = 0.5\n', r"\[delays\] initial must lie in \[0, upper"),

@@ -502,6 +502,18 @@ class FilterErrorEstimator:
     start: str = attrs.field(default="auto", validator=_start_choice)
     callback: Callable | None = None
 
+    def check_structure(self, structure) -> None:
+        """Refuse, before any data exist, noise-model options naming a state that
+        ``structure`` (a ModelStructure; a model of one's own is checked when fitted) lacks."""
+        if not isinstance(structure, ModelStructure):
+            return
+        for option in ("process_noise", "disturbances", "gusts"):
+            unknown = [s for s in getattr(self, option) or () if s not in structure.states]
+            if unknown:
+                raise EstimationError(f"{option} names {', '.join(unknown)}, not states of the "
+                                      f"structure ({', '.join(structure.states)}); choose "
+                                      f"among those")
+
     def estimate(self, structure: ModelStructure, maneuvers: ManeuverSet, *,
                  start=None) -> Estimate:
         """Fit ``structure``'s derivatives and delays, F and R to ``maneuvers``; a nonlinear

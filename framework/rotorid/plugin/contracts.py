@@ -34,7 +34,11 @@ ENVELOPE_KINDS = ("bounds", "cost")
 # ----------------------------------------------------------------- estimators
 @runtime_checkable
 class Estimator(Protocol):
-    """Family ``estimators``: fits a structure's free parameters to maneuvers."""
+    """Family ``estimators``: fits a structure's free parameters to maneuvers.
+
+    Optionally, ``check_structure(structure)`` raises a rotorid error for options that cannot
+    work with ``structure`` (a study calls it when reading a case, before any data exist).
+    """
 
     def estimate(self, structure: ModelStructure, maneuvers: ManeuverSet, *,
                  start: Mapping[str, float] | None = None) -> Estimate:

@@ -84,8 +84,10 @@ def check_case(case, where: str) -> None:
     for envelope in case.envelopes:
         check_registered("validation-envelopes", envelope, where, "[verification] envelopes")
     check_registered("estimators", case.estimator, where, "[estimator] name")
-    _wrapped(lambda: create("estimators", case.estimator, **case.estimator_options), where,
-             "[estimator]")
+    estimator = _wrapped(lambda: create("estimators", case.estimator,
+                                        **case.estimator_options), where, "[estimator]")
+    if hasattr(estimator, "check_structure"):
+        _wrapped(lambda: estimator.check_structure(structure), where, "[estimator]")
     for criterion, _ in case.criteria:
         check_registered("reduction-criteria", criterion, where, "[reduction] criteria")
     if case.rule not in RULES:
