@@ -167,6 +167,11 @@ def test_a_misspelt_estimator_is_named_before_its_options_are_judged(case, tmp_p
                      "--estimator", "filter_error", "--disturbances", "q"]) == 2
     assert ("argument --estimator: no estimator named 'filter_error'; available: "
             "filter-error, frequency-response, output-error") in capsys.readouterr().err
+    # a noise-model state the model lacks is a usage error, found before the data are read
+    assert cli.main(["identify", str(model), str(tmp_path / "no-such-data"), "--out",
+                     str(tmp_path / "x.json"), "--estimator", "filter-error",
+                     "--disturbances", "q,beta0"]) == 2
+    assert "disturbances names beta0, not states of the structure" in capsys.readouterr().err
 
 
 def test_max_iterations_limits_the_final_run(case, tmp_path, capsys):

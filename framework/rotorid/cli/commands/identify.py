@@ -329,7 +329,8 @@ def data_warnings_report(messages: list[str]) -> str:
 
 def run(args) -> int:
     from rotorid.cli.files import load_maneuvers, refuse_overwrite
-    from rotorid.errors import DataFileError, ExitStatus, MissingFileError, RotoridWarning
+    from rotorid.errors import (DataFileError, EstimationError, ExitStatus, MissingFileError,
+                                RotoridWarning, UsageError)
     from rotorid.estimation.data_checks import check_fit_data
     from rotorid.estimation.result_file import INGESTION_SETTINGS
     from rotorid.estimation.sanity import check_before_fit, checks_report
@@ -354,6 +355,11 @@ def run(args) -> int:
     with using(manager):
         options = _options(args)
         estimator = _estimator(args.estimator, options)
+        if hasattr(estimator, "check_structure"):     # options against the model, before data
+            try:
+                estimator.check_structure(model)
+            except EstimationError as error:
+                raise UsageError(str(error)) from None
         with warnings.catch_warnings(record=True) as found, checks_report(shown=not args.quiet):
             warnings.simplefilter("always", RotoridWarning)
             ingestion = ingestion_settings(args)
