@@ -127,6 +127,8 @@ def test_exact_recovery_of_a_delayed_model_from_its_analytic_responses():
     assert estimate.converged
     assert estimate.cost < 1e-20
     np.testing.assert_allclose(estimate.values, structure.as_vector(truth), rtol=1e-9)
+    pairs = len(PAIRS) + 2
+    assert f"J points           = {estimate.n_samples} over {pairs} pairs" in estimate.report()
 
 
 def _sweeps(structure, values, noise, seed):

@@ -471,7 +471,10 @@ class Estimate:
                  f"    estimator          = {self.estimator}",
                  f"    converged          = {self.converged} ({self.stop_reason})",
                  f"    iterations         = {self.iterations}",
-                 f"    samples            = {self.n_samples} × {len(self.output_names)} outputs",
+                 (f"    J points           = {self.n_samples} over "
+                  f"{len(self.output_names)} pairs" if self.estimator == "frequency-response"
+                  else f"    samples            = {self.n_samples} × "
+                       f"{len(self.output_names)} outputs"),
                  f"    cost               = {self.cost:.6g}",
                  f"    RMSE               = {self._rmse_line()}"]
         lines.extend(self._output_lines())
