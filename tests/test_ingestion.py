@@ -320,3 +320,11 @@ def test_epoch_times_and_microseconds_are_read_as_uniform_time():
     m = Maneuver.from_columns("px4", columns, ingestion={
         "channels": {"TIME_us": {"signal": "time", "unit": "µs"}}})
     assert m.dt == pytest.approx(0.02)
+
+
+def test_a_moment_of_a_clock_timed_record_is_told_from_its_start():
+    from rotorid.ingestion import moment_text
+
+    assert moment_text(np.arange(5) * 0.1, 3) == "t = 0.3 s"
+    clock = 15863530.0 + np.arange(5) * 0.02
+    assert moment_text(clock, 3) == "0.06 s into the record (t = 15863530.06 s)"

@@ -262,7 +262,7 @@ def _fill_nan_gaps(columns: dict, where: str) -> tuple[dict, int]:
             raise DataError(f"{where}: channel {name!r} holds no number at all")
         starts = np.flatnonzero(np.diff(np.concatenate([[0], missing.astype(int)])) == 1)
         warnings.warn(f"{where}: channel {name!r} has {starts.size} NaN gap(s), "
-                      f"{int(missing.sum())} samples, the first at t = {time[starts[0]]:.6g} s "
+                      f"{int(missing.sum())} samples, the first at {moment_text(time, starts[0])} "
                       f"(a dropout); resampling interpolates across them",
                       DataWarning, stacklevel=5)
         filled[name] = np.interp(time, time[~missing], values[~missing])
@@ -363,3 +363,13 @@ def prepare_columns(columns: Mapping[str, np.ndarray], units: str,
         prepared, notes["trim_removed"] = _remove_trim(prepared, ingestion, units, where)
         notes["trim_units"] = unit_system(ingestion.trim_units or units).name
     return prepared, notes
+
+
+def moment_text(time: np.ndarray, index: int) -> str:
+    """When sample ``index`` of a record with ``time`` (s) lies: ``t = 12.34 s``, or for a
+    record that does not start at zero (a clock) the time into it with the recorded value
+    beside it (``12.34 s into the record (t = 15863542.34 s)``)."""
+    into = float(time[index] - time[0])
+    if time[0] == 0:
+        return f"t = {into:.4g} s"
+    return f"{into:.4g} s into the record (t = {float(time[index]):.12g} s)"

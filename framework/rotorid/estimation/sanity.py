@@ -28,6 +28,7 @@ from rotorid.data import ManeuverSet
 from rotorid.errors import DataWarning
 from rotorid.estimation.data_checks import is_constant
 from rotorid.estimation.kinematics import WHERE_UNITS, check_kinematics
+from rotorid.ingestion import moment_text
 from rotorid.model.signals import ModelSignals
 from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.units import CHANNEL_KINDS, unit_system
@@ -220,7 +221,8 @@ def _first_flat_run(maneuver, column: int, unit: str):
         value = record[start]
         kind = "clipped" if value in (record.max(), record.min()) else "dropout"
         return kind, (f"{value:.6g}{unit} for {length} samples ({length * maneuver.dt:.3g} s) "
-                      f"from t = {maneuver.time[start]:.4g} s in maneuver {maneuver.name!r}")
+                      f"from {moment_text(maneuver.time, start)} in maneuver "
+                      f"{maneuver.name!r}")
     return None
 
 
