@@ -108,17 +108,17 @@ def test_time_histories_draw_measured_thin_and_grey_behind_the_models(hover):
 
 def test_time_histories_of_a_record_on_a_range_clock_start_at_zero(hover):
     """A record time-stamped on the range's clock (seconds of day): its axes run from the
-    record's start, which the label names, not from 35012 s."""
+    record's start, which the label names in full, not from 15863530 s (1.58635e+07)."""
     maneuver = next(m for m in hover.identification if m.metadata["kind"] == "3211")
     index = list(hover.identification).index(maneuver)
-    late = attrs.evolve(maneuver, time=maneuver.time + 35012.0)
+    late = attrs.evolve(maneuver, time=maneuver.time + 15863530.0)
     figure = plot_time_histories(late, {"model": hover.simulated("with delays")[index]})
     start, end = input_window(maneuver)
     for axis in figure.axes:
         low, high = axis.get_xlim()
         assert -1.0 < low and high < maneuver.duration + 1.0
     zoom = figure.axes[-1]
-    assert zoom.get_xlabel() == "time from the record's start at 35012 s [s]"
+    assert zoom.get_xlabel() == "time from the record's start at t = 15863530 s [s]"
     assert zoom.get_xlim()[0] == pytest.approx(start, abs=0.5)
 
 

@@ -239,7 +239,7 @@ def plot_time_histories(maneuver: Maneuver, simulated: Mapping[str, np.ndarray],
     start, end = (t - origin for t in input_window(maneuver))
     time = maneuver.time - origin
     time_label = ("time t [s]" if origin == 0.0
-                  else f"time from the record's start at {origin:g} s [s]")
+                  else f"time from the record's start at t = {origin:.12g} s [s]")
     for column, signal in enumerate(outputs):
         _outputs_panel(axes[column], time, measured[:, column],
                        {label: values[:, column] for label, values in simulated.items()},
