@@ -320,7 +320,7 @@ COMMANDS = [
                                   (5, 7, "p", "r"))],
     ("identify-unknown-estimator", lambda tmp_path: [*_identify()(tmp_path), "--estimator",
                                                      "magic"],
-     ExitStatus.ERROR, ["no estimator named 'magic'", "rotorid plugins"]),
+     ExitStatus.USAGE, ["argument --estimator: no estimator named 'magic'", "rotorid plugins"]),
     ("identify-unknown-noise", lambda tmp_path: [*_identify()(tmp_path), "--noise", "pink"],
      ExitStatus.USAGE, ["argument --noise", "'pink'"]),
     ("identify-fixed-delay-longer-than-records", _identify(model=TEN_SECOND_DELAY),

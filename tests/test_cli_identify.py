@@ -243,7 +243,7 @@ def test_bad_inputs_give_one_line_errors(case, tmp_path, capsys):
         ["identify", str(model), str(tmp_path / "missing.csv"), "--out", out], capsys)
     assert "no estimator named 'least-squares'" in _error_line(
         ["identify", str(model), str(data), "--estimator", "least-squares", "--out", out],
-        capsys)
+        capsys, ExitStatus.USAGE)
     assert "argument --outputs: 'vz' is no output of" in _error_line(
         ["identify", str(model), str(data), "--outputs", "q,vz", "--out", out, "--quiet"],
         capsys, ExitStatus.USAGE)

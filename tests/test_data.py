@@ -137,8 +137,13 @@ def test_extra_channels_are_read_by_name_cut_with_the_record_and_checked():
     np.testing.assert_array_equal(maneuver.head(0.1).channel("V"), [50.0, 51.0, 52.0, 53.0,
                                                                     54.0, 55.0])
     assert maneuver.with_outputs(np.zeros((10, 8))).channel("V")[9] == 59.0
-    with pytest.raises(DataError, match="unknown channel 'beta'; channels: time, .*, r, V$"):
+    # a channel of a known kind the record lacks: the model uses it, and the fixes are named
+    with pytest.raises(DataError, match="has no channel 'beta', which the model uses; .*"
+                                        "leave the output out of the fit .*the record's "
+                                        "channels: time, .*, r, V$"):
         maneuver.channel("beta")
+    with pytest.raises(DataError, match="unknown channel 'bta'; channels: time, .*, r, V$"):
+        maneuver.channel("bta")
     with pytest.raises(DataError, match="extra channel 'q' repeats an input or output channel"):
         attrs.evolve(base, extra_channels={"q": np.zeros(10)})
     with pytest.raises(DataError, match=r"expected shape \(10, 1\) for channels V, got \(9, 1\)"):

@@ -246,7 +246,8 @@ class Maneuver:
                             f"leave the output out of the fit (--outputs, the estimator's "
                             f"outputs), remove the derivatives of the control, or choose a "
                             f"model without it (a structure template such as longitudinal or "
-                            f"lateral)")
+                            f"lateral); the record's channels: "
+                            f"{', '.join(self.channel_names + tuple(self.extra_channels))}")
         raise DataError(f"unknown channel {name!r}; channels: "
                         f"{', '.join(self.channel_names + tuple(self.extra_channels))}")
 
