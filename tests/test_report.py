@@ -262,3 +262,21 @@ def test_the_bode_caption_names_the_response_the_analytic_one_is_compared_with()
         "p/aileron, identified model. Blue")
     assert "red: the measured response conditioned on lat, ped" in caption
     assert "which the conditioned response is compared with" in caption
+
+
+def test_a_flat_rmse_path_is_named_beside_the_lowest_rmse_selection():
+    """RMSE 1.0, 1.009, 0.998, 1.003: the lowest is step 2, the parsimonious rule (1 %) keeps
+    step 3, 0.50 % above it; the report says the path is flat there."""
+    from rotorid import Derivative, ModelStructure
+    from rotorid.estimation.reduction import ReductionPath, ReductionStep
+    from rotorid.report.html import _other_selections
+    from test_estimation_rules import HOVER, estimate_of
+
+    structure = ModelStructure(HOVER, [Derivative("L_p")])
+    steps = [ReductionStep(k, None, estimate_of(np.eye(1), [1.0], ("L_p",), rmse=rmse),
+                           structure) for k, rmse in enumerate((1.0, 1.009, 0.998, 1.003))]
+    text = _other_selections(ReductionPath(steps, "lowest-rmse", 0.01))
+    assert text.startswith("Other rules would select: parsimonious (1%) step 3, first-rise "
+                           "(1%) step 3.")
+    assert "step 3 (1 parameter) lies within 0.50% of the lowest" in text
+    assert "flat" not in _other_selections(ReductionPath(steps[:3], "lowest-rmse", 0.01))

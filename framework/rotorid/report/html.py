@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from rotorid.estimation.estimate import rmse_counted_units, rmse_unit
+from rotorid.progress import counted as plural
 from rotorid.io import atomic_write
 from rotorid.model.derivatives import delayed_derivative
 from rotorid.model.modes import modes
@@ -666,10 +667,21 @@ def pair_anchor(pair: str) -> str:
 def _other_selections(path) -> str:
     """Where the other selection rules land on the path (tolerance rules with their
     tolerance)."""
+    selections = path.selections()
     others = [f"{rule} ({path.rmse_tolerance:.0%}) step {index}" if rule != "lowest-rmse"
               else f"{rule} step {index}"
-              for rule, index in path.selections().items() if rule != path.rule]
-    return f"Other rules would select: {', '.join(others)}." if others else ""
+              for rule, index in selections.items() if rule != path.rule]
+    text = f"Other rules would select: {', '.join(others)}." if others else ""
+    lowest, lean = selections["lowest-rmse"], selections["parsimonious"]
+    if path.rule == "lowest-rmse" and lean > lowest:
+        steps = path.steps
+        spread = steps[lean].rmse / steps[lowest].rmse - 1.0
+        text += (f" The RMSE is flat over the path: step {lean} "
+                 f"({plural(steps[lean].n_parameters, 'parameter')}) lies within {spread:.2%} of the "
+                 f"lowest, so the lowest-RMSE rule chooses among nearly equal fits; the "
+                 f"parsimonious rule ([reduction] rule = \"parsimonious\") keeps the smaller "
+                 f"one.")
+    return text
 
 
 def _delays_text(result) -> str:
