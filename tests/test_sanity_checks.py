@@ -97,6 +97,20 @@ def test_az_holding_one_g_is_named_and_not_reported_as_an_offset(model, clean):
         in message
 
 
+def test_an_angle_in_deg_read_as_rad_is_named(model, clean):
+    """φ recorded in deg but declared rad reaches 57.3 times its swing in deg: past 180°."""
+    def read_as_rad(y):
+        y[:, _column("phi")] = np.degrees(y[:, _column("phi")])
+        return y
+
+    largest = max(float(np.max(np.abs(m.channel("phi")))) for m in clean)
+    assert largest < 180.0 < 57.3 * largest
+    [message] = [m for m in _messages(_changed(clean, read_as_rad), model[0])
+                 if "beyond any maneuver's angle" in m]
+    assert message.startswith("output 'phi' reaches ") and '{"phi": "deg"}' in message
+    assert not [m for m in _messages(clean, model[0]) if "beyond any maneuver's angle" in m]
+
+
 def test_rates_recorded_in_rad_per_s_are_named(model, clean):
     def in_radians(y):
         for name in ("q", "p", "r"):

@@ -8,7 +8,8 @@ find data a fit would use and be misled by; each warning gives the numbers and t
 - outputs that are not perturbations from trim: ``az`` holding 1 g, other outputs starting
   far from zero (an offset, an absolute attitude);
 - an implausible unit scale: angular rates far too small (rad/s declared as deg/s) or too
-  large (deg/s declared as rad/s) for a maneuver that moves the controls;
+  large (deg/s declared as rad/s) for a maneuver that moves the controls; an angle beyond
+  180° from zero (deg read as rad);
 - a sensor that sits on one value for several samples: at its extreme (saturated or clipped)
   or elsewhere (a dropout held at the last value);
 - rates and accelerations that do not integrate to the attitudes and velocities
@@ -45,6 +46,8 @@ ONE_G_TOLERANCE = 0.2
 FLAT_RUN = 5
 #: Plausible range of the largest angular rate of a maneuver that moves the controls, deg/s.
 PLAUSIBLE_RATE_DEG = (1.0, 400.0)
+#: No identification maneuver moves a flow angle or attitude further than this from trim, deg.
+PLAUSIBLE_ANGLE_DEG = 180.0
 RATE_CHANNELS = ("q", "p", "r")
 
 
@@ -177,6 +180,22 @@ def _check_input_offsets(maneuvers: ManeuverSet, signals: ModelSignals | None) -
               f"remove the trim (rotorid identify --trim first-second, or --trim {name}=VALUE)")
 
 
+def _check_angle_range(maneuvers: ManeuverSet) -> None:
+    """An angle output (attitude, flow angle, rotor angle) beyond :data:`PLAUSIBLE_ANGLE_DEG`
+    from zero: recorded in deg and read as rad (a 5° swing of α read as 5 rad)."""
+    system = unit_system(maneuvers.units)
+    to_deg = math.degrees(1.0) / system.angle_per_radian
+    for name in maneuvers.output_names:
+        if CHANNEL_KINDS.get(name) != "angle":
+            continue
+        largest = max(float(np.max(np.abs(m.channel(name)))) for m in maneuvers)
+        if largest * to_deg > PLAUSIBLE_ANGLE_DEG:
+            unit = system.label(name)
+            _warn(f"output {name!r} reaches {largest:.4g} {unit} ({largest * to_deg:.4g} deg) "
+                  f"from zero, beyond any maneuver's angle: was it recorded in deg and read as "
+                  f"rad? Declare its unit ({WHERE_UNITS} {{\"{name}\": \"deg\"}})")
+
+
 def _check_rate_scale(maneuvers: ManeuverSet) -> None:
     if all(is_constant(m.inputs) for m in maneuvers):
         return
@@ -269,6 +288,7 @@ def check_data(maneuvers: ManeuverSet, condition: FlightCondition | None = None,
     _check_offsets(maneuvers, ("az",) if one_g else (), signals)
     _check_input_offsets(maneuvers, signals)
     _check_rate_scale(maneuvers)
+    _check_angle_range(maneuvers)
     _check_flat_runs(maneuvers, signals)
     check_kinematics(maneuvers, condition)
 
