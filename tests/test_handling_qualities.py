@@ -82,6 +82,24 @@ def test_default_pairs_are_the_models_own_and_a_missing_path_has_no_numbers():
                                  pairs=["phi/lat"])
 
 
+def test_an_aeroplanes_pitch_attitude_over_its_elevator_has_the_same_numbers():
+    """The fixed-wing template with M_q and a delayed M_elevator alone: θ/δe is the same
+    K e^(−τs)/(s(s + a)) (u and w do not feed back into q), so the hand computation holds."""
+    condition = rotorid.FlightCondition(u0=50.0, w0=0.0, theta0=0.0)
+    structure = rotorid.ModelStructure.populated(condition, "fixed-wing-longitudinal", "si")
+    structure = structure.without(*[n for n in structure.names
+                                    if n not in ("M_q", "M_elevator")]).with_delays(
+        ["M_elevator"])
+    assert available_pairs(structure.outputs, structure.controls) == ("theta/elevator",)
+    values = {"M_q": -A, "M_elevator": K, "tau_M_elevator": TAU}
+    (pitch,) = model_handling_qualities(structure, values, np.geomspace(0.1, 100.0, 4000))
+    omega_180, omega_135, omega_gain, delay = _reference()
+    assert pitch.pair == "theta/elevator"
+    assert pitch.omega_180 == pytest.approx(omega_180, rel=1e-4)
+    assert pitch.bandwidth == pytest.approx(min(omega_135, omega_gain), rel=1e-4)
+    assert pitch.phase_delay == pytest.approx(delay, rel=1e-3)
+
+
 def test_measured_responses_heading_from_yaw_rate_and_reversed_sign():
     structure = rotorid.ModelStructure(rotorid.FlightCondition.from_airspeed(0.0), [
         Derivative("N_r"), Derivative("N_ped")]).with_delays(["N_ped"])

@@ -460,7 +460,8 @@ def handling_qualities_html(result) -> str:
         return ""
     return "\n".join([
         '<h2 id="handling-qualities">Handling qualities: ADS-33 bandwidth and phase delay</h2>',
-        "<p>Per ADS-33E-PRF §3.3–3.4 (small-amplitude attitude changes): ω180 where the "
+        "<p>Per ADS-33E-PRF §3.3–3.4 (small-amplitude attitude changes; an aeroplane's pairs "
+        "by the same definitions, MIL-STD-1797A's bandwidth criterion): ω180 where the "
         "attitude's phase reaches −180°, the phase bandwidth at −135°, the gain bandwidth "
         "where the gain is 6 dB above its value at ω180, the bandwidth the lesser, and the "
         "phase delay τ_p = −(Φ(2ω180) + 180°)/(57.3·2ω180). The heading is the integrated yaw "

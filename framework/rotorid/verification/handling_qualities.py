@@ -10,7 +10,9 @@ For an attitude response Φ(ω) = ∠H(jω) in deg (unwrapped) and |H| in dB:
 * phase delay τ_p = −(Φ(2ω180) + 180°) / (57.3·2ω180) in s.
 
 The pairs are pitch attitude over longitudinal cyclic (``theta/long``), roll attitude over
-lateral cyclic (``phi/lat``) and heading over pedal (``psi/ped``). The heading is not a model
+lateral cyclic (``phi/lat``) and heading over pedal (``psi/ped``), and an aeroplane's over its
+elevator, ailerons and rudder (``theta/elevator``, ``phi/aileron``, ``psi/rudder``), for which
+MIL-STD-1797A's bandwidth criterion uses the same definitions. The heading is not a model
 output; its response is taken as that of the yaw rate integrated, ψ = r/(jω) (ψ̇ = r about
 level trim). Crossings are interpolated linearly in log ω between grid points. A response
 whose low-frequency phase is positive (a control whose positive sense reduces the attitude)
@@ -36,8 +38,9 @@ from rotorid.verification.frequency import (
 )
 from rotorid.verification.pairs import primary_axis
 
-#: ADS-33's attitude pairs; ``psi`` is the heading (integrated yaw rate).
-HQ_PAIRS = ("theta/long", "phi/lat", "psi/ped")
+#: The attitude pairs: ADS-33's and an aeroplane's; ``psi`` is the heading (integrated yaw
+#: rate).
+HQ_PAIRS = ("theta/long", "phi/lat", "psi/ped", "theta/elevator", "phi/aileron", "psi/rudder")
 #: deg per rad as ADS-33 writes it in the phase-delay formula.
 DEG_PER_RAD = 57.3
 
