@@ -80,3 +80,30 @@ def test_output_error_names_the_fast_mode_of_its_fit():
     assert estimate.value("Y_v") == pytest.approx(-80.0, rel=0.05)
     assert any(n.startswith("modes faster than the records resolve") and "Y_v" in n
                for n in estimate.notes)
+
+
+def test_smoothly_moving_inputs_under_the_zero_order_hold_are_named():
+    """A doublet held by a computer jumps by its whole excursion within one sample; the same
+    doublet through a 0.06 s actuator lag at 50 Hz moves at most 1 − e^(−0.02/0.06) = 28 % of
+    it per sample: named under the zero-order hold, not under the first-order one."""
+    import attrs
+    from rotorid.data import Maneuver, ManeuverSet
+    from rotorid.estimation.fit_notes import smooth_inputs_note
+
+    time = np.arange(0.0, 4.0, 0.02)
+    held = np.where((time >= 1.0) & (time < 1.5), 1.0, 0.0) - np.where(
+        (time >= 1.5) & (time < 2.0), 1.0, 0.0)
+    lagged = np.zeros_like(held)
+    decay = math.exp(-0.02 / 0.06)
+    for k in range(1, time.size):
+        lagged[k] = decay * lagged[k - 1] + (1 - decay) * held[k - 1]
+
+    def record(stick):
+        inputs = np.zeros((time.size, 4))
+        inputs[:, 0] = stick
+        return ManeuverSet([Maneuver("doublet", time, inputs, np.zeros((time.size, 8)))])
+
+    assert smooth_inputs_note(record(held)) is None
+    note = smooth_inputs_note(record(lagged))
+    assert note is not None and "above 28% of their excursion" in note and "--hold foh" in note
+    assert smooth_inputs_note(attrs.evolve(record(lagged), hold="foh")) is None

@@ -22,7 +22,8 @@ from rotorid.data import ManeuverSet
 from rotorid.errors import DataWarning, EstimationError, SimulationDivergedError
 from rotorid.estimation.coloured_residuals import coloured_covariance
 from rotorid.estimation.estimate import Estimate
-from rotorid.estimation.fit_notes import fast_modes_note, held_delay_note, outlying_maneuvers
+from rotorid.estimation.fit_notes import (fast_modes_note, held_delay_note, outlying_maneuvers,
+                                          smooth_inputs_note)
 from rotorid.estimation.models import (
     LinearModel,
     as_model,
@@ -357,6 +358,7 @@ class OutputErrorEstimator:
         notes = [note for note in (
             outlying_maneuvers(residuals, maneuvers.names, estimate.noise_covariance),
             None if structure is None else held_delay_note(structure, maneuvers.hold),
+            smooth_inputs_note(maneuvers),
             None if structure is None else fast_modes_note(
                 structure, _structure_values(structure, estimate), maneuvers[0].dt))
             if note is not None]

@@ -1,6 +1,6 @@
 """Notes on a finished fit that point at the data or the setup: maneuvers whose residuals
-stand out, delays the zero-order hold hides from an output, and modes faster than the records
-resolve."""
+stand out, delays the zero-order hold hides from an output, smoothly moving inputs held by it,
+and modes faster than the records resolve."""
 
 from __future__ import annotations
 
@@ -15,6 +15,9 @@ from rotorid.model.modes import modes
 OUTLIER_FACTOR = 4.0
 #: A mode whose |λ| times the records' sample time exceeds this settles within two samples.
 FAST_MODE_STEP = 0.5
+#: Inputs whose largest change over one sample stays below this fraction of their excursion
+#: in every maneuver move smoothly: recorded positions, not commands held between samples.
+SMOOTH_INPUT_STEP = 0.5
 
 
 def outlying_maneuvers(residuals: Sequence[np.ndarray], names: Sequence[str],
@@ -113,3 +116,26 @@ def fast_modes_note(structure, values, sample_time: float) -> str | None:
             f"lacks (actuator or motor lags, delays, rotor states: add them), turbulence in the "
             f"records (fit with filter error), or a poor start (start elsewhere); else fix or "
             f"remove those derivatives")
+
+
+def smooth_inputs_note(maneuvers) -> str | None:
+    """Under the zero-order hold, a note when every moving input of every maneuver changes by
+    less than :data:`SMOOTH_INPUT_STEP` of its excursion from one sample to the next: such
+    inputs are recorded positions (surfaces, actuators) that move between samples, which the
+    first-order hold follows and the zero-order hold delays by half a sample; None
+    otherwise (a multistep a computer holds jumps by its whole step within one sample)."""
+    if maneuvers.hold != "zoh":
+        return None
+    largest = []
+    for maneuver in maneuvers:
+        for column in maneuver.inputs.T:
+            excursion = float(np.ptp(column))
+            if excursion > 0:
+                largest.append(float(np.max(np.abs(np.diff(column)))) / excursion)
+    if not largest or max(largest) >= SMOOTH_INPUT_STEP:
+        return None
+    return (f"the inputs move smoothly (no change over one sample above "
+            f"{max(largest):.0%} of their excursion): recorded positions rather than commands "
+            f"held between samples; the zero-order hold delays them by half a sample, which "
+            f"the derivatives then absorb: fit them with the first-order hold (--hold foh, "
+            f"[resampling] hold = \"foh\")")
