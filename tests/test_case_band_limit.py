@@ -115,3 +115,14 @@ def test_decimate_and_update_every_together_are_refused():
                                             r"update_every, not both"):
         FlightCase.from_mapping({**CASE, "estimator": FILTER_EVERY,
                                  "resampling": {"cutoff_hz": 4.0, "decimate": 6}}, "case.toml")
+
+
+def test_the_run_is_labelled_by_what_the_source_gives():
+    """Generated data come as a quick or a full set; recorded files are what they are (only a
+    [quick] table makes a quick run of them)."""
+    generated = FlightCase.from_mapping(CASE)
+    assert generated.run_label == "full set"
+    assert attrs.evolve(generated, is_quick=True).run_label == "quick set"
+    files = FlightCase.from_mapping({"name": "own", "data": {"source": "files",
+                                                             "identification": "f/*.csv"}})
+    assert files.run_label == "" and attrs.evolve(files, is_quick=True).run_label == "quick run"

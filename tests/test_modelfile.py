@@ -119,6 +119,9 @@ def test_out_of_order_structures_are_written_explicitly():
 
 @pytest.mark.parametrize("text, fragment", [
     ('speed = 1\n[condition]\n', "model.toml: unknown key 'speed'; known keys: units, "),
+    ('name = "own"\n[data]\nsource = "files"\n',
+     r"model.toml: a study case file \(it has a \[data\] table\), not a model file: run it "
+     r"with `rotorid study model.toml --out DIR`"),
     ('[condition]\nairspeed = 1\n', r"model.toml: \[condition\]: unknown key\(s\) \['airspeed'\]"),
     ('[condition]\n[structure]\nkeep = []\n',
      r"model.toml: \[structure\]: unknown key 'keep'"),

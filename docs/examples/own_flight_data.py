@@ -12,8 +12,9 @@ with delays, verified against frequency sweeps. The steps:
    (or build the same settings as a mapping: ``FlightCase.from_mapping({...})``).
 4. **Run the case**: from Python (``Study`` / ``run_case``, as here) or with the command
    ``rotorid study my-hover.toml --out results``.
-5. **Read the results**: ``results/my-hover/result.json`` and the printed summary (reduction
-   path, selected structure, delays, key derivatives, verification per sweep pair).
+5. **Read the results**: ``OUT/my-hover/result.json`` (``results/own-data/my-hover/`` with the
+   command below), ``OUT/report.html`` and the printed summary (reduction path, selected
+   structure, delays, key derivatives, verification per sweep pair).
 
 CSV format (details in docs/conventions.md, "Maneuver files")::
 
@@ -40,12 +41,14 @@ Without your own files the script first writes demonstration files: the built-in
 truth model (the ``helisim`` data source) trimmed in hover and flown with multisteps and
 sweeps, saved exactly in the format above, so every step runs as it would on flight data.
 
-Run it from the repository root::
+Run it from the repository root with the Python that has rotorid installed (README's
+``.venv/bin/python``, or ``python`` with that environment active)::
 
-    # demonstration data, reduced run (about 15 s on 2 cores)
-    python docs/examples/own_flight_data.py results/own-data --quick
+    # demonstration data, reduced run (about 90 s on 2 cores, figures included; measured
+    # 2026-11-28, 64 s through `rotorid study` on the case file it writes)
+    .venv/bin/python docs/examples/own_flight_data.py results/own-data --quick
     # your files
-    python docs/examples/own_flight_data.py results/flight-042 \\
+    .venv/bin/python docs/examples/own_flight_data.py results/flight-042 \\
         --identification 'flight042/multisteps/*.csv' --verification 'flight042/sweeps/*.csv' \\
         --airspeed-kt 0 --theta0-deg 2.1 --phi0-deg -2.8
 

@@ -125,6 +125,11 @@ def _derivative(name: str, settings, where: str) -> Derivative:
 
 def _structure(mapping: Mapping, source: str) -> ModelStructure:
     _require("table", mapping, f"{source}: a model file")
+    if "data" in mapping:
+        raise DataFileError(f"{source}: a study case file (it has a [data] table), not a "
+                            f"model file: run it with `rotorid study {source} --out DIR`, or "
+                            f"give `rotorid identify` a model file (keys "
+                            f"{', '.join(_TOP_KEYS)})")
     _check_keys(mapping, _TOP_KEYS, source)
     units = _require("string", mapping.get("units", "flight-test"), f"{source}: units")
     if "condition" not in mapping:

@@ -782,8 +782,8 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         f"{html.escape(result.condition.describe(estimates['no delays'].units))}. "
         f"{len(result.identification)} identification maneuvers"
         f"{html.escape(_kinds(result.identification))}, {verification_count} verification "
-        f"maneuvers; "
-        f"{'quick' if case.is_quick else 'full'} set. Units: {estimates['no delays'].units}; "
+        f"maneuvers{'; ' + case.run_label if case.run_label else ''}. Units: "
+        f"{estimates['no delays'].units}; "
         f"{html.escape(rmse_basis_text(estimates['no delays']))}. "
         f"Time: {html.escape(seconds)}.</p>",
         "<p>Machine-readable results: <a href=\"result.json\">result.json</a>; tables: "
@@ -807,7 +807,12 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
                  ("time-histories", "Time histories"),
                  ("verification", "Frequency-domain verification")]
     key_text = (f"Identified ({result.final_model_name}) beside the truth model's residualised "
-                "6-DoF linearisation and the published Helisim Bo-105 values (Padfield 2007)."
+                "6-DoF linearisation and the published Helisim Bo-105 values (Padfield 2007). "
+                "The verdict here compares the sign with the published value's (else the "
+                "truth linearisation's: the basis column); the claims above check "
+                "the paper's statements (e.g. N_v > 0 in hover), which the truth model itself "
+                "may contradict, so a derivative can hold the paper's claim and differ from "
+                "the truth model's sign."
                 if truth else f"Identified values of the {result.final_model_name} (measured "
                               "data: compared only with the reference values the case file "
                               "gives, if any).")

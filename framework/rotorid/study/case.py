@@ -269,6 +269,14 @@ class FlightCase:
             raise DataFileError(f"{path}: not valid TOML: {error}") from None
         return cls.from_mapping(mapping, str(path), path.parent)
 
+    @property
+    def run_label(self) -> str:
+        """``"quick set"`` or ``"full set"`` of data a source generates; for recorded files
+        ``"quick run"`` under a ``[quick]`` table (the files are what they are), else ``""``."""
+        if self.data_source == "files":
+            return "quick run" if self.is_quick else ""
+        return "quick set" if self.is_quick else "full set"
+
     # ----------------------------------------------------------------- variants
     def quick(self) -> "FlightCase":
         """The reduced but honest variant: shorter records, criteria-stopped reduction (the

@@ -337,7 +337,8 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     prepare_directory(directory, case, resume)
     notify("rotorid_case_started", case=case)
     clock = {"start": time.perf_counter()}
-    report(case.name, f"data: {case.data_source} ({'quick' if case.is_quick else 'full'} set)")
+    report(case.name, f"data: {case.data_source}"
+                      + (f" ({case.run_label})" if case.run_label else ""))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", DataWarning)
         data, condition = load_data(case, directory / "data")
