@@ -563,7 +563,9 @@ def hybrid_html(result, figures: Sequence = ()) -> str:
         f"({comparison.estimate.iterations} iterations, {comparison.seconds:.1f} s).{reduced} "
         "All three are judged alike: their simulation of the identification maneuvers, and J "
         f"per pair over {html.escape(comparison.band.describe())} "
-        f"({MISMATCH_COST_GUIDELINE_TEXT}).</p>",
+        f"({MISMATCH_COST_GUIDELINE_TEXT}): this comparison's own band, up to where the "
+        f"flapping acts, so its J and MUAD counts differ from those of the verification "
+        f"section, which counts {html.escape(result.case.band.describe())}.</p>",
         _html_table(hybrid_model_rows(result)),
         "<p>Points of each pair's error ε inside the MUAD envelope, of those the band and MUAD's "
         "own range count:</p>",
