@@ -280,3 +280,24 @@ def test_a_flat_rmse_path_is_named_beside_the_lowest_rmse_selection():
                            "(1%) step 3.")
     assert "step 3 (1 parameter) lies within 0.50% of the lowest" in text
     assert "flat" not in _other_selections(ReductionPath(steps[:3], "lowest-rmse", 0.01))
+
+
+def test_the_delay_section_says_what_the_profiles_determine():
+    """Three profiles over 0, 0.15, 0.3 s: one flat (RMSE at most 0.05 % worse), one that zero
+    delay fits within 1 % but 0.3 s does not, one that every other value fits worse."""
+    from rotorid.estimation.profiles import DelayProfile
+    from rotorid.report.html import _profiles_text
+
+    def profile(name, rises):
+        rmse = 1.0 + np.array(rises)
+        return DelayProfile(name, [0.0, 0.15, 0.3], rmse, rmse, [True] * 3, 0.1, 1.0, 1.0)
+
+    text = _profiles_text([profile("tau_M_p", [0.0005, 0.0001, 0.0]),
+                           profile("tau_M_q", [0.0036, 0.0, 0.03]),
+                           profile("tau_L_p", [0.017, 0.04, 0.4])])
+    assert text == (". The delay profiles (RMSE relative to the free fit's, over 0–0.3 s): flat "
+                    "for M_p (at most +0.05%): the data do not determine it, whatever the "
+                    "bounds say; zero delay fits within 1 % for M_q (+0.36%)")
+    assert _profiles_text([profile("tau_L_p", [0.017, 0.04, 0.4])]) == (
+        ". The delay profiles (RMSE over 0–0.3 s) determine every kept delay")
+    assert _profiles_text(()) == ""

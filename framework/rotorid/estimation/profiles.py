@@ -50,6 +50,20 @@ class DelayProfile:
         """RMSE relative to the free fit's, minus one, shape (K,): 0.01 is 1 % worse."""
         return self.rmse / self.free_rmse - 1.0
 
+    @property
+    def largest_rise(self) -> float:
+        """The largest :attr:`relative_rmse` of the converged refits (NaN without one): below
+        about 1 % the profile is flat, and the data do not determine the delay."""
+        rises = self.relative_rmse[self.converged]
+        return float(rises.max()) if rises.size else float("nan")
+
+    @property
+    def rise_at_zero(self) -> float | None:
+        """:attr:`relative_rmse` of the converged refit at 0 s (None without one): how much
+        worse the model fits without this delay."""
+        at_zero = np.flatnonzero((self.grid == 0.0) & self.converged)
+        return float(self.relative_rmse[at_zero[0]]) if at_zero.size else None
+
     def as_dict(self) -> dict:
         return {"delay": self.delay, "grid_s": self.grid.tolist(),
                 "det_r": self.cost.tolist(), "rmse": self.rmse.tolist(),

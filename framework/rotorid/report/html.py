@@ -702,7 +702,35 @@ def _delays_text(result) -> str:
                  "rad/s with the same delays, relative error "
                  f"{truth.relative_rms:.1%}): " + ", ".join(
                      f"{n} {v:.3f} s" for n, v in truth.delays.items()))
-    return text
+    return text + _profiles_text(result.delay_profiles)
+
+
+#: A delay profile whose RMSE stays within this of the free fit's does not determine it.
+FLAT_PROFILE = 0.01
+
+
+def _profiles_text(profiles) -> str:
+    """What the delay profiles say beyond the bounds: the delays whose profile is flat, and
+    those that zero delay fits nearly as well (within :data:`FLAT_PROFILE`)."""
+    if not profiles:
+        return ""
+    flat = [p for p in profiles if p.largest_rise < FLAT_PROFILE]
+    near_zero = [p for p in profiles if p not in flat and p.rise_at_zero is not None
+                 and p.rise_at_zero < FLAT_PROFILE]
+    span = f"{min(p.grid.min() for p in profiles):g}–{max(p.grid.max() for p in profiles):g} s"
+    parts = []
+    if flat:
+        parts.append("flat for " + ", ".join(
+            f"{delayed_derivative(p.delay)} (at most {p.largest_rise:+.2%})" for p in flat)
+            + ": the data do not determine " + ("it" if len(flat) == 1 else "them")
+            + ", whatever the bounds say")
+    if near_zero:
+        parts.append("zero delay fits within 1 % for " + ", ".join(
+            f"{delayed_derivative(p.delay)} ({p.rise_at_zero:+.2%})" for p in near_zero))
+    if not parts:
+        return f". The delay profiles (RMSE over {span}) determine every kept delay"
+    return f". The delay profiles (RMSE relative to the free fit's, over {span}): " + \
+        "; ".join(parts)
 
 
 def _band_source(band) -> str:
