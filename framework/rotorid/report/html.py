@@ -815,7 +815,7 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         f"maneuvers{'; ' + case.run_label if case.run_label else ''}. Units: "
         f"{estimates['no delays'].units}; "
         f"{html.escape(rmse_basis_text(estimates['no delays']))}. "
-        f"Time: {html.escape(seconds)}.</p>",
+        f"Time: {html.escape(seconds)} (the figures and this report come after).</p>",
         "<p>Machine-readable results: <a href=\"result.json\">result.json</a>; tables: "
         + ", ".join(f'<a href="tables/{t}.csv">{t}.csv</a>'
                     for t in case_table_names(result, claims))
