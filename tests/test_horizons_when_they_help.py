@@ -18,6 +18,10 @@ from rotorid.estimation.models import LinearModel
 from rotorid_output_error.levenberg_marquardt import Problem
 from test_docs_full_vs_diagonal_noise import _example
 
+#: The start of output error's note on the horizons it fitted first.
+HORIZONS_NOTE = ("horizons 3 s, 6 s first (fitted on each record's first seconds before the "
+                 "whole records, so that the simulation stays near the data): ")
+
 
 def _counting_evaluations(monkeypatch) -> list:
     """Patch the output-error cost evaluation to record the values of every call."""
@@ -61,11 +65,11 @@ def test_zero_and_unstable_starts_go_through_the_horizons():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IdentifiabilityWarning)
         zero = fit.estimate(structure, data)
-    assert zero.notes[0] == "horizons 3 s, 6 s first: zero start"
+    assert zero.notes[0] == HORIZONS_NOTE + "zero start"
     unstable = structure.as_vector(example.TRUTH)
     unstable[structure.parameter_names.index("M_w")] = 0.2      # statically unstable
     started = fit.estimate(structure, data, start=unstable)
-    assert started.notes[0] == ("horizons 3 s, 6 s first: the start model is unstable "
+    assert started.notes[0] == (HORIZONS_NOTE + "the start model is unstable "
                                 "(growth rate 0.961 1/s)")
     assert started.converged
     well_started = rotorid.create("estimators", "output-error").estimate(structure, data)
@@ -103,7 +107,7 @@ def test_a_continuation_ending_above_its_start_gives_way_to_the_full_fit_from_it
         expected = direct.estimate(structure, data)
         monkeypatch.setattr(type(estimator), "_run", led_astray)
         estimate = estimator.estimate(structure, data)
-    assert estimate.notes[0] == "horizons 3 s, 6 s first: zero start"
+    assert estimate.notes[0] == HORIZONS_NOTE + "zero start"
     assert ("the horizons ended above the start values' cost on the full records; refitted "
             "the full records from the start values") in estimate.notes
     np.testing.assert_array_equal(estimate.values, expected.values)
@@ -117,7 +121,7 @@ def test_initial_values_that_diverge_restart_from_the_equation_error_start():
     started = structure.with_initial(diverging)
     estimate = rotorid.create("estimators", "output-error").estimate(started, data)
     assert estimate.notes == (
-        "horizons 3 s, 6 s first: the start model is unstable (growth rate 42.5 1/s)",
+        HORIZONS_NOTE + "the start model is unstable (growth rate 42.5 1/s)",
         "the start values gave no finite cost; restarted from the equation-error start")
     assert estimate.converged
     well_started = rotorid.create("estimators", "output-error").estimate(structure, data)

@@ -201,7 +201,9 @@ class OutputErrorEstimator:
         reason, evaluated = (self._horizons_help(base, fitted, maneuvers, columns, weights,
                                                  values) if horizons else (None, None))
         if reason:
-            notes.append(f"horizons {', '.join(f'{h:g} s' for h in horizons)} first: {reason}")
+            notes.append(f"horizons {', '.join(f'{h:g} s' for h in horizons)} first (fitted "
+                         f"on each record's first seconds before the whole records, so that "
+                         f"the simulation stays near the data): {reason}")
         stages = [(h, Settings(max_iterations=15, cost_tolerance=1e-4, noise=self.noise))
                   for h in (horizons if reason else ())]
         stages.append((None, Settings(self.max_iterations, self.cost_tolerance,
