@@ -257,3 +257,26 @@ def test_records_without_q_dot_and_throttle_fit_when_neither_is_used():
         assert estimate.value(name) == pytest.approx(VALUES[name], rel=1e-3), name
     with pytest.raises(rotorid.errors.DataError, match="leave the output out of the fit"):
         rotorid.create("estimators", "output-error").estimate(structure, lean)
+
+
+def test_a_control_read_only_by_a_known_output_term_is_read_from_the_data():
+    """Throttle without any derivative but read directly by alpha's known equation (0.5 per
+    unit): the simulation reads it, so alpha steps by 0.5 with it; without that term it is
+    not read at all."""
+    import tomllib
+
+    from rotorid.model.modelfile import parse_model
+
+    text = DECLARED.format(theta0_deg="0.0", minus_w0=-2.0, minus_g_cos=-G_SI, minus_g_sin=0.0,
+                           g_cos=G_SI, g_sin=0.0, alpha_u=0.0, alpha_w=0.02).replace(
+        'alpha = { u = 0.0, w = 0.02 }', 'alpha = { w = 0.02, throttle = 0.5 }')
+    structure = parse_model(tomllib.loads(text), "direct")
+    structure = structure.without(*[n for n in structure.names if n.endswith("_throttle")])
+    assert structure.read_controls == ("elevator", "throttle")
+    _, _, maneuvers = _maneuvers("zoh")
+    alpha = Simulator(structure, maneuvers).outputs({})[0][:, structure.outputs.index("alpha")]
+    throttle = maneuvers[0].channel("throttle")
+    np.testing.assert_allclose(alpha, 0.5 * throttle, atol=1e-12)
+    plain = _structure()
+    plain = plain.without(*[n for n in plain.names if n.endswith("_throttle")])
+    assert plain.read_controls == ("elevator",)

@@ -257,6 +257,14 @@ class ModelStructure:
         return self.template.controls
 
     @property
+    def read_controls(self) -> tuple[str, ...]:
+        """The controls the model reads: those of a derivative (free or fixed) or of a known
+        output term; the data need not hold the others."""
+        variables = {d.variable for d in self.derivatives}
+        direct = np.any(self.known_terms().d != 0, axis=0)
+        return tuple(c for j, c in enumerate(self.controls) if c in variables or direct[j])
+
+    @property
     def outputs(self) -> tuple[str, ...]:
         return self.template.outputs
 

@@ -43,8 +43,8 @@ _BLOCK_SAMPLES = 64
 
 class _Group:
     """Maneuvers sharing one sample time, padded to a common length (time-major arrays);
-    ``inputs`` holds the ``controls`` channels, in that order, those not in ``used`` (no
-    derivative of the structure reads them) left at trim, unread."""
+    ``inputs`` holds the ``controls`` channels, in that order, those not in ``used`` (that
+    the structure does not read, ``ModelStructure.read_controls``) left at trim, unread."""
 
     def __init__(self, dt: float, indices: list[int], maneuvers, initial_states, controls,
                  used):
@@ -236,9 +236,8 @@ class Simulator:
         for i, m in enumerate(maneuvers):
             key = next((dt for dt in groups if abs(dt - m.dt) <= 1e-9 * dt), m.dt)
             groups.setdefault(key, []).append(i)
-        used = {d.variable for d in structure.derivatives}
-        self.groups = [_Group(dt, idx, maneuvers.maneuvers, states, structure.controls, used)
-                       for dt, idx in groups.items()]
+        self.groups = [_Group(dt, idx, maneuvers.maneuvers, states, structure.controls,
+                              structure.read_controls) for dt, idx in groups.items()]
         # The companion states of the last parameter vector simulated, per group: an
         # estimator asks for the sensitivities at the values it has just simulated.
         self._last_states: tuple[bytes, list] | None = None
