@@ -357,5 +357,6 @@ def test_filter_error_options_are_checked(case, tmp_path, capsys):
         base + ["--estimator", "filter-error", "--update-every", "0"], capsys,
         ExitStatus.USAGE)
     assert "vz" in _error_line(
-        base + ["--estimator", "filter-error", "--disturbances", "vz"], capsys)
+        base + ["--estimator", "filter-error", "--disturbances", "vz"], capsys,
+        ExitStatus.USAGE)
     assert not (tmp_path / "r.json").exists()

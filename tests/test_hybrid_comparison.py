@@ -24,6 +24,7 @@ from rotorid.study.case import FlightCase
 from rotorid.study.hybrid_comparison import FLAP_SHAPED, HYBRID_MODELS, compare_hybrid
 from rotorid.model.residualisation import derivatives_of, residualise
 from rotorid.verification.simulation_fit import simulation_fit
+from rotorid.verification.band import DEFAULT_BAND
 from rotorid.verification.verify import verify_model
 
 PAIRS = ("q/long", "p/lat")
@@ -132,8 +133,14 @@ def test_the_hybrids_quasi_steady_derivatives_recover_the_residualised_truth(inp
             estimate.value("M_q"), estimate["M_q"].cramer_rao)
 
 
+def _result(comparison):
+    """What the report reads of a case result: the comparison, and the case's band."""
+    return types.SimpleNamespace(hybrid_comparison=comparison,
+                                 case=types.SimpleNamespace(band=DEFAULT_BAND))
+
+
 def test_report_tables_of_the_three_models(comparison):
-    result = types.SimpleNamespace(hybrid_comparison=comparison)
+    result = _result(comparison)
     models = hybrid_model_rows(result)
     assert [row[0] for row in models[1:]] == list(HYBRID_MODELS)
     assert models[0][4:6] == ["J q/long [-]", "J p/lat [-]"]
@@ -153,7 +160,7 @@ def test_report_tables_of_the_three_models(comparison):
 
 
 def test_report_figures_of_the_three_models(comparison, tmp_path):
-    result = types.SimpleNamespace(hybrid_comparison=comparison)
+    result = _result(comparison)
     figures = hybrid_figures(result, tmp_path, "70 kt", comparison.structure.signals)
     assert [f.file for f in figures] == ["hybrid_error_q_long.png", "hybrid_error_p_lat.png"]
     assert all((tmp_path / f.file).stat().st_size > 0 for f in figures)
@@ -190,4 +197,4 @@ def test_the_hybrid_reduced_before_its_fit(inputs, comparison):
     assert reduced.removed and reduced.summary()["removed"] == list(reduced.removed)
     assert set(reduced.structure.names) == set(comparison.structure.names) - set(reduced.removed)
     assert set(REQUIRED) <= set(reduced.structure.names)
-    assert reduced.removed[-1] in hybrid_html(types.SimpleNamespace(hybrid_comparison=reduced))
+    assert reduced.removed[-1] in hybrid_html(_result(reduced))
