@@ -503,16 +503,19 @@ class FilterErrorEstimator:
     callback: Callable | None = None
 
     def check_structure(self, structure) -> None:
-        """Refuse, before any data exist, noise-model options naming a state that
-        ``structure`` (a ModelStructure; a model of one's own is checked when fitted) lacks."""
-        if not isinstance(structure, ModelStructure):
-            return
-        for option in ("process_noise", "disturbances", "gusts"):
-            unknown = [s for s in getattr(self, option) or () if s not in structure.states]
-            if unknown:
-                raise EstimationError(f"{option} names {', '.join(unknown)}, not states of the "
-                                      f"structure ({', '.join(structure.states)}); choose "
-                                      f"among those")
+        """Refuse, before any data exist, noise-model options that ``structure`` (a
+        ModelStructure; a model of one's own is checked when fitted) cannot take: the checks
+        of :meth:`_noise_states`."""
+        if isinstance(structure, ModelStructure):
+            self._noise_states(structure)
+
+    def _noise_states(self, structure: ModelStructure):
+        """The states of the process noise, the disturbances and the gusts in ``structure``
+        (:func:`process_noise_states`, :func:`gust_states`), each option checked."""
+        return (process_noise_states(structure, self.process_noise),
+                process_noise_states(structure, self.disturbances, "disturbances",
+                                     accelerations=True),
+                gust_states(structure, self.gusts))
 
     def estimate(self, structure: ModelStructure, maneuvers: ManeuverSet, *,
                  start=None) -> Estimate:
@@ -542,12 +545,10 @@ class FilterErrorEstimator:
         # it would otherwise shorten every step (the fit then stalls far from the optimum)
         settings = Settings(self.max_iterations, self.cost_tolerance, self.step_tolerance,
                             shorten_steps=False)
+        process_noise, disturbances, gusts = self._noise_states(structure)
         problem = FilterErrorProblem(
-            structure, maneuvers, process_noise_states(structure, self.process_noise),
-            settings, process_noise_states(structure, self.disturbances, "disturbances",
-                                           accelerations=True),
-            gust_states(structure, self.gusts), self.initial_states, self.output_biases,
-            self.update_every)
+            structure, maneuvers, process_noise, settings, disturbances, gusts,
+            self.initial_states, self.output_biases, self.update_every)
         values, note, given = self._start_values(problem, maneuvers, start)
         mine = not any(name in given for name in structure.parameter_names)
         from_equation_error = mine and self._wants_equation_error(structure)

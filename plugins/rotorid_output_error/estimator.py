@@ -362,7 +362,8 @@ class OutputErrorEstimator:
             None if structure is None else held_delay_note(structure, maneuvers.hold),
             smooth_inputs_note(maneuvers),
             None if structure is None else fast_modes_note(
-                structure, _structure_values(structure, estimate), maneuvers[0].dt))
+                structure, estimate.restricted(structure.parameter_names).values,
+                maneuvers[0].dt))
             if note is not None]
         coloured = coloured_text(residuals, selected.output_names, maneuvers[0].dt,
                                  "residuals")
@@ -389,11 +390,6 @@ class OutputErrorEstimator:
                 f"{factor:.2f} times the white-residual bounds (median)")
         return attrs.evolve(estimate, cramer_rao=bounds, correlation=correlation,
                             notes=(*estimate.notes, *notes, note))
-
-
-def _structure_values(structure: ModelStructure, estimate: Estimate) -> dict[str, float]:
-    """The structure's own parameters of ``estimate`` (the per-maneuver ones left out)."""
-    return {name: estimate.value(name) for name in structure.parameter_names}
 
 
 def _problem(model, maneuvers, columns, weights, settings) -> Problem:

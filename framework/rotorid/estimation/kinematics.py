@@ -32,8 +32,7 @@ from scipy.integrate import cumulative_trapezoid
 from rotorid.data import ManeuverSet
 from rotorid.errors import DataWarning
 from rotorid.model.structure import STATES, FlightCondition, ModelStructure
-from rotorid.units import FOOT, G_SI
-from rotorid.units import unit_system
+from rotorid.units import FOOT, G_SI, unit_system
 
 #: A scale factor further than this from 1 is reported.
 SCALE_TOLERANCE = 0.1

@@ -163,7 +163,7 @@ def load_result(path: str | os.PathLike, model: str | None = None,
         settings = record.get("case") if isinstance(record.get("case"), Mapping) else {}
         data = settings.get("data") if isinstance(settings.get("data"), Mapping) else {}
         ingestion = {k: data[k] for k in (*INGESTION_SETTINGS, "channels") if k in data}
-        hold = settings.get("identification_hold") or data.get("hold") or "zoh"
+        hold = checked_hold(settings.get("identification_hold") or data.get("hold"), path)
     else:
         if model is not None:
             raise UsageError(f"{path} is a `rotorid identify` result holding one model; "
@@ -173,9 +173,7 @@ def load_result(path: str | os.PathLike, model: str | None = None,
         ingestion = ({k: v for k, v in read.items() if k in INGESTION_SETTINGS}
                      if isinstance(read, Mapping) else {})
         declared = structure or _described_structure(record, path)
-        hold = record.get("hold") or "zoh"
-    if hold not in HOLDS:
-        raise DataFileError(f"{path}: hold {hold!r} is not one of {', '.join(HOLDS)}")
+        hold = checked_hold(record.get("hold"), path)
     if not isinstance(entry.get("parameters"), Mapping):
         raise DataFileError(f"{path}: no 'parameters' table; give a result written by "
                             f"`rotorid identify` or `rotorid study`")
@@ -185,6 +183,16 @@ def load_result(path: str | os.PathLike, model: str | None = None,
     return IdentifiedModel(identified, values, estimate, str(path), chosen, noise,
                            None if lag is None else float(lag),
                            None if inputs is None else tuple(inputs), ingestion, hold)
+
+
+def checked_hold(hold: str | None, path) -> str:
+    """The input hold a result file ``path`` records (``hold`` of a ``rotorid identify``
+    result, a study case's ``identification_hold``), checked; ``"zoh"`` where it records
+    none."""
+    hold = hold or "zoh"
+    if hold not in HOLDS:
+        raise DataFileError(f"{path}: hold {hold!r} is not one of {', '.join(HOLDS)}")
+    return hold
 
 
 def named_model_file(path: str | os.PathLike) -> Path | None:

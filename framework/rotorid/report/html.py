@@ -35,10 +35,10 @@ from pathlib import Path
 import numpy as np
 
 from rotorid.estimation.estimate import rmse_counted_units, rmse_unit
-from rotorid.progress import counted as plural
 from rotorid.io import atomic_write
 from rotorid.model.derivatives import delayed_derivative
 from rotorid.model.modes import modes
+from rotorid.progress import counted as plural
 from rotorid.report.figures import (
     ReportFigure,
     case_figures,
@@ -680,8 +680,8 @@ def _other_selections(path) -> str:
         steps = path.steps
         spread = steps[lean].rmse / steps[lowest].rmse - 1.0
         text += (f" The RMSE is flat over the path: step {lean} "
-                 f"({plural(steps[lean].n_parameters, 'parameter')}) lies within {spread:.2%} of the "
-                 f"lowest, so the lowest-RMSE rule chooses among nearly equal fits; the "
+                 f"({plural(steps[lean].n_parameters, 'parameter')}) lies within "
+                 f"{spread:.2%} of the lowest, so the lowest-RMSE rule chooses among nearly equal fits; the "
                  f"parsimonious rule ([reduction] rule = \"parsimonious\") keeps the smaller "
                  f"one.")
     return text

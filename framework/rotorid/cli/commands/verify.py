@@ -316,6 +316,7 @@ def _verify_own_model(args, reference, result_path, locations, band, envelopes):
     (:mod:`rotorid.verification.integrated`)."""
     from rotorid.data import ManeuverSet
     from rotorid.errors import UsageError
+    from rotorid.estimation.result_file import checked_hold
     from rotorid.io import read_json_object
     from rotorid.model.reference import load_model_reference
     from rotorid.verification.integrated import signal_sweeps, verify_integrated
@@ -336,7 +337,7 @@ def _verify_own_model(args, reference, result_path, locations, band, envelopes):
         return signal_sweeps(own, read)
 
     sweeps = _read_sweeps(args, locations, None, ingestion, lambda read: [], in_signals,
-                          record.get("hold") or "zoh")
+                          checked_hold(record.get("hold"), result_path))
     raw = ManeuverSet([as_recorded[m.name] for m in sweeps], hold=sweeps.hold)
     pairs = None if args.pairs is None else names(args.pairs)
     verification = verify_integrated(own, values, raw, pairs, envelopes, band=band)
