@@ -25,6 +25,7 @@ repository root::
                                              [--structure hybrid|six-dof]
                                              [--heave-disturbance] [--sigma SU SV SW]
                                              [--actuator-lag S] [--turbulent-only]
+                                             [--amplitude AXIS=PERCENT ...]
 
 ``--quick`` shortens the records to 60 %. ``--cutoff HZ`` fits both estimators to the records
 low-passed at HZ (zero phase) and kept at every N-th sample (:mod:`rotorid.resampling`; N by
@@ -54,8 +55,10 @@ the stick. ``--turbulent-only`` leaves the still-air fits out (the still-air rec
 give the hybrid its start). ``--two-stage`` replaces every input by its least-squares
 projection on the recorded multistep of its maneuver's axis (:func:`two_stage_inputs`), which
 removes the stabilising loops' answer to the turbulence from the inputs (a diagnostic of
-closed-loop bias). docs/estimation.md, "Hover in moderate turbulence", gives what each setting
-measured.
+closed-loop bias). ``--amplitude coll=12 ...`` flies the multisteps of the named axes at those
+amplitudes (% of travel, still air and turbulence alike; the built-in ones are long 5, lat 3,
+coll 6, ped 6): inputs sized for the turbulence. docs/estimation.md, "Hover in moderate
+turbulence", gives what each setting measured.
 """
 
 from __future__ import annotations
@@ -104,38 +107,39 @@ def declared(turbulence: str) -> dict[str, float]:
             for name, value in DECLARED.items()}
 
 
-def _settings(seed: int, quick: bool) -> dict:
-    """The helisim source's settings of the hover identification set."""
+def _settings(seed: int, quick: bool, amplitude=None) -> dict:
+    """The helisim source's settings of the hover identification set (``amplitude``: the
+    multisteps' amplitudes by axis, % of travel, in place of the built-in ones)."""
     return {"condition": "hover", "kinds": ["3211", "2311"], "seed": seed,
-            "duration_scale": 0.6 if quick else 1.0}
+            "duration_scale": 0.6 if quick else 1.0, "amplitude": dict(amplitude or {})}
 
 
-def still_air(source, seed: int, quick: bool):
+def still_air(source, seed: int, quick: bool, amplitude=None):
     """The still-air identification set flown by ``source`` and its hover trim condition."""
-    still = source.generate(_settings(seed, quick))
+    still = source.generate(_settings(seed, quick, amplitude))
     first = still[0].metadata
     return still, FlightCondition.from_airspeed(0.0, first["trim_theta_deg"],
                                                 first["trim_phi_deg"])
 
 
-def data_sets(turbulence, seed: int, quick: bool, source=None):
+def data_sets(turbulence, seed: int, quick: bool, source=None, amplitude=None):
     """(still air, turbulent) identification sets flown by ``source`` (a helisim source; by
     default the truth model) in ``turbulence`` (a preset name or a table of the helisim
     source's turbulence settings), the hover trim condition and the truth model's data
     source."""
     source = source_flown_by("nonlinear") if source is None else source
-    still, condition = still_air(source, seed, quick)
-    turbulent = source.generate({**_settings(seed, quick), "turbulence": turbulence})
+    still, condition = still_air(source, seed, quick, amplitude)
+    turbulent = source.generate({**_settings(seed, quick, amplitude), "turbulence": turbulence})
     return still, turbulent, condition, rotorid.create("data-sources", "helisim")
 
 
-def hybrid_truth(seed: int, quick: bool):
+def hybrid_truth(seed: int, quick: bool, amplitude=None):
     """A helisim source flying the hybrid structure that output error fits to still-air
     records of :data:`HYBRID_TRUTH_OF` (a truth of exactly the hybrid's form, delays dropped,
     as near that rotor as the hybrid gets; :meth:`LinearisedPlant.of_structure`), and that
     hybrid's quasi-steady key derivatives by name."""
     rotor = source_flown_by(HYBRID_TRUTH_OF)
-    still, condition = still_air(rotor, seed, quick)
+    still, condition = still_air(rotor, seed, quick, amplitude)
     six_dof = ModelStructure.six_dof(condition)
     hybrid = hybrid_from_six_dof(six_dof, fit("output-error", six_dof, still).values)
     values = fit("output-error", hybrid, still).values
@@ -248,6 +252,9 @@ def main(argv=None) -> dict:
     parser.add_argument("--update-every", action="store_true",
                         help="with --cutoff: filter error on the low-passed records at full "
                              "rate, updating at every N-th sample (N as --decimate)")
+    parser.add_argument("--amplitude", nargs="+", metavar="AXIS=PERCENT", default=(),
+                        help="multistep amplitudes (%% of travel) in place of the built-in "
+                             "ones, e.g. coll=12")
     parser.add_argument("--turbulent-only", action="store_true",
                         help="fit the turbulent records only (the still-air ones still give "
                              "the hybrid its start)")
@@ -257,13 +264,20 @@ def main(argv=None) -> dict:
     if args.turbulent_only and args.from_still:
         parser.error("--from-still starts from the still-air fit, which --turbulent-only skips")
 
+    try:
+        amplitude = {axis: float(percent) for axis, percent in
+                     (item.split("=") for item in args.amplitude)}
+    except ValueError:
+        parser.error(f"--amplitude takes AXIS=PERCENT items (long, lat, coll, ped), got "
+                     f"{' '.join(args.amplitude)}")
     turbulence = args.turbulence if args.sigma is None else {
         "preset": args.turbulence, "sigma": list(args.sigma), "span": NO_ROTATION_SPAN}
     if args.truth == "hybrid":
-        flown, truth = hybrid_truth(args.seed, args.quick)
+        flown, truth = hybrid_truth(args.seed, args.quick, amplitude)
     else:
         flown, truth = source_flown_by(args.truth), None
-    still, turbulent, condition, source = data_sets(turbulence, args.seed, args.quick, flown)
+    still, turbulent, condition, source = data_sets(turbulence, args.seed, args.quick, flown,
+                                                  amplitude)
     if args.actuator_lag is not None:
         still, turbulent = (lagged_inputs(data, args.actuator_lag) for data in (still, turbulent))
     six_dof = ModelStructure.six_dof(condition)
