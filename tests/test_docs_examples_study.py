@@ -430,6 +430,27 @@ def test_the_known_actuator_lag_puts_the_hover_roll_axis_within_its_bounds(capsy
     assert abs(miss["percent"]) > 10.0 and abs(miss["cr_off"]) > 3.0, miss
 
 
+def test_turbulence_example_flies_the_multisteps_at_the_amplitudes_given(capsys):
+    """turbulence_hover.py --amplitude: the named axes' multisteps are flown at those
+    amplitudes (% of travel), the others at the built-in ones; a malformed item is a usage
+    error that names the form."""
+    from rotorid_helisim.datasets import AMPLITUDE, DataSetConfig, maneuver_specs
+
+    example = _load("turbulence_hover")
+    specs = maneuver_specs(DataSetConfig.from_mapping(example._settings(0, True,
+                                                                        {"coll": 12.0})))
+    peaks = {}
+    for spec in specs:
+        peaks.setdefault(spec.axis, set()).add(float(np.max(np.abs(spec.signal(
+            np.arange(0.0, 15.0, 0.02))))))
+    assert peaks["coll"] == {12.0}
+    assert peaks["lat"] == {AMPLITUDE["lat"]}
+    with pytest.raises(SystemExit) as exit_info:
+        example.main(["--amplitude", "coll12"])
+    assert exit_info.value.code == 2
+    assert "AXIS=PERCENT" in capsys.readouterr().err
+
+
 @pytest.mark.slow
 def test_filter_error_on_decimated_records_reduces_to_the_truth_in_still_air(capsys):
     """docs/examples/turbulence_hover.py --decimate 4 --cutoff 4 on 60 % records: in still air
