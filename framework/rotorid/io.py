@@ -98,6 +98,18 @@ def read_json_object(path: str | os.PathLike, what: str, content: str = "") -> d
     return dict(record)
 
 
+def read_toml(path: str | os.PathLike, what: str) -> dict:
+    """The table stored in the TOML file ``path``; errors name ``what`` (e.g. ``"model
+    file"``), the path and the parser's line."""
+    import tomllib
+
+    path = require_file(path, what)
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        raise DataFileError(f"{path}: not a valid TOML file: {error}") from None
+
+
 #: A number as rotorid reads it from text: sign, decimal digits with an optional point, and an
 #: optional exponent; or the words nan and inf, which the readers then refuse by name. Python's
 #: other float syntax (``1_000``, surrounding words) is not a number here.

@@ -57,14 +57,13 @@ from __future__ import annotations
 
 import math
 import os
-import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 
 import attrs
 
 from rotorid.errors import DataFileError, RotoridError
-from rotorid.io import atomic_write, require_file
+from rotorid.io import atomic_write, read_toml
 from rotorid.model.derivatives import Derivative
 from rotorid.model.signals import ChannelMap
 from rotorid.model.structure import FlightCondition, ModelStructure
@@ -303,11 +302,7 @@ def _naming(source: str, error: Exception) -> DataFileError:
 
 
 def _read(path: str | os.PathLike) -> Mapping:
-    path = require_file(path, "model file")
-    try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise DataFileError(f"{path}: not a valid TOML file: {error}") from None
+    return read_toml(path, "model file")
 
 
 def case_model(case: Mapping, condition: Mapping, units: str, source: str) -> ModelStructure:

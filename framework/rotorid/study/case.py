@@ -31,7 +31,7 @@ import attrs
 
 from rotorid.actuators import lagged_inputs
 from rotorid.errors import DataFileError, MissingFileError, VerificationError
-from rotorid.io import require_file
+from rotorid.io import read_toml
 from rotorid.model.structure import PAPER_DELAYED
 from rotorid.plugin.manager import create
 from rotorid.resampling import decimated, low_passed
@@ -262,12 +262,7 @@ class FlightCase:
         if not path.exists():
             raise MissingFileError(f"no built-in case or case file {str(name_or_path)!r}; "
                                    f"built-in cases: {', '.join(BUILTIN)}")
-        require_file(path, "case file")
-        try:
-            mapping = tomllib.loads(path.read_text(encoding="utf-8"))
-        except tomllib.TOMLDecodeError as error:
-            raise DataFileError(f"{path}: not valid TOML: {error}") from None
-        return cls.from_mapping(mapping, str(path), path.parent)
+        return cls.from_mapping(read_toml(path, "case file"), str(path), path.parent)
 
     @property
     def run_label(self) -> str:

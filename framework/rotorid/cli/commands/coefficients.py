@@ -38,22 +38,16 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    import tomllib
-
     from rotorid.cli.files import refuse_overwrite
-    from rotorid.errors import DataFileError, ExitStatus, UsageError
+    from rotorid.errors import ExitStatus, UsageError
     from rotorid.estimation.result_file import load_result
-    from rotorid.io import atomic_write, require_file
+    from rotorid.io import atomic_write, read_toml
     from rotorid.model.coefficients import Aircraft, non_dimensional
     from rotorid.model.modelfile import load_model
 
     out = None if args.csv is None else refuse_overwrite(args.csv, args.force)
-    path = require_file(args.aircraft, "aircraft file")
-    try:
-        table = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise DataFileError(f"{path}: not a valid TOML file: {error}") from None
-    aircraft = Aircraft.from_mapping(table.get("aircraft", table), str(path))
+    table = read_toml(args.aircraft, "aircraft file")
+    aircraft = Aircraft.from_mapping(table.get("aircraft", table), args.aircraft)
     structure = None if args.structure is None else load_model(args.structure)
     identified = load_result(args.result, args.model, structure)
     if identified.estimate is None and not identified.values:
