@@ -27,6 +27,9 @@ def case_file(tmp_path, text: str):
      r"family; use .*muad"),
     ('[reduction]\ncriteria = ["cramer_rao"]\n',
      r"\[reduction\] criteria 'cramer_rao' is not registered.*use one of cramer-rao"),
+    ('[reduction]\ncriteria = [{ name = "cramer-rao", treshold = 5.0 }]\n',
+     r"\[reduction\] criteria: reduction criterion 'cramer-rao' has no option 'treshold'; "
+     r"its options: .*threshold"),
     ('[reduction]\nrule = "best"\n', r"\[reduction\] rule 'best' is unknown"),
     ('[reduction]\nwarm_start = "yes"\n', r"\[reduction\] warm_start must be true or false"),
     ('[estimator]\nname = "least-squares"\n', r"\[estimator\] name 'least-squares'"),

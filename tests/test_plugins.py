@@ -312,7 +312,7 @@ def test_envelopes_by_name_come_from_the_manager_given():
     manager = new_plugin_manager([plugin("flat_plugin", rotorid_validation_envelopes=registers)],
                                  load_entry_points=False)
     assert envelopes_by_name(["flat"], manager) == {"flat": FlatEnvelope()}
-    with pytest.raises(PluginError, match="no validation-envelope named 'muad'"):
+    with pytest.raises(PluginError, match="no validation envelope named 'muad'"):
         envelopes_by_name(["muad"], manager)
 
 
@@ -425,3 +425,31 @@ def test_a_study_with_a_manager_refuses_a_process_pool(tmp_path):
     case = FlightCase.load(Path(__file__).parent / "cases" / "tiny.toml")
     with pytest.raises(StudyError, match="cannot be sent to other processes"):
         Study([case], tmp_path, executor="process", manager=new_plugin_manager())
+
+
+def test_create_names_the_options_a_factory_takes():
+    """A misspelt or missing option names the options the factory's signature takes (the
+    built-in multisteps' amplitude, step_width …), also for a factory that takes none."""
+    with pytest.raises(PluginError, match=r"input signal '3211' has no option 'amplitud'; "
+                                          r"its options: amplitude, step_width, start"):
+        create("input-signals", "3211", amplitud=3.0)
+    with pytest.raises(PluginError, match=r"input signal '3211' needs options it was not "
+                                          r"given \('amplitude' and 'step_width'\)"):
+        create("input-signals", "3211")
+    registers = lambda: [PluginDescriptor("bare", lambda: FlatEnvelope(), "test")]  # noqa: E731
+    manager = new_plugin_manager([plugin("bare_plugin", rotorid_validation_envelopes=registers)],
+                                 load_entry_points=False)
+    with pytest.raises(PluginError, match=r"validation envelope 'bare' has no option "
+                                          r"'threshold'; its options: none$"):
+        create("validation-envelopes", "bare", manager, threshold=0.8)
+
+
+def test_a_registration_hook_that_raises_is_named():
+    def registers():
+        raise ModuleNotFoundError("No module named 'heavy'")
+
+    manager = new_plugin_manager([plugin("heavy_plugin", rotorid_input_signals=registers)],
+                                 load_entry_points=False)
+    with pytest.raises(PluginError, match=r"plugin 'heavy_plugin': rotorid_input_signals "
+                                          r"raised ModuleNotFoundError: No module named"):
+        registry("input-signals", manager)

@@ -168,3 +168,44 @@ def test_a_study_takes_its_plugins_from_the_manager_it_is_given(site, files, tmp
         case = FlightCase.load(case_file)
     Study([case], tmp_path / "out", progress=None, manager=manager).run()
     assert seen == [("example", "example-output-error")]
+
+
+def test_a_case_whose_condition_is_not_the_sources_trim_is_refused(site, tmp_path,
+                                                                   monkeypatch):
+    """The example source gives its trim (hover); a case stating 80 kt as well is refused with
+    both trims and the fix, where one stating the same hover trim runs on."""
+    import tomllib
+
+    from rotorid.errors import DataError
+    from rotorid.study.pipeline import load_data
+
+    monkeypatch.syspath_prepend(str(THIRDPARTY))
+    monkeypatch.syspath_prepend(str(site))
+    table = tomllib.loads(CASE)
+    with using(rotorid.new_plugin_manager()):
+        stated = FlightCase.from_mapping({**table, "condition": {
+            "airspeed_kt": 80.0, "theta0_deg": 5.0}}, "example.toml")
+        with pytest.raises(DataError, match=r"\[condition\] \(80.0 kt, Θ0 = 5.00°.*is not "
+                                            r"the trim.*\(0.0 kt.*remove the \[condition\]"):
+            load_data(stated, tmp_path)
+        same = FlightCase.from_mapping({**table, "condition": {"airspeed_kt": 0.0}},
+                                       "example.toml")
+        assert load_data(same, tmp_path)[1].airspeed_kt == 0.0
+
+
+def test_an_entry_point_that_cannot_be_imported_is_named_in_one_line(site, tmp_path):
+    """A broken installed plugin (its module missing): every command says which entry point
+    and distribution fail, in one line without a traceback, and exits with 3."""
+    broken = tmp_path / "broken"
+    info = broken / "acme_broken-1.0.dist-info"
+    info.mkdir(parents=True)
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: acme-broken\nVersion: 1.0\n",
+                                   encoding="utf-8")
+    (info / "entry_points.txt").write_text("[rotorid]\nbroken = acme_missing.plugin\n",
+                                           encoding="utf-8")
+    run = rotorid_cli(broken, "plugins")
+    assert run.returncode == 3
+    assert run.stderr.strip() == (
+        "rotorid: error: plugin 'broken' (acme_missing.plugin, from acme-broken) cannot be "
+        "imported: ModuleNotFoundError: No module named 'acme_missing'; fix it or uninstall "
+        "it (pip uninstall acme-broken)")

@@ -1,24 +1,19 @@
-"""Registers the built-in input signals (cheap to import; the signal classes load on use)."""
+"""Registers the built-in input signals: the multisteps (a kind of :class:`Multistep` each) and
+the sweep, their options those of the classes."""
+
+import functools
 
 from rotorid.plugin.hookspecs import PluginDescriptor, hookimpl
 
+from .signals import Multistep, Sweep
+
 
 def _multistep(kind):
-    def factory(**options):
-        from .signals import Multistep
-
-        return Multistep(kind, **options)
-
-    factory.__name__ = f"make_{kind}"
-    factory.__doc__ = (f"A {kind} multistep; options: amplitude (%), step_width (s), start, "
-                       f"trailing (s), sample_time (s).")
-    return factory
+    """A factory of ``kind`` multisteps taking :class:`Multistep`'s other fields."""
+    return functools.partial(Multistep, kind)
 
 
-def _sweep(**options):
-    from .signals import Sweep
-
-    return Sweep(**options)
+_sweep = Sweep
 
 
 @hookimpl
@@ -31,5 +26,6 @@ def rotorid_input_signals():
         PluginDescriptor("doublet", _multistep("doublet"),
                          "doublet (+1 −1 step widths): amplitude, step_width"),
         PluginDescriptor("sweep", _sweep,
-                         "logarithmic frequency sweep with 2 cycles at omega_min, trim at both ends"),
+                         "logarithmic frequency sweep with 2 cycles at omega_min, trim at both ends: "
+                         "amplitude, omega_min, omega_max, sweep_time"),
     ]

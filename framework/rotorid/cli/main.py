@@ -66,7 +66,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script; returns the exit status."""
-    parser = build_parser()
+    try:
+        parser = build_parser()
+    except RotoridError as error:              # an installed plugin that cannot be loaded
+        print(f"rotorid: error: {one_line(str(error))}", file=sys.stderr)
+        return ExitStatus.ERROR
     args = parser.parse_args(argv)
     if not getattr(args, "run", None):
         parser.print_help()

@@ -18,6 +18,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import functools
+import importlib.metadata
 import inspect
 from collections.abc import Iterable, Iterator
 
@@ -38,6 +39,10 @@ FAMILIES = {
     "input-signals": "rotorid_input_signals",
     "commands": "rotorid_commands",
 }
+#: One component of each family, as messages name it.
+COMPONENT_OF = {"estimators": "estimator", "reduction-criteria": "reduction criterion",
+                "validation-envelopes": "validation envelope", "data-sources": "data source",
+                "input-signals": "input signal", "commands": "command"}
 
 
 @attrs.frozen
@@ -64,13 +69,28 @@ def new_plugin_manager(extra_plugins: Iterable[object] = (), load_entry_points: 
     try:
         if load_entry_points:
             manager.load_setuptools_entrypoints(hookspecs.PROJECT)
-    except ImportError as error:
-        raise PluginError(f"a plugin of the {hookspecs.PROJECT!r} entry-point group cannot be "
-                          f"imported: {error}; fix or uninstall it") from error
+    except Exception as error:                 # a plugin's import may raise anything
+        raise _import_failure(error) from error
     _checked(manager.check_pending)
     for plugin in extra_plugins:
         register_plugin(plugin, manager)
     return manager
+
+
+def _import_failure(error: Exception) -> PluginError:
+    """What a failing ``rotorid`` entry point gets: the entry point that fails to import
+    (each tried again), its distribution and the error."""
+    for entry_point in importlib.metadata.entry_points(group=hookspecs.PROJECT):
+        try:
+            entry_point.load()
+        except Exception as failure:           # the one that fails, whatever it raises
+            distribution = entry_point.dist.name if entry_point.dist else "its distribution"
+            return PluginError(
+                f"plugin {entry_point.name!r} ({entry_point.value}, from {distribution}) "
+                f"cannot be imported: {type(failure).__name__}: {failure}; fix it or "
+                f"uninstall it (pip uninstall {distribution})")
+    return PluginError(f"a plugin of the {hookspecs.PROJECT!r} entry-point group cannot be "
+                       f"imported: {type(error).__name__}: {error}; fix or uninstall it")
 
 
 def register_plugin(plugin: object, manager: pluggy.PluginManager | None = None,
@@ -143,8 +163,10 @@ def _descriptors(impl, hook_name: str) -> list:
             raise PluginError(f"{hook_name} must return an iterable of PluginDescriptor "
                               f"objects, got {result!r}")
         return list(result)
-    except PluginError as error:
-        raise PluginError(f"plugin {impl.plugin_name!r}: {error}") from error
+    except Exception as error:                 # a plugin's hook may raise anything
+        what = error if isinstance(error, PluginError) else f"{hook_name} raised " \
+            f"{type(error).__name__}: {error}"
+        raise PluginError(f"plugin {impl.plugin_name!r}: {what}") from error
 
 
 def registry(family: str, manager: pluggy.PluginManager | None = None) -> dict[str, Registered]:
@@ -183,18 +205,22 @@ def create(family: str, name: str, manager: pluggy.PluginManager | None = None, 
     components = registry(family, manager)
     if name not in components:
         known = ", ".join(components) or "none"
-        raise PluginError(f"no {family[:-1] if family.endswith('s') else family} named "
-                          f"{name!r}; available: {known} (see `rotorid plugins`)")
+        raise PluginError(f"no {COMPONENT_OF[family]} named {name!r}; available: {known} "
+                          f"(see `rotorid plugins`)")
     factory = components[name].descriptor.factory
     try:
         component = factory(**options)
     except TypeError as error:
-        if "unexpected keyword argument" not in str(error):
-            raise
-        unknown = str(error).rsplit("unexpected keyword argument", 1)[1].strip()
-        kind = family[:-1] if family.endswith("s") else family
-        raise PluginError(f"{kind} {name!r} has no option {unknown}; its options: "
-                          f"{', '.join(_options_of(factory)) or 'none'}") from None
+        taken = ", ".join(_options_of(factory)) or "none"
+        if "unexpected keyword argument" in str(error):
+            unknown = str(error).rsplit("unexpected keyword argument", 1)[1].strip()
+            raise PluginError(f"{COMPONENT_OF[family]} {name!r} has no option {unknown}; "
+                              f"its options: {taken}") from None
+        if "missing" in str(error) and "required" in str(error):
+            raise PluginError(f"{COMPONENT_OF[family]} {name!r} needs options it was not "
+                              f"given ({str(error).split(': ', 1)[-1]}); its options: "
+                              f"{taken}") from None
+        raise
     problems = violations(family, component)
     if problems:
         raise PluginError(
@@ -205,8 +231,18 @@ def create(family: str, name: str, manager: pluggy.PluginManager | None = None, 
 
 
 def _options_of(factory) -> tuple[str, ...]:
-    """The keyword options of the component ``factory`` builds by default: its attrs fields,
-    else its ``__init__``'s keyword parameters (empty when it cannot be built bare)."""
+    """The keyword options ``factory`` takes: the named parameters of its signature (a
+    class's ``__init__``); for a factory taking ``**options`` (or without a signature), the
+    attrs fields or ``__init__`` parameters of the component it builds bare (empty when it
+    cannot)."""
+    keyword = (inspect.Parameter.KEYWORD_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)
+    try:
+        parameters = list(inspect.signature(factory).parameters.values())
+    except (TypeError, ValueError):            # a builtin without a signature
+        parameters = None
+    if parameters is not None and all(p.kind != inspect.Parameter.VAR_KEYWORD
+                                      for p in parameters):
+        return tuple(p.name for p in parameters if p.kind in keyword)
     try:
         component = factory()
     except Exception:                        # a component that needs options: none to list
@@ -214,8 +250,7 @@ def _options_of(factory) -> tuple[str, ...]:
     if attrs.has(type(component)):
         return tuple(f.name for f in attrs.fields(type(component)) if f.init)
     parameters = inspect.signature(type(component).__init__).parameters.values()
-    return tuple(p.name for p in parameters if p.name != "self" and p.kind in (
-        inspect.Parameter.KEYWORD_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD))
+    return tuple(p.name for p in parameters if p.name != "self" and p.kind in keyword)
 
 
 def notify(hook_name: str, manager: pluggy.PluginManager | None = None, **kwargs) -> None:

@@ -23,6 +23,7 @@ from rotorid.study.comparison import FREQUENCY_ESTIMATOR
 from rotorid.study.hybrid_comparison import HYBRID_OMEGA_MAX
 from rotorid.study.reference import check_reference_names
 from rotorid.units import FLIGHT_TEST, unit_fits_kind, units_of_kind
+from rotorid.verification.compare import envelopes_by_name
 from rotorid.verification.pairs import parse_pair
 
 #: The records' time column, which a channel map may link (in s or ms) beside the signals;
@@ -83,13 +84,17 @@ def check_case(case, where: str) -> None:
                  "[verification] pairs")
     for envelope in case.envelopes:
         check_registered("validation-envelopes", envelope, where, "[verification] envelopes")
+    _wrapped(lambda: envelopes_by_name(case.envelopes, band=case.band), where,
+             "[verification] envelopes")
     check_registered("estimators", case.estimator, where, "[estimator] name")
     estimator = _wrapped(lambda: create("estimators", case.estimator,
                                         **case.estimator_options), where, "[estimator]")
     if hasattr(estimator, "check_structure"):
         _wrapped(lambda: estimator.check_structure(structure), where, "[estimator]")
-    for criterion, _ in case.criteria:
+    for criterion, options in case.criteria:
         check_registered("reduction-criteria", criterion, where, "[reduction] criteria")
+        _wrapped(lambda: create("reduction-criteria", criterion, **options), where,
+                 "[reduction] criteria")
     if case.rule not in RULES:
         raise DataFileError(f"{where}: [reduction] rule {case.rule!r} is unknown; use "
                             f"{', '.join(RULES)}")

@@ -91,15 +91,36 @@ class ReportWriter(Protocol):
 # ----------------------------------------------------------------- steps
 def load_data(case: FlightCase, directory: Path) -> tuple[CaseData, FlightCondition]:
     """The case's data from its data source (which may store them in ``directory``) and the
-    trim: the source's, or else the case's ``[condition]`` table."""
+    trim: the source's, or else the case's ``[condition]`` table; both given, they must agree
+    (:data:`TRIM_TOLERANCE`)."""
     source = create("data-sources", case.data_source)
     data = source.case_data(_data_settings(case, source), Path(directory))
     if data.condition is not None:
+        if case.condition:
+            _check_same_trim(case, FlightCondition.from_mapping(case.condition), data.condition)
         return data, data.condition
     if not case.condition:
         raise DataError(f"case {case.name}: the {case.data_source!r} data source gives no "
                         f"trim; add a [condition] table (airspeed_kt, theta0_deg, phi0_deg)")
     return data, FlightCondition.from_mapping(case.condition)
+
+
+#: How far a case's [condition] may lie from its data source's trim: body velocities, m/s,
+#: and attitudes, rad (0.1 kt and 0.01°).
+TRIM_TOLERANCE = (0.05, 1.75e-4)
+
+
+def _check_same_trim(case: FlightCase, stated: FlightCondition, source: FlightCondition):
+    """Refuse a case whose ``[condition]`` (``stated``) is not the trim its data source gives."""
+    speed, angle = TRIM_TOLERANCE
+    def apart(*names):
+        return max(abs(getattr(stated, name) - getattr(source, name)) for name in names)
+
+    if apart("u0", "v0", "w0") > speed or apart("theta0", "phi0") > angle:
+        raise DataError(f"case {case.name}: its [condition] ({stated.describe()}) is not the "
+                        f"trim the {case.data_source!r} data source gives "
+                        f"({source.describe()}); remove the [condition] table to use the "
+                        f"source's trim, or make the two agree")
 
 
 def _data_settings(case: FlightCase, source) -> Mapping:
