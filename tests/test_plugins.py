@@ -16,7 +16,7 @@ import rotorid
 from rotorid.errors import PluginError
 from rotorid.estimation.reduction import reduce
 from rotorid.plugin import hookspecs
-from rotorid.plugin.contracts import CONTRACTS, members, violations
+from rotorid.plugin.contracts import CONTRACTS, Removal, members, violations
 from rotorid.plugin.hookspecs import PluginDescriptor, hookimpl
 from rotorid.plugin.manager import (
     FAMILIES,
@@ -453,3 +453,62 @@ def test_a_registration_hook_that_raises_is_named():
     with pytest.raises(PluginError, match=r"plugin 'heavy_plugin': rotorid_input_signals "
                                           r"raised ModuleNotFoundError: No module named"):
         registry("input-signals", manager)
+
+
+def _stub_fit(structure):
+    """An Estimate of ``structure`` with M_q = −2, M_u = 0.1, every bound 0.1."""
+    names = structure.parameter_names
+    values = {"M_q": -2.0, "M_u": 0.1}
+    return rotorid.Estimate.from_fit(structure, [values[n] for n in names],
+                                     100.0 * np.eye(len(names)), [np.ones((4, 8))],
+                                     estimator="stub")
+
+
+@pytest.mark.parametrize("proposal, message", [
+    ("M_u", r"reduction criterion Proposer: propose returned str, not Removal or None"),
+    (Removal("Q_zz", "proposer", 1.0, 0.5, "test"),
+     r"reduction criterion Proposer: propose proposed 'Q_zz', which is not one of the "
+     r"candidates \(M_q, M_u\); fix the criterion"),
+])
+def test_what_a_plugin_returns_is_checked_where_it_is_used(proposal, message):
+    """A criterion returning a name instead of a Removal, or proposing a parameter that is
+    no candidate, and an estimator returning a dict each get a PluginError naming them."""
+    structure = rotorid.ModelStructure(rotorid.FlightCondition.from_airspeed(0.0),
+                                       [rotorid.Derivative("M_q"), rotorid.Derivative("M_u")])
+
+    class Fitter:
+        def estimate(self, structure, maneuvers, *, start=None):
+            return _stub_fit(structure)
+
+    class Proposer:
+        def propose(self, estimate):
+            return proposal
+
+        def rank(self, estimate):
+            return None
+
+    class DictEstimator:
+        def estimate(self, structure, maneuvers, *, start=None):
+            return {"M_q": -2.0}
+
+    with pytest.raises(PluginError, match=message):
+        reduce(structure, None, Fitter(), [Proposer()], case="stub")
+    with pytest.raises(PluginError, match=r"estimator DictEstimator: estimate returned dict, "
+                                          r"not Estimate"):
+        reduce(structure, None, DictEstimator(), [Proposer()], case="stub")
+
+
+def test_an_envelopes_bounds_off_the_grid_given_are_named():
+    @attrs.frozen
+    class ShortEnvelope(FlatEnvelope):
+        def bounds(self, omega):
+            return FlatEnvelope.bounds(self, omega[:3])
+
+    omega = np.linspace(1.0, 10.0, 20)
+    with pytest.raises(PluginError, match=r"validation envelope 'flat': bounds\(omega\) was "
+                                          r"asked for 20 frequencies and returned bounds on 3"):
+        check_bounds(ShortEnvelope(), np.ones(20, complex), np.ones(20), omega)
+    with pytest.raises(rotorid.errors.VerificationError, match=r"envelope 'x': bounds on 3 "
+                                                               r"frequencies need arrays"):
+        EnvelopeBounds("x", omega[:3], np.ones(2), np.ones(3), np.ones(3), np.ones(3),
+                       np.zeros(3, bool))

@@ -33,11 +33,11 @@ from collections.abc import Callable, Collection, Sequence
 import attrs
 import numpy as np
 
-from rotorid.errors import EstimationError
+from rotorid.errors import EstimationError, PluginError
 from rotorid.estimation.continuation import continued_start
 from rotorid.estimation.estimate import Estimate
 from rotorid.model.structure import ModelStructure
-from rotorid.plugin.contracts import Removal
+from rotorid.plugin.contracts import Removal, returned
 
 RULES = ("lowest-rmse", "parsimonious", "first-rise")
 
@@ -129,12 +129,20 @@ class ReductionPath:
 
 
 def _propose(criteria, estimate: Estimate, continue_to_zero: bool) -> Removal | None:
-    for criterion in criteria:
-        removal = criterion.propose(estimate)
-        if removal is not None:
-            return removal
+    """The first criterion's removal (the last one's ranking with ``continue_to_zero``),
+    checked: a :class:`Removal` of one of ``estimate``'s parameters, or None."""
+    calls = [(criterion, "propose") for criterion in criteria]
     if continue_to_zero:
-        return criteria[-1].rank(estimate)
+        calls.append((criteria[-1], "rank"))
+    for criterion, method in calls:
+        call = f"reduction criterion {type(criterion).__name__}: {method}"
+        removal = returned(getattr(criterion, method)(estimate), (Removal, type(None)), call)
+        if removal is not None:
+            if removal.parameter not in estimate.parameter_names:
+                raise PluginError(f"{call} proposed {removal.parameter!r}, which is not one "
+                                  f"of the candidates ({', '.join(estimate.parameter_names)})"
+                                  f"; fix the criterion")
+            return removal
     return None
 
 
@@ -186,7 +194,7 @@ def reduce(structure: ModelStructure, maneuvers, estimator, criteria: Sequence, 
     with using(manager):
         steps = list(finished)
         if not steps:
-            record(ReductionStep(0, None, estimator.estimate(structure, maneuvers), structure))
+            record(ReductionStep(0, None, _fitted(estimator, structure, maneuvers), structure))
         while candidates := [d.name for d in steps[-1].structure.free_derivatives
                              if d.name not in keep]:
             last = steps[-1]
@@ -200,7 +208,7 @@ def reduce(structure: ModelStructure, maneuvers, estimator, criteria: Sequence, 
             if warm_start:
                 start = continued_start(last.estimate, last.structure, reduced)
             try:
-                estimate = (estimator.estimate(reduced, maneuvers, start=start)
+                estimate = (_fitted(estimator, reduced, maneuvers, start)
                             if reduced.parameter_names else _empty_estimate(reduced,
                                                                             maneuvers))
             except EstimationError as error:
@@ -210,6 +218,12 @@ def reduce(structure: ModelStructure, maneuvers, estimator, criteria: Sequence, 
                     f"estimator cannot fit ({error})"))
             record(ReductionStep(len(steps), removal, estimate, reduced))
         return ReductionPath(steps, rule, rmse_tolerance)
+
+
+def _fitted(estimator, structure: ModelStructure, maneuvers, start=None) -> Estimate:
+    """``estimator``'s estimate of ``structure``, checked to be an :class:`Estimate`."""
+    return returned(estimator.estimate(structure, maneuvers, start=start), Estimate,
+                    f"estimator {type(estimator).__name__}: estimate")
 
 
 def _empty_estimate(structure: ModelStructure, maneuvers) -> Estimate:

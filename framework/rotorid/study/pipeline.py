@@ -41,7 +41,7 @@ from rotorid.lease import hold_lease
 from rotorid.model.derivatives import delayed_derivative
 from rotorid.model.modelfile import case_model
 from rotorid.model.structure import FlightCondition, ModelStructure
-from rotorid.plugin.contracts import CaseData
+from rotorid.plugin.contracts import CaseData, returned
 from rotorid.plugin.manager import create, notify, using
 from rotorid.progress import Countdown
 from rotorid.study.case import FlightCase
@@ -94,7 +94,8 @@ def load_data(case: FlightCase, directory: Path) -> tuple[CaseData, FlightCondit
     trim: the source's, or else the case's ``[condition]`` table; both given, they must agree
     (:data:`TRIM_TOLERANCE`)."""
     source = create("data-sources", case.data_source)
-    data = source.case_data(_data_settings(case, source), Path(directory))
+    data = returned(source.case_data(_data_settings(case, source), Path(directory)), CaseData,
+                    f"data source {case.data_source!r}: case_data")
     if data.condition is not None:
         if case.condition:
             _check_same_trim(case, FlightCondition.from_mapping(case.condition), data.condition)

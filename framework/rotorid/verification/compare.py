@@ -20,7 +20,7 @@ import numpy as np
 from rotorid.data import ManeuverSet
 from rotorid.errors import VerificationError
 from rotorid.frozen import FrozenMapping, readonly_array
-from rotorid.plugin.contracts import ValidationEnvelope
+from rotorid.plugin.contracts import ValidationEnvelope, returned
 from rotorid.plugin.manager import create
 from rotorid.verification.band import DEFAULT_BAND, VerificationBand
 from rotorid.verification.envelopes import (
@@ -484,7 +484,8 @@ def _envelope_checks(response: np.ndarray, reference: FrequencyResponse,
     coherence = band.restrict(omega, reference.coherence)
     with np.errstate(divide="ignore", invalid="ignore"):
         error = response / reference.response
-        return {n: e.check(error, coherence, omega) for n, e in envelopes.items()}
+        return {n: returned(e.check(error, coherence, omega), EnvelopeCheck,
+                            f"validation envelope {n!r}: check") for n, e in envelopes.items()}
 
 
 def _reliable(conditioned: FrequencyResponse) -> FrequencyResponse:

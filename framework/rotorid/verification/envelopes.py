@@ -11,7 +11,7 @@ from __future__ import annotations
 import attrs
 import numpy as np
 
-from rotorid.errors import VerificationError
+from rotorid.errors import PluginError, VerificationError
 from rotorid.frozen import readonly_array
 
 
@@ -55,6 +55,18 @@ class EnvelopeBounds:
     phase_upper_deg: np.ndarray = attrs.field(converter=readonly_array)
     extrapolated: np.ndarray = attrs.field(converter=lambda m: readonly_array(m, bool))
     available: bool = True
+
+    def __attrs_post_init__(self):
+        shapes = {name: getattr(self, name).shape for name in (
+            "mag_lower_db", "mag_upper_db", "phase_lower_deg", "phase_upper_deg",
+            "extrapolated")}
+        wrong = {name: shape for name, shape in shapes.items() if shape != self.omega.shape}
+        if wrong:
+            raise VerificationError(
+                f"envelope {self.name!r}: bounds on {self.omega.size} frequencies need arrays "
+                f"of shape {self.omega.shape}, got " + ", ".join(
+                    f"{name} {shape}" for name, shape in wrong.items())
+                + "; fix the envelope's bounds(omega)")
 
 
 #: The usual guideline for the mismatch cost J (Tischler & Remple, ch. 12): J ≤ 100 per pair,
@@ -226,7 +238,13 @@ def check_bounds(envelope, error, coherence, omega) -> EnvelopeCheck:
     the phase bounds.
     """
     error, coherence, omega = validate_check_inputs(error, coherence, omega)
-    bounds = envelope.bounds(omega)
+    from rotorid.plugin.contracts import returned      # the contracts module imports this one
+
+    call = f"validation envelope {envelope.name!r}: bounds"
+    bounds = returned(envelope.bounds(omega), EnvelopeBounds, call)
+    if bounds.omega.shape != omega.shape:
+        raise PluginError(f"{call}(omega) was asked for {omega.size} frequencies and returned "
+                          f"bounds on {bounds.omega.size}; return them on the grid given")
     magnitude, phase = error_db_deg(error)
     with np.errstate(invalid="ignore"):
         margin_db = np.minimum(magnitude - bounds.mag_lower_db, bounds.mag_upper_db - magnitude)

@@ -337,6 +337,8 @@ def run(args) -> int:
     from rotorid.io import atomic_write
     from rotorid.model.modelfile import load_channel_map, load_model
     from rotorid.model.reference import is_model_reference, load_model_reference
+    from rotorid.estimation.estimate import Estimate
+    from rotorid.plugin.contracts import returned
     from rotorid.plugin.manager import new_plugin_manager, using
 
     by_reference = is_model_reference(args.model)
@@ -383,7 +385,8 @@ def run(args) -> int:
             model = model.for_maneuvers(maneuvers)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", RotoridWarning)
-            estimate = estimator.estimate(model, maneuvers)
+            estimate = returned(estimator.estimate(model, maneuvers), Estimate,
+                                f"estimator {args.estimator!r}: estimate")
     _print_warnings(caught)
     data_warnings = [str(warning.message) for warning in found]
     record = _record(estimate, args.model, out, data_warnings)
