@@ -512,3 +512,24 @@ def test_an_envelopes_bounds_off_the_grid_given_are_named():
                                                                r"frequencies need arrays"):
         EnvelopeBounds("x", omega[:3], np.ones(2), np.ones(3), np.ones(3), np.ones(3),
                        np.zeros(3, bool))
+
+
+def test_a_plugins_cost_is_not_reported_as_the_mismatch_cost():
+    """A cost-kind envelope of one's own: its score is a cost without J's guideline and
+    without margins it does not have; the mismatch cost keeps J and its guideline."""
+    from rotorid.verification.envelopes import EnvelopeCheck
+
+    points = np.ones(3)
+    nan = np.full(3, np.nan)
+
+    def check(name, guideline):
+        return EnvelopeCheck(name, "a test", True, points, points, points, points,
+                             np.ones(3, bool), np.ones(3, bool), np.zeros(3, bool), nan, nan,
+                             0.8, True, "pass", 0.25, guideline)
+
+    own = check("rms-db", "")
+    assert "; cost 0.25 [" in own.report() and "J =" not in own.report()
+    assert "worst margin" not in own.report() and "cost_guideline" not in own.summary()
+    mismatch = check("mismatch-cost", "J ≤ 100 (a few pairs ≤ 200, average ≤ 100)")
+    assert "; J = 0.2 (guideline J ≤ 100" in mismatch.report()
+    assert mismatch.summary()["cost_guideline"].startswith("J ≤ 100")

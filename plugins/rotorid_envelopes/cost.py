@@ -24,6 +24,7 @@ from __future__ import annotations
 import attrs
 import numpy as np
 from rotorid.verification.envelopes import (
+    MISMATCH_COST_GUIDELINE_TEXT,
     EnvelopeBounds,
     EnvelopeCheck,
     error_db_deg,
@@ -113,4 +114,5 @@ class MismatchCost:
             inside=contribution <= self.limit, extrapolated=np.zeros(grid.shape, bool),
             margin_db=bounds.mag_upper_db - np.abs(mag),
             margin_deg=bounds.phase_upper_deg - np.abs(pha), threshold=self.threshold,
-            passed=passed, status=status_of(passed, self.verified), cost=cost)
+            passed=passed, status=status_of(passed, self.verified), cost=cost,
+            cost_guideline=MISMATCH_COST_GUIDELINE_TEXT)

@@ -95,7 +95,9 @@ class EnvelopeCheck:
         passed: True/False over the used points; None when not available or no point used.
         status: ``"pass"``, ``"fail"``, ``"pass (unverified envelope)"``,
             ``"fail (unverified envelope)"``, ``"not available"`` or ``"no coherent points"``.
-        cost: the mismatch cost J for cost-type checks, else None.
+        cost: a cost-kind envelope's score of the pair (the mismatch cost J), else None.
+        cost_guideline: the guideline the cost is read by, in words (the mismatch cost's
+            :data:`MISMATCH_COST_GUIDELINE_TEXT`; empty where the envelope states none).
     """
 
     envelope: str
@@ -114,6 +116,7 @@ class EnvelopeCheck:
     passed: bool | None
     status: str
     cost: float | None = None
+    cost_guideline: str = ""
 
     @property
     def n_used(self) -> int:
@@ -169,7 +172,7 @@ class EnvelopeCheck:
             "worst_margin_db": _finite_or_none(self.worst_margin_db),
             "worst_margin_deg": _finite_or_none(self.worst_margin_deg),
             "cost": self.cost,
-            **({} if self.cost is None else {"cost_guideline": MISMATCH_COST_GUIDELINE}),
+            **({"cost_guideline": self.cost_guideline} if self.cost_guideline else {}),
         }
 
     def report(self) -> str:
@@ -179,10 +182,13 @@ class EnvelopeCheck:
         if self.status == "not available":
             return f"{self.envelope}: not available, no point checked [{source}]"
         line = (f"{self.envelope}: {self.status}; {self.n_inside}/{self.n_used} points inside "
-                f"(γ² ≥ {self.threshold:g}); worst margin {self.worst_margin_db:+.2f} dB, "
-                f"{self.worst_margin_deg:+.1f}°")
+                f"(γ² ≥ {self.threshold:g})")
+        if np.isfinite(self.worst_margin_db) or np.isfinite(self.worst_margin_deg):
+            line += (f"; worst margin {self.worst_margin_db:+.2f} dB, "
+                     f"{self.worst_margin_deg:+.1f}°")
         if self.cost is not None:
-            line += f"; J = {self.cost:.1f} (guideline {MISMATCH_COST_GUIDELINE_TEXT})"
+            line += (f"; J = {self.cost:.1f} (guideline {self.cost_guideline})"
+                     if self.cost_guideline else f"; cost {self.cost:.4g}")
         if self.passed is None and self.status == "no coherent points":
             line += (f" — the measured coherence never reaches {self.threshold:g}: check that "
                      f"the sweeps excite this input and the output responds, or lower the "
