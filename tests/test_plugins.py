@@ -533,3 +533,8 @@ def test_a_plugins_cost_is_not_reported_as_the_mismatch_cost():
     mismatch = check("mismatch-cost", "J ≤ 100 (a few pairs ≤ 200, average ≤ 100)")
     assert "; J = 0.2 (guideline J ≤ 100" in mismatch.report()
     assert mismatch.summary()["cost_guideline"].startswith("J ≤ 100")
+
+
+def test_a_removal_states_its_criterions_own_unit():
+    assert Removal("M_u", "cramer-rao", 47.34, 30.0, "bound").metric_text == "47.3 %"
+    assert Removal("M_u", "t-ratio", 0.52, 2.0, "small", unit="").metric_text == "0.52"

@@ -72,6 +72,7 @@ class ReductionStep:
                 "removed": None if removal is None else removal.parameter,
                 "criterion": None if removal is None else removal.criterion,
                 "metric": None if removal is None else _finite(removal.metric),
+                "metric_unit": None if removal is None else removal.unit,
                 "reason": None if removal is None else removal.reason,
                 "rmse": self.rmse, "cost": self.cost,
                 "iterations": self.estimate.iterations, "converged": self.estimate.converged}
@@ -214,7 +215,7 @@ def reduce(structure: ModelStructure, maneuvers, estimator, criteria: Sequence, 
             except EstimationError as error:
                 return ReductionPath(steps, rule, rmse_tolerance, stopped=(
                     f"stopped at step {last.index}: removing {removal.parameter} "
-                    f"({removal.criterion} {removal.metric:.1f} %) leaves a structure the "
+                    f"({removal.criterion} {removal.metric_text}) leaves a structure the "
                     f"estimator cannot fit ({error})"))
             record(ReductionStep(len(steps), removal, estimate, reduced))
         return ReductionPath(steps, rule, rmse_tolerance)

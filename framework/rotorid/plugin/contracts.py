@@ -55,7 +55,8 @@ class Removal:
     """A criterion's proposal: remove ``parameter`` because ``metric`` exceeds ``threshold``.
 
     ``criterion`` is the proposing criterion's name; ``metric`` and ``threshold`` are in the
-    criterion's own measure (e.g. % for normalised Cramér-Rao bounds); ``reason`` is one line.
+    criterion's own measure, ``unit`` (``"%"`` for normalised Cramér-Rao bounds, ``""`` for a
+    plain ratio); ``reason`` is one line.
     """
 
     parameter: str
@@ -63,6 +64,12 @@ class Removal:
     metric: float
     threshold: float
     reason: str
+    unit: str = "%"
+
+    @property
+    def metric_text(self) -> str:
+        """The metric with its unit, e.g. ``"47.3 %"`` or ``"0.52"``."""
+        return f"{self.metric:.3g}" + (f" {self.unit}" if self.unit else "")
 
 
 @runtime_checkable

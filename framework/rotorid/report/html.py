@@ -107,14 +107,14 @@ def rmse_basis_text(estimate) -> str:
 def removed_rows(result) -> list[list[str]]:
     """Appendix B, removed parameters: step, parameter, criterion, metric, RMSE, iterations."""
     unit = rmse_unit(result.estimates["no delays"].output_units)
-    rows = [["step", "removed", "criterion", "metric [%]", "parameters [-]",
+    rows = [["step", "removed", "criterion", "metric", "parameters [-]",
              f"RMSE [{unit}]", "iterations [-]", "selected"]]
     selected = result.path.selected_index
     for step in result.path.steps:
         removal = step.removal
         rows.append([str(step.index), "—" if removal is None else removal.parameter,
                      "" if removal is None else removal.criterion,
-                     "" if removal is None else _number(removal.metric, 3),
+                     "" if removal is None else removal.metric_text,
                      str(step.n_parameters), f"{step.rmse:.4f}", str(step.estimate.iterations),
                      "yes" if step.index == selected else ""])
     return rows

@@ -179,7 +179,7 @@ def _reduce(case: FlightCase, structure: ModelStructure, ident: ManeuverSet, est
         save_step(directory, step)
         removed = "full structure" if step.removal is None else (
             f"removed {step.removal.parameter} ({step.removal.criterion} "
-            f"{step.removal.metric:.1f} %)")
+            f"{step.removal.metric_text})")
         report(case.name, f"reduction step {step.index}: {removed}, {step.n_parameters} "
                           f"parameters, RMSE {step.rmse:.4f}, {step.estimate.iterations} iter "
                           f"{countdown.step()}")
