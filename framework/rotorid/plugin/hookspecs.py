@@ -148,4 +148,5 @@ def rotorid_reduction_step(case, step):
 
 @hookspec
 def rotorid_case_finished(case, result):
-    """Called when a flight case has finished, with its immutable ``CaseResult``."""
+    """Called when a flight case has finished: ``case`` the
+    :class:`~rotorid.study.case.FlightCase`, ``result`` its immutable ``CaseResult``."""

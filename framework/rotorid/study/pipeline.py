@@ -150,10 +150,34 @@ def checked_structure(case: FlightCase, structure: ModelStructure, ident: Maneuv
     (:func:`~rotorid.estimation.sanity.check_before_fit`), and the text of each warning they
     gave (it also becomes a progress line); the derivatives of inputs that never move are
     dropped before the first fit."""
-    with warnings.catch_warnings(record=True) as caught:
+    with warnings.catch_warnings(record=True) as caught, _check_lines() as lines:
         warnings.simplefilter("always", DataWarning)
         checked = check_before_fit(ident, structure)
+    for line in lines:
+        report(case.name, line)
     return checked, _reported_warnings(case, caught, report)
+
+
+@contextlib.contextmanager
+def _check_lines():
+    """The lines the data checks log (``rotorid.checks``, e.g. the kinematic consistency
+    fits) collected while the block runs, for the case's progress instead of bare lines."""
+    logger, lines = logging.getLogger("rotorid.checks"), []
+
+    class Collector(logging.Handler):
+        def emit(self, record):
+            lines.append(record.getMessage())
+
+    collector, propagate, level = Collector(logging.INFO), logger.propagate, logger.level
+    logger.addHandler(collector)
+    logger.propagate = False
+    logger.setLevel(logging.INFO)
+    try:
+        yield lines
+    finally:
+        logger.removeHandler(collector)
+        logger.propagate = propagate
+        logger.setLevel(level)
 
 
 def _reported_warnings(case: FlightCase, caught, report: Progress) -> tuple[str, ...]:

@@ -8,6 +8,8 @@ on a frequency grid. :func:`check_bounds` is the check of every bounds-kind enve
 
 from __future__ import annotations
 
+import re
+
 import attrs
 import numpy as np
 
@@ -158,8 +160,9 @@ class EnvelopeCheck:
 
     @property
     def source_sentence(self) -> str:
-        """The first sentence of the envelope's provenance, without its full stop."""
-        return self.provenance.split(". ")[0].rstrip(".")
+        """The first sentence of the envelope's provenance, without its full stop (a full
+        stop ends a sentence where a capital follows it: ``eq. 12.20`` does not)."""
+        return re.split(r"\.\s+(?=[A-Z])", self.provenance)[0].rstrip(".")
 
     def summary(self) -> dict:
         """JSON-ready summary (no per-point arrays)."""
