@@ -209,3 +209,25 @@ def test_an_entry_point_that_cannot_be_imported_is_named_in_one_line(site, tmp_p
         "rotorid: error: plugin 'broken' (acme_missing.plugin, from acme-broken) cannot be "
         "imported: ModuleNotFoundError: No module named 'acme_missing'; fix it or uninstall "
         "it (pip uninstall acme-broken)")
+
+
+def test_a_bug_in_a_case_names_where_it_was_raised(tmp_path, monkeypatch, capsys):
+    """An error rotorid does not raise on purpose fails the case with the file, line and
+    function it came from; ROTORID_TRACEBACK=1 prints the traceback as well."""
+    from rotorid.errors import StudyError
+    from rotorid.study import pipeline
+
+    def broken(*args, **kwargs):
+        raise ValueError("a plugin's bug")
+
+    monkeypatch.setattr(pipeline, "run_case", broken)
+    case = FlightCase.load("hover")
+    with pytest.raises(StudyError, match=r"ValueError: a plugin's bug \(raised in .*"
+                                         r"test_thirdparty_plugin.py:\d+, broken; "
+                                         r"ROTORID_TRACEBACK=1 prints the traceback\)"):
+        pipeline.run_case_task(case, progress=None, out_dir=tmp_path)
+    assert "Traceback" not in capsys.readouterr().err
+    monkeypatch.setenv("ROTORID_TRACEBACK", "1")
+    with pytest.raises(StudyError):
+        pipeline.run_case_task(case, progress=None, out_dir=tmp_path)
+    assert "Traceback" in capsys.readouterr().err

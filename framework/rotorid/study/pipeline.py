@@ -21,7 +21,10 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
+import os
+import sys
 import time
+import traceback
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Executor
@@ -31,8 +34,8 @@ from typing import Protocol
 import attrs
 
 from rotorid.data import ALL_CHANNELS, ManeuverSet
-from rotorid.errors import (DataError, DataWarning, IdentifiabilityWarning, RotoridWarning,
-                            StudyError)
+from rotorid.errors import (DataError, DataWarning, IdentifiabilityWarning, RotoridError,
+                            RotoridWarning, StudyError)
 from rotorid.estimation.data_checks import check_fit_data
 from rotorid.estimation.reduction import ReductionPath, ReductionStep, reduce
 from rotorid.estimation.sanity import check_before_fit
@@ -476,7 +479,20 @@ def run_case_task(case: FlightCase, progress: Progress | None = log_progress,
         return run_case(case, progress=tracking, **options)
     except Exception as error:
         raise StudyError(f"case {case.name} failed {last[0]}: {type(error).__name__}: "
-                         f"{error}") from error
+                         f"{error}{_raised_at(error)}") from error
+
+
+def _raised_at(error: Exception) -> str:
+    """Where an error rotorid did not raise on purpose (a bug, in rotorid or a plugin) came
+    from: the innermost frame, and the whole traceback on stderr with ``ROTORID_TRACEBACK=1``
+    set; empty for a rotorid error, whose message names the problem."""
+    if isinstance(error, RotoridError) or error.__traceback__ is None:
+        return ""
+    if os.environ.get("ROTORID_TRACEBACK"):
+        traceback.print_exception(error, file=sys.stderr)
+    frame = traceback.extract_tb(error.__traceback__)[-1]
+    return (f" (raised in {frame.filename}:{frame.lineno}, {frame.name}; ROTORID_TRACEBACK=1 "
+            f"prints the traceback)")
 
 
 class Study:
