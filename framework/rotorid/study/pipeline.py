@@ -183,6 +183,14 @@ def _check_lines():
         logger.setLevel(level)
 
 
+def _other_selections(path: ReductionPath) -> str:
+    """``"; parsimonious would select step 5"`` for the rules that select another step than
+    the path's own (``[reduction] rule``), empty when all agree."""
+    others = {rule: index for rule, index in path.selections().items()
+              if index != path.selected_index}
+    return "".join(f"; {rule} would select step {index}" for rule, index in others.items())
+
+
 def _reported_warnings(case: FlightCase, caught, report: Progress) -> tuple[str, ...]:
     """The text of each of rotorid's warnings ``caught`` (others are shown as Python shows
     them), each also a progress line of the case."""
@@ -415,8 +423,8 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     path, resumed = _reduce(case, structure, ident, estimator, directory, resume, report)
     clock["reduction"] = time.perf_counter()
     selected = path.selected
-    report(case.name, f"selected step {selected.index}: {selected.n_parameters} parameters, "
-                      f"RMSE {selected.rmse:.4f}")
+    report(case.name, f"selected step {selected.index} ({path.rule}): {selected.n_parameters} "
+                      f"parameters, RMSE {selected.rmse:.4f}{_other_selections(path)}")
     delayed, delayed_estimate, dropped = with_delays(case, selected, ident, estimator,
                                                      directory)
     clock["delays"] = time.perf_counter()
