@@ -37,7 +37,8 @@ from rotorid.errors import EstimationError, PluginError
 from rotorid.estimation.continuation import continued_start
 from rotorid.estimation.estimate import Estimate
 from rotorid.model.structure import ModelStructure
-from rotorid.plugin.contracts import Removal, returned
+from rotorid.plugin.contracts import Removal
+from rotorid.plugin.returns import returned
 
 RULES = ("lowest-rmse", "parsimonious", "first-rise")
 

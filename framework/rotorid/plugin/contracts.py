@@ -244,19 +244,6 @@ def members(protocol: type) -> tuple[str, ...]:
     return tuple(dict.fromkeys(declared))
 
 
-def returned(value, expected: type | tuple[type, ...], call: str):
-    """``value`` when it is one of ``expected`` (None among them allows None); otherwise a
-    :class:`PluginError` naming ``call`` (e.g. ``"data source 'fdx': case_data"``), what it
-    returned and what the contract wants."""
-    kinds = expected if isinstance(expected, tuple) else (expected,)
-    if value is None and type(None) in kinds or value is not None and isinstance(
-            value, tuple(k for k in kinds if k is not type(None))):
-        return value
-    wanted = " or ".join("None" if k is type(None) else k.__name__ for k in kinds)
-    raise PluginError(f"{call} returned {type(value).__name__}, not {wanted}; see "
-                      f"docs/plugins.md")
-
-
 def violations(family: str, component: object) -> tuple[str, ...]:
     """How ``component`` breaks ``family``'s contract: missing members, methods that are not
     callable, an envelope kind outside :data:`ENVELOPE_KINDS`; empty when it conforms."""

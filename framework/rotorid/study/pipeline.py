@@ -44,7 +44,8 @@ from rotorid.lease import hold_lease
 from rotorid.model.derivatives import delayed_derivative
 from rotorid.model.modelfile import case_model
 from rotorid.model.structure import FlightCondition, ModelStructure
-from rotorid.plugin.contracts import CaseData, returned
+from rotorid.plugin.contracts import CaseData
+from rotorid.plugin.returns import returned
 from rotorid.plugin.manager import create, notify, using
 from rotorid.progress import Countdown
 from rotorid.study.case import FlightCase

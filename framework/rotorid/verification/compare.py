@@ -20,7 +20,8 @@ import numpy as np
 from rotorid.data import ManeuverSet
 from rotorid.errors import VerificationError
 from rotorid.frozen import FrozenMapping, readonly_array
-from rotorid.plugin.contracts import ValidationEnvelope, returned
+from rotorid.plugin.contracts import ValidationEnvelope
+from rotorid.plugin.returns import returned
 from rotorid.plugin.manager import create
 from rotorid.verification.band import DEFAULT_BAND, VerificationBand
 from rotorid.verification.envelopes import (

@@ -15,6 +15,7 @@ import numpy as np
 
 from rotorid.errors import PluginError, VerificationError
 from rotorid.frozen import readonly_array
+from rotorid.plugin.returns import returned
 
 
 def wrap180(angle_deg):
@@ -247,8 +248,6 @@ def check_bounds(envelope, error, coherence, omega) -> EnvelopeCheck:
     the phase bounds.
     """
     error, coherence, omega = validate_check_inputs(error, coherence, omega)
-    from rotorid.plugin.contracts import returned      # the contracts module imports this one
-
     call = f"validation envelope {envelope.name!r}: bounds"
     bounds = returned(envelope.bounds(omega), EnvelopeBounds, call)
     if bounds.omega.shape != omega.shape:

@@ -338,7 +338,7 @@ def run(args) -> int:
     from rotorid.model.modelfile import load_channel_map, load_model
     from rotorid.model.reference import is_model_reference, load_model_reference
     from rotorid.estimation.estimate import Estimate
-    from rotorid.plugin.contracts import returned
+    from rotorid.plugin.returns import returned
     from rotorid.plugin.manager import new_plugin_manager, using
 
     by_reference = is_model_reference(args.model)
