@@ -27,7 +27,7 @@ import attrs
 import numpy as np
 
 from rotorid.errors import UsageError
-from rotorid.units import UNITS
+from rotorid.units import KNOT, UNITS
 
 #: The aeroplane's data, SI: name → description (all positive but ``ixz``).
 AIRCRAFT_FIELDS = {
@@ -129,7 +129,7 @@ def _variable_scale(structure, aircraft: Aircraft, variable: str, speed: float):
 def _equation_scale(structure, aircraft: Aircraft, letter: str, state: str, speed: float,
                     pressure: float):
     """Factor turning an SI equation term (per unit variable) into a force or moment
-    coefficient, or a reason for none."""
+    coefficient, or None where the equation is no force or moment."""
     kind = structure.signals.all[state].kind
     if letter in "XYZ" and kind == "velocity":
         return aircraft.mass_kg / (pressure * aircraft.wing_area_m2)
@@ -155,6 +155,11 @@ def _inertia_coupling(structure, aircraft: Aircraft) -> dict[str, tuple[str, flo
             for letter, other in (("L", "N"), ("N", "L"))}
 
 
+def trim_speed(structure) -> float:
+    """The trim airspeed V of ``structure``'s condition, m/s."""
+    return structure.condition.airspeed_kt * KNOT
+
+
 def non_dimensional(structure, values: Mapping[str, float], aircraft: Aircraft,
                     estimate=None) -> tuple[list[Coefficient], list[str]]:
     """The coefficients of ``structure``'s derivatives at ``values`` (name → value of its
@@ -162,8 +167,7 @@ def non_dimensional(structure, values: Mapping[str, float], aircraft: Aircraft,
     trim airspeed, and the derivatives left out with the reason. With ``estimate`` (of the
     same structure) the bounds are its Cramér-Rao bounds propagated through the conversion.
     """
-    condition = structure.condition
-    speed = math.sqrt(condition.u0**2 + condition.v0**2 + condition.w0**2)
+    speed = trim_speed(structure)
     if speed <= 0.0:
         raise UsageError("non-dimensional coefficients need the trim airspeed; the model's "
                          "condition has none (hover): give its [condition] an airspeed")
@@ -197,11 +201,12 @@ def non_dimensional(structure, values: Mapping[str, float], aircraft: Aircraft,
             result.append(moment * scale)
         return np.array(result)
 
-    names = tuple(values) if estimate is None else estimate.parameter_names
-    vector = np.array([values[n] for n in names]) if estimate is None else None
     if estimate is None:
-        centre, bounds = coefficients(vector), np.full(len(rows), np.nan)
+        names = tuple(values)
+        centre = coefficients(np.array([values[n] for n in names]))
+        bounds = np.full(len(rows), np.nan)
     else:
+        names = estimate.parameter_names
         centre, bounds = estimate.propagated(coefficients)
     return ([Coefficient(name, derivative.name, float(v), float(b))
              for (derivative, _, _, name, _), v, b in zip(rows, centre, bounds)], skipped)

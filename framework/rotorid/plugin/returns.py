@@ -11,8 +11,7 @@ def returned(value, expected: type | tuple[type, ...], call: str):
     :class:`PluginError` naming ``call`` (e.g. ``"data source 'fdx': case_data"``), what it
     returned and what the contract wants."""
     kinds = expected if isinstance(expected, tuple) else (expected,)
-    if value is None and type(None) in kinds or value is not None and isinstance(
-            value, tuple(k for k in kinds if k is not type(None))):
+    if isinstance(value, kinds):
         return value
     wanted = " or ".join("None" if k is type(None) else k.__name__ for k in kinds)
     raise PluginError(f"{call} returned {type(value).__name__}, not {wanted}; see "

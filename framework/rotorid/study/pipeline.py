@@ -45,8 +45,8 @@ from rotorid.model.derivatives import delayed_derivative
 from rotorid.model.modelfile import case_model
 from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.plugin.contracts import CaseData
-from rotorid.plugin.returns import returned
 from rotorid.plugin.manager import create, notify, using
+from rotorid.plugin.returns import returned
 from rotorid.progress import Countdown
 from rotorid.study.case import FlightCase
 from rotorid.study.checks import check_case, check_cases
@@ -118,6 +118,7 @@ TRIM_TOLERANCE = (0.05, 1.75e-4)
 def _check_same_trim(case: FlightCase, stated: FlightCondition, source: FlightCondition):
     """Refuse a case whose ``[condition]`` (``stated``) is not the trim its data source gives."""
     speed, angle = TRIM_TOLERANCE
+
     def apart(*names):
         return max(abs(getattr(stated, name) - getattr(source, name)) for name in names)
 
@@ -184,7 +185,7 @@ def _check_lines():
         logger.setLevel(level)
 
 
-def _other_selections(path: ReductionPath) -> str:
+def _differing_selections(path: ReductionPath) -> str:
     """``"; parsimonious would select step 5"`` for the rules that select another step than
     the path's own (``[reduction] rule``), empty when all agree."""
     others = {rule: index for rule, index in path.selections().items()
@@ -425,7 +426,7 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
     clock["reduction"] = time.perf_counter()
     selected = path.selected
     report(case.name, f"selected step {selected.index} ({path.rule}): {selected.n_parameters} "
-                      f"parameters, RMSE {selected.rmse:.4f}{_other_selections(path)}")
+                      f"parameters, RMSE {selected.rmse:.4f}{_differing_selections(path)}")
     delayed, delayed_estimate, dropped = with_delays(case, selected, ident, estimator,
                                                      directory)
     clock["delays"] = time.perf_counter()

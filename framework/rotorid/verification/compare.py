@@ -21,8 +21,8 @@ from rotorid.data import ManeuverSet
 from rotorid.errors import VerificationError
 from rotorid.frozen import FrozenMapping, readonly_array
 from rotorid.plugin.contracts import ValidationEnvelope
-from rotorid.plugin.returns import returned
 from rotorid.plugin.manager import create
+from rotorid.plugin.returns import returned
 from rotorid.verification.band import DEFAULT_BAND, VerificationBand
 from rotorid.verification.envelopes import (
     MISMATCH_COST_GUIDELINE,

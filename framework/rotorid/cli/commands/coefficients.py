@@ -42,7 +42,7 @@ def run(args) -> int:
     from rotorid.errors import ExitStatus, UsageError
     from rotorid.estimation.result_file import load_result
     from rotorid.io import atomic_write, read_toml
-    from rotorid.model.coefficients import Aircraft, non_dimensional
+    from rotorid.model.coefficients import Aircraft, non_dimensional, trim_speed
     from rotorid.model.modelfile import load_model
 
     out = None if args.csv is None else refuse_overwrite(args.csv, args.force)
@@ -57,8 +57,7 @@ def run(args) -> int:
     if not rows:
         raise UsageError(f"{args.result}: no derivative has a non-dimensional coefficient "
                          f"({'; '.join(skipped)})")
-    condition = identified.structure.condition
-    speed = (condition.u0**2 + condition.v0**2 + condition.w0**2) ** 0.5
+    speed = trim_speed(identified.structure)
     print(f"at V = {speed:.4g} m/s, q̄ = {0.5 * aircraft.density_kgm3 * speed**2:.5g} Pa; per "
           f"rad, speeds per V, rates per 2V/b (p, r) or 2V/c̄ (q); a speed's coefficient "
           f"includes 2·C0")

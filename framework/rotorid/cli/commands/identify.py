@@ -332,14 +332,14 @@ def run(args) -> int:
     from rotorid.errors import (DataFileError, EstimationError, ExitStatus, MissingFileError,
                                 RotoridWarning, UsageError)
     from rotorid.estimation.data_checks import check_fit_data
+    from rotorid.estimation.estimate import Estimate
     from rotorid.estimation.result_file import INGESTION_SETTINGS
     from rotorid.estimation.sanity import check_before_fit, checks_report
     from rotorid.io import atomic_write
     from rotorid.model.modelfile import load_channel_map, load_model
     from rotorid.model.reference import is_model_reference, load_model_reference
-    from rotorid.estimation.estimate import Estimate
-    from rotorid.plugin.returns import returned
     from rotorid.plugin.manager import new_plugin_manager, using
+    from rotorid.plugin.returns import returned
 
     by_reference = is_model_reference(args.model)
     model = load_model_reference(args.model) if by_reference else load_model(args.model)
