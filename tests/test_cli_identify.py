@@ -1,6 +1,7 @@
 """``rotorid identify``: estimates from maneuver files against the truth; one-line errors."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -319,14 +320,28 @@ def test_filter_error_noise_model_options(case, tmp_path, capsys):
     """--estimator filter-error with --process-noise none --gusts w --disturbances r: the
     estimate holds the w gust's and the r disturbance's parameters and no F; the w gust's fit
     from equation error shows its gust-free first fit in the progress lines; the derivatives
-    of these noise-free data stay within 4 CR of the truth."""
+    of these noise-free data stay within 4 CR of the truth. --states writes each maneuver's
+    state estimates as a maneuver file (the states, then d_r and g_w, in their units) and a
+    figure."""
     model, data, _ = case
-    out = tmp_path / "fe.json"
+    out, states = tmp_path / "fe.json", tmp_path / "states"
     status = cli.main(["identify", str(model), str(data), "--out", str(out),
                        "--estimator", "filter-error", "--process-noise", "none",
-                       "--gusts", "w", "--disturbances", "r", "--update-every", "1"])
+                       "--gusts", "w", "--disturbances", "r", "--update-every", "1",
+                       "--states", str(states)])
     captured = capsys.readouterr()
     assert status == 0, captured.err
+    written = sorted(p.name for p in states.iterdir())
+    recorded = sorted(p.stem for p in Path(data).iterdir())
+    assert written == sorted([f"{n}.csv" for n in recorded] + [f"{n}.png" for n in recorded])
+    estimates = read_maneuver(states / f"{recorded[0]}.csv")
+    assert estimates.metadata["content"] == "state estimates"
+    assert np.all(np.isfinite(estimates.channel("g_w")))
+    assert list(estimates.metadata["state_units"])[-2:] == ["d_r", "g_w"]
+    assert estimates.metadata["state_units"]["g_w"] == "ft/s"
+    assert estimates.metadata["state_units"]["d_r"] == "deg/s²"
+    assert estimates.metadata["standard_deviation"]["g_w"] > 0.0
+    assert f"written to {states}" in captured.out
     record = json.loads(out.read_text(encoding="utf-8"))
     names = set(record["parameters"])
     assert {"G_w", "Tg_w", "D_r", "T_r"} <= names
@@ -343,6 +358,11 @@ def test_filter_error_options_are_checked(case, tmp_path, capsys):
     model, data, _ = case
     out = str(tmp_path / "r.json")
     base = ["identify", str(model), str(data), "--out", out, "--quiet"]
+    assert _error_line(base + ["--states", str(tmp_path / "s")], capsys,
+                       ExitStatus.USAGE).endswith(
+        "--states: estimator 'output-error' gives no state estimates; use --estimator "
+        "filter-error")
+    assert not (tmp_path / "s").exists()
     assert _error_line(base + ["--gusts", "w"], capsys, ExitStatus.USAGE).endswith(
         "--gusts: filter error's noise model; add --estimator filter-error (the output-error "
         "estimator has no process noise)")

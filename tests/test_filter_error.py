@@ -33,16 +33,17 @@ def structure(delays=()):
 
 
 def noisy_data(process, seed=1, dt=0.02, model=None, truth=SMALL_TRUTH, variance=VARIANCE,
-               disturbances=None, gusts=None, initial_states=None, biases=None):
+               disturbances=None, gusts=None, initial_states=None, biases=None, trace=None):
     """Doublet maneuvers of ``model`` (default the small six-dof hover model) in its own
-    channels, simulated by :func:`noisy_outputs`; ``biases`` (records, p) are added to each
-    record's outputs."""
+    channels, simulated by :func:`noisy_outputs` (``trace`` passed on); ``biases`` (records,
+    p) are added to each record's outputs."""
     model = structure() if model is None else model
     controls = [rotorid.CONTROLS.index(u) for u in model.controls]
     records = [r for r in doublet_maneuvers(dt=dt) if np.any(r.inputs[:, controls])]
     inputs = [r.inputs[:, controls] for r in records]
     outputs = noisy_outputs(model, truth, inputs, dt, process, variance,
-                            np.random.default_rng(seed), disturbances, gusts, initial_states)
+                            np.random.default_rng(seed), disturbances, gusts, initial_states,
+                            trace=trace)
     if biases is not None:
         outputs = [y + b for y, b in zip(outputs, biases)]
     return rotorid.ManeuverSet([
@@ -52,7 +53,7 @@ def noisy_data(process, seed=1, dt=0.02, model=None, truth=SMALL_TRUTH, variance
 
 
 def noisy_outputs(model, truth, inputs, dt, process, variance, rng, disturbances=None,
-                  gusts=None, initial_states=None, substeps=1):
+                  gusts=None, initial_states=None, substeps=1, trace=None):
     """The outputs (N_i, p) of ``model`` at ``truth`` for each input record (N_i, m),
     simulated independently of the estimator (zero-order-hold discretisation by one matrix
     exponential) from trim, with white process noise (state → σ per sample) added to the
@@ -66,7 +67,9 @@ def noisy_outputs(model, truth, inputs, dt, process, variance, rng, disturbances
     controls) and −(C − C0)·e_j·g in the outputs. ``initial_states`` (records, n) starts each
     record there instead of at trim. ``substeps`` > 1 steps the disturbances and gusts (and
     the states they drive) that many times per sample, each at its own Gauss-Markov decay: a
-    continuous process to within 1/substeps of a sample, not one held over the sample."""
+    continuous process to within 1/substeps of a sample, not one held over the sample.
+    ``trace``, a list, receives per record the true (N_i, n + gusts + disturbances) states,
+    gusts and disturbance accelerations at the samples."""
     a, b, c, d = model.matrices(model.as_vector(truth))
     n, m = b.shape
     gust = dict(gusts or {})
@@ -99,14 +102,18 @@ def noisy_outputs(model, truth, inputs, dt, process, variance, rng, disturbances
         x = np.zeros(n) if initial_states is None else np.array(initial_states[i], dtype=float)
         outputs = np.empty((len(record), len(model.outputs)))
         acceleration, air = np.zeros(len(coloured)), np.zeros(len(gust))
+        truth_states = np.empty((len(record), n + len(gust) + len(coloured)))
         for k, u in enumerate(record):
             outputs[k] = c @ x + d @ u + sensed @ acceleration + gust_reading @ air
+            truth_states[k] = np.concatenate([x, air, acceleration])
             for _ in range(substeps):
                 x = phi @ x + gamma @ u + gust_gamma @ air + held @ acceleration
                 acceleration = decay * acceleration + drive * rng.standard_normal(len(coloured))
                 air = gust_decay * air + gust_drive * rng.standard_normal(len(gust))
             x[rows] += sigma * rng.standard_normal(len(rows))
         records.append(outputs + rng.standard_normal(outputs.shape) * np.sqrt(variance))
+        if trace is not None:
+            trace.append(truth_states)
     return records
 
 
@@ -292,7 +299,7 @@ def _assert_matches_central_differences(problem, system, steady, values, names, 
     """The innovations' exact sensitivities and those of B (the innovation covariance)
     against central differences of ``problem.innovations``, for the parameters ``names``
     (relative step 1e-6 of the value, at least of ``floor``)."""
-    sens = np.concatenate([d for _, _, d in innovation_blocks(system, steady, problem.records)])
+    sens = np.concatenate([d for _, _, d, _ in innovation_blocks(system, steady, problem.records)])
     d_innovation = steady.innovation.imag / COMPLEX_STEP
     for name in names:
         k = problem.parameter_names.index(name)

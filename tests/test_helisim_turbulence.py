@@ -74,6 +74,23 @@ def test_seeds_reproduce_and_streams_differ():
     assert one[0].metadata["turbulence"]["sigma"] == list(turbulence.sigma)
 
 
+def test_a_turbulent_record_carries_the_gusts_it_flew_through(tmp_path):
+    """Each turbulent record holds its maneuver's own gust draw as extra channels g_u … g_r
+    (ft/s and deg/s, no sensor noise), kept through a maneuver file; still air has none."""
+    from rotorid_files.formats import read_maneuver, write_maneuver
+
+    flown = HelisimSource().generate({**SMALL, "turbulence": "light"})
+    for record in flown:
+        drawn = Turbulence.preset("light").gusts(record.n_samples, record.dt, 0.0,
+                                                 gust_generator(SMALL["seed"], record.name))
+        recorded = np.column_stack([record.channel(f"g_{c}") for c in "uvwpqr"])
+        np.testing.assert_allclose(recorded[:, :3], drawn[:, :3] / FOOT, rtol=1e-12)
+        np.testing.assert_allclose(recorded[:, 3:], np.degrees(drawn[:, 3:]), rtol=1e-12)
+    path = write_maneuver(flown[0], tmp_path / "turbulent.csv")
+    np.testing.assert_allclose(read_maneuver(path).channel("g_w"), flown[0].channel("g_w"))
+    assert not set(HelisimSource().generate(SMALL)[0].extra_channels)
+
+
 def test_aerodynamics_see_the_air_relative_motion():
     """A body moving at V with rates ω in still air and a body at rest in a gust of −V, −ω
     (every point meets −(V + ω × r)) carry the same aerodynamic specific force."""

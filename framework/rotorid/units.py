@@ -60,6 +60,8 @@ CHANNEL_KINDS = {
     "p_dot": "angular-acceleration", "q_dot": "angular-acceleration",
     "r_dot": "angular-acceleration",
     "beta0": "angle", "beta1c": "angle", "beta1s": "angle", "vi": "velocity",
+    "g_u": "velocity", "g_v": "velocity", "g_w": "velocity",
+    "g_p": "rate", "g_q": "rate", "g_r": "rate",
     "long": "control", "lat": "control", "coll": "control", "ped": "control",
     "elevator": "control", "aileron": "control", "rudder": "control", "throttle": "control",
     "time": "time",

@@ -30,8 +30,12 @@ VELOCITIES = ("u", "v", "w")
 #: Optional rotor columns: coning and tip-path-plane tilts, kept as extra channels (a hybrid
 #: model measuring its rotor states reads them, docs/hybrid.md).
 ROTOR_ANGLES = ("beta0", "beta1c", "beta1s")
+#: Optional gust columns: the air's velocity and rotation a generated record flew through
+#: (``rotorid generate --turbulence``), kept as extra channels; filter error's gust
+#: estimates of the same names are drawn against them (``rotorid identify --states``).
+GUSTS = ("g_u", "g_v", "g_w", "g_p", "g_q", "g_r")
 #: Columns beyond the fixed layout that a file may hold without a model naming them.
-OPTIONAL_COLUMNS = VELOCITIES + ROTOR_ANGLES
+OPTIONAL_COLUMNS = VELOCITIES + ROTOR_ANGLES + GUSTS
 #: Header keys that are not metadata.
 RESERVED = ("name", "units", "initial_state", "state_names", "channel_units")
 #: Allowed metadata keys (also the ``# key: value`` syntax of CSV files).
@@ -117,7 +121,10 @@ def assemble(path: Path, columns: Mapping[str, np.ndarray], header: Mapping,
     except DataError as error:
         raise DataFileError(str(error)) from None
     declared = () if ingestion.signals is None else ingestion.signals.all.names
-    known = tuple(dict.fromkeys(ALL_CHANNELS + OPTIONAL_COLUMNS + declared + ingestion.keep_columns))
+    # a file of state estimates (rotorid identify --states) declares its states' units
+    estimated = tuple(header.get("state_units") or ())
+    known = tuple(dict.fromkeys(ALL_CHANNELS + OPTIONAL_COLUMNS + declared + estimated
+                                + ingestion.keep_columns))
     unknown = [c for c in columns if c not in known]
     if unknown and not for_model:
         raise DataFileError(f"{path}: unknown channel(s) {', '.join(map(repr, unknown))}; "

@@ -49,6 +49,7 @@ from rotorid.errors import EstimationError, IdentifiabilityWarning, SimulationDi
 from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.fit_notes import fast_modes_note
 from rotorid.estimation.models import LinearModel
+from rotorid.estimation.state_estimates import StateEstimates
 from rotorid.estimation.whiteness import whiteness_note
 from rotorid.model.parameter_units import rate_unit
 from rotorid.model.structure import ModelStructure
@@ -266,6 +267,11 @@ class FilterErrorProblem(InnovationLikelihood):
                                 + tuple(f"R_{o}" for o in structure.outputs))
         self.n_global = len(self.parameter_names)
         available = filter_state_names(tuple(kept), disturbances, gusts)
+        #: the filter's states an initial value or an estimate is given for
+        self.available_states = available
+        self.maneuver_names = maneuvers.names
+        #: (N_i,) each maneuver's sample times, s
+        self.times = [m.time for m in maneuvers]
         self.maneuver_parameters = ManeuverParameters.of(
             maneuvers.names, available, len(disturbances) + len(gusts),
             chosen_initial_states(initial_states, available, structure.states),
@@ -369,13 +375,39 @@ class FilterErrorProblem(InnovationLikelihood):
     def innovations(self, values) -> tuple[np.ndarray, np.ndarray]:
         """Time-major innovations (N, M, p) and their covariance B (p, p) at ``values``."""
         system, steady = self.filter(values)
-        blocks = [block for _, block, _ in innovation_blocks(
+        blocks = [block for _, block, _, _ in innovation_blocks(
             system, steady, self.records, **self.record_terms(values, system))]
         return np.concatenate(blocks), steady.innovation[0]
 
     def per_maneuver(self, innovations: np.ndarray) -> list[np.ndarray]:
         """Time-major (N, M, p) innovations → one (N_i, p) array per maneuver."""
         return self.records.split(innovations)
+
+    def state_estimates(self, values) -> StateEstimates:
+        """The filter's estimates x̂(n|n) = x̃_n + K ν_n at every measurement update of each
+        maneuver at ``values``: the states the outputs see, then the disturbances and gusts
+        (:func:`.maneuver_parameters.filter_state_names`), with the standard deviations of
+        the steady-state filtered covariance P − K B Kᵀ."""
+        system, steady = self.filter(values)
+        gain = steady.gain[0]
+        filtered = np.concatenate([
+            predicted + innovations @ gain.T for _, innovations, _, predicted in
+            innovation_blocks(system, steady, self.records, **self.record_terms(values, system))])
+        n_kept, n_coloured = len(self.kept_indices), len(self.disturbances) + len(self.gusts)
+        columns = np.r_[np.arange(n_kept), system.size - n_coloured + np.arange(n_coloured)]
+        covariance = steady.covariance[0] - gain @ steady.innovation[0] @ gain.T
+        states = self.structure.signals.states
+        units = ([states[self.structure.states[i]].unit for i in self.kept_indices]
+                 + [rate_unit(states[s].unit) for s in self.disturbances]
+                 + [states[s].unit for s in self.gusts])
+        every = self.update_every
+        return StateEstimates(
+            self.available_states, units, self.maneuver_names,
+            [time[::every] for time in self.times],
+            [f[:, columns] for f in self.records.split(filtered)],
+            np.sqrt(np.clip(np.diag(covariance)[columns], 0.0, None)),
+            method=f"Kalman filter x̂(n|n), steady-state gain"
+                   f"{f', updated at every {every}th sample' if every > 1 else ''}")
 
     def gauss_newton(self, values, b: np.ndarray, residuals):
         """Fisher information M (P, P) and gradient G (P,) of L at ``values`` (module
@@ -397,7 +429,7 @@ class FilterErrorProblem(InnovationLikelihood):
 
         # the products of one block run on a second thread while the filter steps the next
         with ThreadPoolExecutor(max_workers=1) as pool:
-            parts = [pool.submit(products, first, block, d_block) for first, block, d_block
+            parts = [pool.submit(products, first, block, d_block) for first, block, d_block, _
                      in innovation_blocks(system, steady, self.records, whiten, **terms)]
             sums = [sum(part) for part in zip(*(part.result() for part in parts))]
         information, gradient = sums[:2]
@@ -541,14 +573,7 @@ class FilterErrorEstimator:
     def _fit_linear(self, structure: ModelStructure, maneuvers: ManeuverSet, start,
                     stage: str = "") -> Estimate:
         """The fit of a linear ``structure``; its iterations are reported as ``stage``."""
-        # projected steps: in still air every F heads for its bound 0, and one F just above
-        # it would otherwise shorten every step (the fit then stalls far from the optimum)
-        settings = Settings(self.max_iterations, self.cost_tolerance, self.step_tolerance,
-                            shorten_steps=False)
-        process_noise, disturbances, gusts = self._noise_states(structure)
-        problem = FilterErrorProblem(
-            structure, maneuvers, process_noise, settings, disturbances, gusts,
-            self.initial_states, self.output_biases, self.update_every)
+        problem = self._problem(structure, maneuvers)
         values, note, given = self._start_values(problem, maneuvers, start)
         mine = not any(name in given for name in structure.parameter_names)
         from_equation_error = mine and self._wants_equation_error(structure)
@@ -569,6 +594,39 @@ class FilterErrorEstimator:
                 and (estimate.sign_violations or not estimate.converged)):
             estimate = attrs.evolve(estimate, notes=(*estimate.notes, POORER_OPTIMUM_ADVICE))
         return estimate
+
+    def _problem(self, structure: ModelStructure, maneuvers: ManeuverSet) -> FilterErrorProblem:
+        """The filter-error problem of a linear ``structure`` on ``maneuvers`` with this
+        estimator's noise model and options."""
+        # projected steps: in still air every F heads for its bound 0, and one F just above
+        # it would otherwise shorten every step (the fit then stalls far from the optimum)
+        settings = Settings(self.max_iterations, self.cost_tolerance, self.step_tolerance,
+                            shorten_steps=False)
+        process_noise, disturbances, gusts = self._noise_states(structure)
+        return FilterErrorProblem(
+            structure, maneuvers, process_noise, settings, disturbances, gusts,
+            self.initial_states, self.output_biases, self.update_every)
+
+    def state_estimates(self, structure: ModelStructure, maneuvers: ManeuverSet,
+                        estimate: Estimate) -> StateEstimates:
+        """The filter's estimates x̂(n|n) along ``maneuvers`` at ``estimate``, a fit of the
+        linear ``structure`` to them with this estimator's options
+        (:meth:`FilterErrorProblem.state_estimates`)."""
+        if not isinstance(structure, ModelStructure):
+            raise EstimationError("filter error's state estimates are for linear structures; "
+                                  "a nonlinear model's extended Kalman filter does not give "
+                                  "them")
+        problem = self._problem(structure, maneuvers)
+        missing = [n for n in problem.parameter_names if n not in estimate.parameter_names]
+        if missing:
+            raise EstimationError(
+                f"the estimate has no {', '.join(missing[:6])}{' …' if len(missing) > 6 else ''}"
+                f": state estimates need the filter-error fit of this structure to these "
+                f"maneuvers with the same noise model (process_noise, disturbances, gusts, "
+                f"initial_states, output_biases)")
+        values = np.array([estimate.value(n) for n in problem.parameter_names])
+        with blas.single_threaded():
+            return problem.state_estimates(values)
 
     def _wants_equation_error(self, structure: ModelStructure) -> bool:
         """Whether the derivatives start from equation error (``start`` option, or "auto"

@@ -131,10 +131,11 @@ def _run(start: np.ndarray, transition_t: np.ndarray, forcing: np.ndarray) -> np
 def innovation_blocks(system: CompanionSystem, steady: SteadyStateFilter, records: Records,
                       weight: np.ndarray | None = None, start: np.ndarray | None = None,
                       biases: np.ndarray | None = None
-                      ) -> Iterator[tuple[int, np.ndarray, np.ndarray | None]]:
-    """Yield ``(first, ν, ∂ν)`` for samples first … first+L−1: innovations ν (L, M, p) and,
-    when ``system`` and ``steady`` hold complex-step directions, their derivatives ∂ν
-    (L, M, p, D) (else None); with ``weight`` W (p, p) both multiplied by it, ν W.
+                      ) -> Iterator[tuple[int, np.ndarray, np.ndarray | None, np.ndarray]]:
+    """Yield ``(first, ν, ∂ν, x̃)`` for samples first … first+L−1: innovations ν (L, M, p),
+    when ``system`` and ``steady`` hold complex-step directions their derivatives ∂ν
+    (L, M, p, D) (else None), and the predicted states x̃ (L, M, S); with ``weight`` W (p, p)
+    ν and ∂ν are multiplied by it, ν W.
     ``start`` (M, S) is each maneuver's x̃_0 (default its recorded initial state, zero in
     the other companion states), ``biases`` (M, p) constants subtracted from its outputs.
 
@@ -184,7 +185,7 @@ def innovation_blocks(system: CompanionSystem, steady: SteadyStateFilter, record
         states = _run(state, a_t, inputs @ pu + corrected @ k.T)                   # (L, M, S)
         innovations = ((corrected - states @ h.T) * mask) @ weight
         if d_a is None:
-            yield first, innovations, None
+            yield first, innovations, None, states
             continue
         regressors = np.concatenate([inputs, corrected, states], axis=2).reshape(
             length * count, -1)
@@ -193,4 +194,4 @@ def innovation_blocks(system: CompanionSystem, steady: SteadyStateFilter, record
                          - (output_weight @ np.swapaxes(
                              d_states.reshape(length * count, n_dir, size), 1, 2)
                             ).reshape(length, count, n_y, n_dir)) * mask[..., None]
-        yield first, innovations, d_innovations
+        yield first, innovations, d_innovations, states

@@ -28,7 +28,7 @@ import attrs
 import numpy as np
 from rotorid.data import Maneuver, ManeuverSet
 from rotorid.errors import DataError
-from rotorid.units import KNOT
+from rotorid.units import FLIGHT_TEST, KNOT, channel_scale
 from rotorid_signals.signals import Multistep, Sweep
 
 from .loops import AXES, LoopDesign, design_loops, quasi_steady_model
@@ -42,6 +42,11 @@ from .sensors import (
 from .turbulence import Turbulence, gust_generator, turbulence_setting
 
 KINDS = ("3211", "2311", "sweep")
+#: The true gusts a turbulent record carries as extra channels (the air's velocity, ft/s, and
+#: rotation, deg/s, at the sample instants, no sensor noise), in :data:`.turbulence.COMPONENTS`
+#: order, and their factors from SI.
+GUST_CHANNELS = ("g_u", "g_v", "g_w", "g_p", "g_q", "g_r")
+GUST_SCALE = channel_scale(GUST_CHANNELS, FLIGHT_TEST)
 #: Flight conditions by name: airspeed in kt.
 CONDITIONS = {"hover": 0.0, "forward": 70.0}
 #: Multistep basic time step Δt per axis, s (validation.md §6.2: Δt ≈ 1.6/ω_n).
@@ -189,6 +194,8 @@ class DataSetConfig:
         design = {"sweep_omega": SWEEP_OMEGA, "sweep_time": SWEEP_TIME,
                   "sweep_amplitude_ratio": SWEEP_AMPLITUDE_RATIO,
                   "multistep_start": MULTISTEP_START, "multistep_record": MULTISTEP_RECORD}
+        if self.turbulence is not None:         # sets cached before they carried the gusts
+            design["gust_channels"] = list(GUST_CHANNELS)
         text = json.dumps({"config": self.as_dict(), "design": design, "plant": plant_id,
                            "version": __version__}, sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()
@@ -291,9 +298,10 @@ def fly_jobs(plant, jobs, progress=None, plant_id: str = "", with_record: bool =
             trims.append(job.trim_state)
             sticks.append(job.trim_stick)
     counts, pilot = _pilot_block([spec for _, spec in rows], dt)
+    gusts = _gusts(rows, pilot.shape[1], dt)
     record = fly(plant, np.array(trims), np.array(sticks), pilot, counts,
                  np.array([g.matrix for g in gains]), dt, jobs[0].config.substeps, progress,
-                 _gusts(rows, pilot.shape[1], dt))
+                 gusts)
     trim_outputs = {id(job): plant.measurements(job.trim_state[None], job.trim_stick[None])[0]
                     for job in jobs}
     by_job = {id(job): [] for job in jobs}
@@ -304,16 +312,17 @@ def fly_jobs(plant, jobs, progress=None, plant_id: str = "", with_record: bool =
         metadata = _metadata(job, spec, loop, plant_id, plant.state_names)
         metadata["excursion"] = excursion(record.states[row, :n], job.trim_state,
                                           plant.state_names)
+        extra = {}
         if job.config.turbulence is not None:
             metadata["turbulence"] = job.config.as_dict()["turbulence"]
-        rotor = {}
+            extra.update(zip(GUST_CHANNELS, (gusts[row, :n] * GUST_SCALE).T))
         if job.config.rotor_channels:
-            rotor = with_rotor_noise(rotor_perturbations(record.states[row, :n], job.trim_state,
-                                                         plant.state_names),
-                                     job.config.noise, job.config.seed, spec.name)
+            extra.update(with_rotor_noise(rotor_perturbations(record.states[row, :n],
+                                                              job.trim_state, plant.state_names),
+                                          job.config.noise, job.config.seed, spec.name))
         by_job[id(job)].append(Maneuver(spec.name, record.time[:n],
                                         record.stick[row, :n] - job.trim_stick, outputs,
-                                        metadata, extra_channels=rotor))
+                                        metadata, extra_channels=extra))
     sets = [ManeuverSet(by_job[id(job)]) for job in jobs]
     if with_record:
         return sets, record, [spec.name for _, spec in rows]

@@ -37,7 +37,10 @@ class Estimator(Protocol):
     """Family ``estimators``: fits a structure's free parameters to maneuvers.
 
     Optionally, ``check_structure(structure)`` raises a rotorid error for options that cannot
-    work with ``structure`` (a study calls it when reading a case, before any data exist).
+    work with ``structure`` (a study calls it when reading a case, before any data exist), and
+    ``state_estimates(structure, maneuvers, estimate)`` returns the
+    :class:`~rotorid.estimation.state_estimates.StateEstimates` of the model's states along
+    ``maneuvers`` at ``estimate`` (``rotorid identify --states``).
     """
 
     def estimate(self, structure: ModelStructure, maneuvers: ManeuverSet, *,

@@ -11,8 +11,8 @@ Usage::
                      [--resample linear|decimate] [--sample-time S]
                      [--actuator-lag S [--actuator-inputs long,lat]]
                      [--process-noise w,q|none] [--disturbances p,q,r] [--gusts u,v,w]
-                     [--update-every N] [--pairs q/long,p/lat] [--band LOW,HIGH]
-                     [--quiet] [--strict] [--force]
+                     [--update-every N] [--states DIR] [--pairs q/long,p/lat]
+                     [--band LOW,HIGH] [--quiet] [--strict] [--force]
 
 ``MODEL.toml`` is a model file (:mod:`rotorid.model.modelfile`); its initial values are the start
 values (all zero: the estimator chooses its own start, see docs/estimation.md). MODEL may
@@ -30,7 +30,12 @@ sweeps alike). The trim removal and resampling are recorded too (``ingestion``),
 set (``estimator_options``: the noise model, outputs, start …), to repeat the fit.
 ``--process-noise``, ``--disturbances``, ``--gusts`` and ``--update-every`` set the ``filter-error`` estimator's noise model
 (docs/estimation.md, "Filter error"); with another estimator they are a usage error that
-says to add ``--estimator filter-error``. The report goes to stdout; stderr gets one line per
+says to add ``--estimator filter-error``. ``--states DIR`` writes the filter's state
+estimates x̂(n|n) of every maneuver (the states the outputs see, then the disturbances
+``d_<state>`` and gusts ``g_<state>``: the turbulence as the identified model sees it) as
+``DIR/<maneuver>.csv`` maneuver files (header ``content: state estimates``, ``state_units``,
+``standard_deviation``) and ``DIR/<maneuver>.png`` figures
+(:mod:`rotorid.estimation.state_estimates`). The report goes to stdout; stderr gets one line per
 accepted iteration (unless ``--quiet``; an observer plugin of the
 ``rotorid_estimation_iteration`` hook, so it works with any estimator that reports through
 it), the kinematic consistency fits and one line per warning: the sanity checks of the data
@@ -53,7 +58,7 @@ import warnings
 from pathlib import Path
 
 from rotorid.cli.arguments import (add_ingestion_arguments, ingestion_settings, names,
-                                   output_file, seconds)
+                                   output_directory, output_file, seconds)
 from rotorid.plugin.hookspecs import hookimpl
 from rotorid.progress import counted
 
@@ -140,6 +145,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--band", default=None, metavar="OMEGA_MIN,OMEGA_MAX",
                         help="frequency response: the frequencies in rad/s a pair's fit may "
                              "reach (default its whole coherent range)")
+    parser.add_argument("--states", default=None, metavar="DIR", type=output_directory,
+                        help="filter error: write the filter's state estimates (the states, "
+                             "the gusts and disturbances) of every maneuver to DIR as CSV "
+                             "maneuver files and PNG figures")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress lines on stderr (warnings stay)")
     parser.add_argument("--force", action="store_true",
@@ -357,6 +366,9 @@ def run(args) -> int:
     with using(manager):
         options = _options(args)
         estimator = _estimator(args.estimator, options)
+        if args.states is not None and not hasattr(estimator, "state_estimates"):
+            raise UsageError(f"--states: estimator {args.estimator!r} gives no state "
+                             f"estimates; use --estimator filter-error")
         if hasattr(estimator, "check_structure"):     # options against the model, before data
             try:
                 estimator.check_structure(model)
@@ -404,6 +416,8 @@ def run(args) -> int:
         print(_modes_report(model, estimate))
     print(data_warnings_report(data_warnings))
     print(f"estimate written to {out}")
+    if args.states is not None:
+        _write_states(estimator, model, maneuvers, estimate, args)
     if estimate.converged:
         return ExitStatus.OK
     if args.strict:
@@ -413,6 +427,28 @@ def run(args) -> int:
     print(f"rotorid identify: warning: the fit did not converge ({_why(estimate)}); "
           f"--strict makes this an error", file=sys.stderr)
     return ExitStatus.OK
+
+
+def _write_states(estimator, model, maneuvers, estimate, args) -> None:
+    """The estimator's state estimates along ``maneuvers`` at ``estimate``: one CSV maneuver
+    file and one PNG figure per maneuver in ``args.states``, written atomically."""
+    from rotorid.estimation.state_estimates import StateEstimates
+    from rotorid.plugin.manager import create
+    from rotorid.plugin.returns import returned
+    from rotorid.report.plots.case import save_figure
+    from rotorid.report.plots.states import plot_state_estimates, recorded_channels
+
+    estimates = returned(estimator.state_estimates(model, maneuvers, estimate), StateEstimates,
+                         f"estimator {args.estimator!r}: state_estimates")
+    directory = Path(args.states)
+    create("data-sources", "files", hold=maneuvers.hold).save(
+        estimates.as_maneuvers(maneuvers), directory)
+    for maneuver in maneuvers:
+        known = recorded_channels(maneuver, estimates.names)
+        save_figure(plot_state_estimates(estimates, maneuver.name, known),
+                    directory / maneuver.name, formats=("png",))
+    print(f"state estimates of {len(estimates.maneuvers)} maneuver(s) "
+          f"({', '.join(estimates.names)}) written to {directory}: <maneuver>.csv and .png")
 
 
 def _why(estimate) -> str:
