@@ -44,3 +44,14 @@ def test_a_positive_definite_innovation_covariance_gives_the_likelihood_cost():
     quadratic = np.mean([v @ np.linalg.solve(b, v) for v in nu])
     assert cost == pytest.approx(np.linalg.det(b) * np.exp(quadratic), rel=1e-12)
     assert returned is b
+
+
+def test_innovations_far_beyond_their_covariance_are_named():
+    """B positive definite but a thousand times too small for the innovations: exp(2L/N)
+    overflows, the cost is infinite and the failure names the quadratic form and the noise
+    starts, not a singular B."""
+    likelihood = _Innovations(np.eye(3) * 1e-4)
+    assert likelihood.evaluate(np.zeros(1))[0] == np.inf
+    message = likelihood.failure(np.zeros(1))
+    assert message.startswith("the innovations are far larger than their covariance B says")
+    assert "exp(2L/N) overflows" in message and "singular" not in message

@@ -47,11 +47,17 @@ class InnovationLikelihood:
             return f"the Kalman filter does not exist ({error})"
         if not np.all(np.isfinite(innovations)):
             return "the innovations overflow (the model diverges at these values)"
-        if np.all(np.isfinite(b)) and not _positive_definite(b):
+        if not np.all(np.isfinite(b)):
+            return "the innovation covariance B is not finite at these values"
+        if not _positive_definite(b):
             return (f"the innovation covariance B is not positive definite (smallest "
                     f"eigenvalue {np.linalg.eigvalsh(b).min():.3g}): the filter's Riccati "
                     f"solution is not a covariance at these values")
-        return f"the innovation covariance B is singular (det B = {np.linalg.det(b):.3g})"
+        scatter = np.einsum("nmi,nmj->ij", innovations, innovations)
+        quadratic = np.trace(np.linalg.solve(b, scatter)) / self.n_samples
+        return (f"the innovations are far larger than their covariance B says (mean νᵀB⁻¹ν = "
+                f"{quadratic:.3g}, so exp(2L/N) overflows): the noise sizes or R start far "
+                f"too small for these data")
 
 
 def _positive_definite(b: np.ndarray) -> bool:
