@@ -283,3 +283,63 @@ def test_a_files_case_is_compared_with_the_users_reference(hover, tmp_path):
     table = (tmp_path / "own" / "tables" / "reference.csv").read_text().splitlines()
     assert table[0].startswith("derivative,unit,identified,CR bound,reference")
     assert [line.split(",")[0] for line in table[1:]] == ["M_q", "L_v", removed]
+
+
+def _synthetic_state_estimates(maneuvers):
+    """State estimates of q (the record's own q, so its grey line lies under the estimate),
+    a w disturbance and a w gust along each of ``maneuvers``."""
+    from rotorid.estimation.state_estimates import StateEstimates
+
+    rng = np.random.default_rng(0)
+    values = [np.column_stack([m.channel("q"), rng.normal(size=(m.n_samples, 2))])
+              for m in maneuvers]
+    return StateEstimates(("q", "d_w", "g_w"), ("deg/s", "ft/s²", "ft/s"),
+                          [m.name for m in maneuvers], [m.time for m in maneuvers], values,
+                          [0.1, 0.5, 1.0], "Kalman filter x̂(n|n), steady-state gain")
+
+
+def test_a_case_with_state_estimates_draws_and_writes_them(hover, tmp_path):
+    """A case whose estimator gave state estimates: a figure per identification maneuver
+    (the noise model's states first), a report section with its contents entry and progress
+    line, the estimates as maneuver files in state_estimates/ and their summary in
+    result.json."""
+    import json
+
+    from rotorid.study.persistence import save_result
+    from rotorid_files.formats import read_maneuver
+
+    maneuvers = list(hover.identification)[:2]
+    result = attrs.evolve(hover, identification=attrs.evolve(hover.identification,
+                                                             maneuvers=maneuvers),
+                          state_estimates=_synthetic_state_estimates(maneuvers))
+    heard = []
+    page = write_case_outputs(result, tmp_path / "case", heard.append).read_text(
+        encoding="utf-8")
+    figures = sorted(p.name for p in (tmp_path / "case" / "figures").glob("states_*.png"))
+    assert figures == sorted(f"states_{m.name}.png" for m in maneuvers)
+    assert any(line.startswith("figures: state estimates of 2 maneuvers") for line in heard)
+    assert '<a href="#state-estimates">State estimates</a>' in page
+    assert '<h2 id="state-estimates">' in page and "states_" in page
+    save_result(tmp_path / "case", result)
+    record = json.loads((tmp_path / "case" / "result.json").read_text(encoding="utf-8"))
+    assert record["state_estimates"]["names"] == ["q", "d_w", "g_w"]
+    assert record["state_estimates"]["units"]["d_w"] == "ft/s²"
+    written = read_maneuver(tmp_path / "case" / "state_estimates" / f"{maneuvers[0].name}.csv")
+    np.testing.assert_allclose(written.channel("g_w"), result.state_estimates.values[0][:, 2])
+    without = write_case_outputs(hover, tmp_path / "plain").read_text(encoding="utf-8")
+    assert "state-estimates" not in without
+
+
+def test_the_states_figure_puts_the_noise_model_first_with_the_recorded_channel_behind(hover):
+    from rotorid.report.plots.states import plot_state_estimates, recorded_channels
+
+    maneuver = hover.identification[0]
+    estimates = _synthetic_state_estimates([maneuver])
+    figure = plot_state_estimates(estimates, maneuver.name,
+                                  recorded_channels(maneuver, estimates.names))
+    panels = [axis for axis in figure.axes if axis.get_visible()]
+    assert [axis.get_ylabel() for axis in panels] == [
+        "disturbance w [ft/s²]", "gust w [ft/s]", "q [deg/s]"]
+    assert [line.get_label() for line in panels[2].lines] == ["recorded", "estimate"]
+    assert all(UNIT.search(axis.get_ylabel()) for axis in panels)
+    _legend_outside(figure)

@@ -128,3 +128,42 @@ def test_state_estimates_check_their_shapes():
         StateEstimates(["w"], ["ft/s"], ["m"], [np.arange(4.0)], [np.zeros((3, 1))], [0.1])
     with pytest.raises(EstimationError, match="1 names need as many units"):
         StateEstimates(["w"], [], ["m"], [np.arange(4.0)], [np.zeros((4, 1))], [0.1])
+
+
+def test_a_study_asks_the_estimator_for_state_estimates_only_where_it_gives_them(flight):
+    """The study's step: none from an estimator without the method; a progress line naming
+    the states from one with it; a progress line with the reason, and none, where it cannot;
+    a PluginError naming the call where it returns something else."""
+    from rotorid.errors import PluginError
+    from rotorid.study.case import FlightCase
+    from rotorid.study.pipeline import _state_estimates
+
+    model, data, _ = flight
+    case = FlightCase.from_mapping({"name": "own", "estimator": {"name": "filter-error"},
+                                    "data": {"source": "files", "identification": "f/*.csv"}})
+    given = _problem(model, data).state_estimates(_true_values(model))
+
+    class Giving:
+        def state_estimates(self, structure, maneuvers, estimate):
+            return given
+
+    class Failing:
+        def state_estimates(self, structure, maneuvers, estimate):
+            raise EstimationError("not for this model")
+
+    class Wrong:
+        def state_estimates(self, structure, maneuvers, estimate):
+            return {}
+
+    heard = []
+
+    def report(name, message):
+        heard.append(message)
+
+    assert _state_estimates(case, object(), model, data, None, report) is None
+    assert _state_estimates(case, Giving(), model, data, None, report) is given
+    assert _state_estimates(case, Failing(), model, data, None, report) is None
+    assert heard == ["state estimates of u, w, q, theta, v, p, phi, r, d_q, g_v along 1 "
+                     "maneuver", "no state estimates: not for this model"]
+    with pytest.raises(PluginError, match="state_estimates"):
+        _state_estimates(case, Wrong(), model, data, None, report)

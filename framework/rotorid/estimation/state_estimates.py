@@ -20,6 +20,8 @@ from rotorid.frozen import readonly_array
 
 #: What the files' ``content`` header says.
 CONTENT = "state estimates"
+#: Where a study writes them, in the case's directory.
+STUDY_DIRECTORY = "state_estimates"
 
 
 def _arrays(values) -> tuple[np.ndarray, ...]:
@@ -62,6 +64,14 @@ class StateEstimates:
             if values.shape != (time.size, count):
                 raise EstimationError(f"state estimates of maneuver {name!r}: values of shape "
                                       f"{values.shape}, expected ({time.size}, {count})")
+
+    def summary(self) -> dict:
+        """What a result record says of them: the states, units, error spreads, the method,
+        the maneuvers, and where a study writes them (``state_estimates/<maneuver>.csv``)."""
+        return {"names": list(self.names), "units": dict(zip(self.names, self.units)),
+                "standard_deviation": dict(zip(self.names, self.standard_deviation.tolist())),
+                "method": self.method, "maneuvers": list(self.maneuvers),
+                "files": f"{STUDY_DIRECTORY}/<maneuver>.csv"}
 
     def of(self, name: str) -> np.ndarray:
         """(ΣN_i,) the estimates of state ``name``, the maneuvers one after the other."""

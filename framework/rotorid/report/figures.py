@@ -2,7 +2,8 @@
 
 :func:`case_figures` writes into ``<case>/figures/``: ``rmse``, ``delay_profiles`` (when the
 case profiled its delays), ``time_<maneuver>`` for every identification maneuver, and ``error_<out>_<in>`` and ``bode_<out>_<in>`` for every verified
-pair (PNG and SVG each); titles name the flight condition ("hover", "70 kt").
+pair, ``states_<maneuver>`` for every identification maneuver where the estimator gave state
+estimates (PNG and SVG each); titles name the flight condition ("hover", "70 kt").
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from rotorid.progress import Countdown, counted
 from rotorid.report.plots.case import plot_rmse_path, plot_time_histories, save_figure
 from rotorid.report.plots.frequency import RELAXED_THRESHOLD, plot_bode, plot_error
 from rotorid.report.plots.profiles import plot_delay_profiles
+from rotorid.report.plots.states import NOISE_PREFIXES, plot_state_estimates, recorded_channels
 from rotorid.verification.compare import envelopes_by_name
 from rotorid.verification.pairs import parse_pair
 
@@ -84,6 +86,32 @@ def _time_caption(maneuver, models: Sequence[str]) -> str:
             "window (shaded above).")
 
 
+def _states_caption(maneuver, estimates) -> str:
+    noise = [n for n in estimates.names if n[:2] in NOISE_PREFIXES]
+    return (f"<code>{html.escape(maneuver.name)}</code>: the estimator's state estimates "
+            f"along the record ({html.escape(estimates.method)}) for the model with delays, "
+            f"each in a band of ±2 standard deviations of its error as the estimator states "
+            f"it; first the noise model's states ({html.escape(', '.join(noise) or 'none')}: "
+            "d_ a disturbance acceleration, g_ a gust), the turbulence as the identified "
+            "model sees it. Thin grey: the record's own channel of the same name (a "
+            "measured output; a generated record's true gust).")
+
+
+def _state_figures(result, figures_dir: Path, tally: FigureTally) -> list[ReportFigure]:
+    """One figure of the state estimates per identification maneuver (``states_<name>``)."""
+    estimates = result.state_estimates
+    written = []
+    for maneuver in result.identification:
+        figure = plot_state_estimates(
+            estimates, maneuver.name, recorded_channels(maneuver, estimates.names),
+            title=f"{case_title(result)}: state estimates ({maneuver.name})")
+        name = f"states_{file_stem(maneuver.name)}"
+        tally.save(figure, figures_dir / name)
+        written.append(ReportFigure(f"{name}.png", _states_caption(maneuver, estimates)))
+    tally.group_done(f"state estimates of {counted(len(written), 'maneuver')}")
+    return written
+
+
 def _error_caption(pair: str, muad_range: str, band) -> str:
     return (f"{html.escape(pair)}: error ε = H_model/H_measured of each model's response on "
             "the sweeps (magnitude in dB, phase as principal value in deg) against the MUAD "
@@ -149,8 +177,9 @@ def case_figure_count(result) -> int:
     """How many figures :func:`case_figures` writes for ``result``."""
     reference = result.verification.get("with delays")
     pairs = 0 if reference is None else len(reference.pairs)
+    states = 0 if result.state_estimates is None else len(result.state_estimates.maneuvers)
     return (1 + bool(result.delay_profiles) + len(result.identification) + 2 * pairs
-            + len(_hybrid_pairs(result)))
+            + len(_hybrid_pairs(result)) + states)
 
 
 def case_figures(result, figures_dir: Path,
@@ -188,6 +217,8 @@ def case_figures(result, figures_dir: Path,
         tally.save(figure, figures_dir / name)
         written["time"].append(ReportFigure(f"{name}.png", _time_caption(maneuver, names)))
     tally.group_done(f"time histories of {counted(len(maneuvers), 'maneuver')}")
+    if result.state_estimates is not None:
+        written["states"] = _state_figures(result, figures_dir, tally)
     by_name = envelopes_by_name(result.case.envelopes, band=result.case.band)
     envelopes = [e for e in by_name.values() if e.kind == "bounds"]
     reference = result.verification.get("with delays")

@@ -835,6 +835,8 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
                  ("modes", "Modes"), *((("fit-notes", "Fit notes"),) if fit_notes(result)
                                         else ()),
                  ("time-histories", "Time histories"),
+                 *((("state-estimates", "State estimates"),) if figures.get("states")
+                   else ()),
                  ("verification", "Frequency-domain verification")]
     key_text = (f"Identified ({result.final_model_name}) beside the truth model's residualised "
                 "6-DoF linearisation and the published Helisim Bo-105 values (Padfield 2007). "
@@ -870,6 +872,13 @@ def case_html(result, figures: Mapping[str, Sequence[ReportFigure]],
         reference_html(result), modes_html(result), fit_notes_html(result),
         '<h2 id="time-histories">Time histories of the identification maneuvers</h2>',
         figures_html(figures.get("time", [])),
+        *(('<h2 id="state-estimates">State estimates of the identification maneuvers</h2>',
+           "<p>What the estimator's filter makes of each record at the model with delays: the "
+           "aircraft's states and its noise model's disturbances and gusts, each with the "
+           "spread of its error; as maneuver files in <code>state_estimates/</code>. A gust "
+           "estimate far larger than any plausible turbulence is a gust on its ridge "
+           "(docs/estimation.md, \"The filter's state estimates\").</p>",
+           figures_html(figures["states"])) if figures.get("states") else ()),
         '<h2 id="verification">Frequency-domain verification on the sweeps</h2>',
         f"<p>Every verdict (MUAD, AEE, the mismatch cost J, and the analytic comparison in "
         f"result.json) counts the same points: the verification band "

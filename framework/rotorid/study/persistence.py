@@ -129,9 +129,17 @@ def save_profiles(directory: Path, selected_step: int,
 
 
 def save_result(directory: Path, result: CaseResult) -> None:
-    """Write ``result.json``."""
+    """Write ``result.json`` and, where the estimator gave them, the state estimates as
+    maneuver files ``state_estimates/<maneuver>.csv``."""
     atomic_write(directory / "result.json",
                  json.dumps(jsonable(result.as_dict()), indent=1, default=_json_default))
+    if result.state_estimates is not None:
+        from rotorid.estimation.state_estimates import STUDY_DIRECTORY
+        from rotorid.plugin.manager import create
+
+        create("data-sources", "files", hold=result.identification.hold).save(
+            result.state_estimates.as_maneuvers(result.identification),
+            directory / STUDY_DIRECTORY)
 
 
 def _json_default(value):

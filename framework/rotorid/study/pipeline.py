@@ -34,11 +34,12 @@ from typing import Protocol
 import attrs
 
 from rotorid.data import ALL_CHANNELS, ManeuverSet
-from rotorid.errors import (DataError, DataWarning, IdentifiabilityWarning, RotoridError,
-                            RotoridWarning, StudyError)
+from rotorid.errors import (DataError, DataWarning, EstimationError, IdentifiabilityWarning,
+                            RotoridError, RotoridWarning, StudyError)
 from rotorid.estimation.data_checks import check_fit_data
 from rotorid.estimation.reduction import ReductionPath, ReductionStep, reduce
 from rotorid.estimation.sanity import check_before_fit
+from rotorid.estimation.state_estimates import StateEstimates
 from rotorid.executors import check_executor, failure_error, run_tasks
 from rotorid.lease import hold_lease
 from rotorid.model.derivatives import delayed_derivative
@@ -47,7 +48,7 @@ from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.plugin.contracts import CaseData
 from rotorid.plugin.manager import create, notify, using
 from rotorid.plugin.returns import returned
-from rotorid.progress import Countdown
+from rotorid.progress import Countdown, counted
 from rotorid.study.case import FlightCase
 from rotorid.study.checks import check_case, check_cases
 from rotorid.study.comparison import compare_frequency_fit
@@ -297,6 +298,24 @@ def _verify(case: FlightCase, structures, estimates, ident: ManeuverSet,
     return simulations, verification
 
 
+def _state_estimates(case: FlightCase, estimator, structure, ident: ManeuverSet, estimate,
+                     report: Progress) -> StateEstimates | None:
+    """The case estimator's state estimates of the model with delays along the
+    identification data (``None`` from an estimator that gives none, or where it cannot:
+    a progress line says why)."""
+    if not hasattr(estimator, "state_estimates"):
+        return None
+    try:
+        estimates = returned(estimator.state_estimates(structure, ident, estimate),
+                             StateEstimates, f"estimator {case.estimator!r}: state_estimates")
+    except EstimationError as error:
+        report(case.name, f"no state estimates: {error}")
+        return None
+    report(case.name, f"state estimates of {', '.join(estimates.names)} along "
+                      f"{counted(len(estimates.maneuvers), 'maneuver')}")
+    return estimates
+
+
 def _compare(case: FlightCase, structures, estimates, simulations,
              verif: ManeuverSet | None, report: Progress) -> dict:
     """The frequency-domain fit of each model beside its time-domain fit, whose metrics on
@@ -438,6 +457,7 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
         report(case.name, _profile_line(profile))
     structures = {"no delays": selected.structure, "with delays": delayed}
     estimates = {"no delays": selected.estimate, "with delays": delayed_estimate}
+    states = _state_estimates(case, estimator, delayed, ident, delayed_estimate, report)
     simulations, verification = _verify(case, structures, estimates, ident, verif, report)
     clock["verification"] = time.perf_counter()
     comparison = _compare(case, structures, estimates, simulations, verif, report)
@@ -462,7 +482,7 @@ def _run_case(case: FlightCase, directory: Path, resume: bool, report: Progress,
         _durations(clock), dropped, resumed,
         None if truth is None else truth_equivalent_delays(truth, condition, delayed),
         comparison, profiles, estimators, data_warnings, hybrid,
-        handling_qualities_table(models, verif))
+        handling_qualities_table(models, verif), states)
     save_result(directory, result)
     if report_writer is not None:
         report(case.name, "figures and report")

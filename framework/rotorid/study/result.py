@@ -10,6 +10,7 @@ import numpy as np
 from rotorid.data import ManeuverSet
 from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.profiles import DelayProfile
+from rotorid.estimation.state_estimates import StateEstimates
 from rotorid.estimation.reduction import ReductionPath
 from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.notebook import case_result_html, case_result_summary
@@ -64,6 +65,9 @@ class CaseResult:
     # ADS-33 bandwidth and phase delay by source: each model's and the measured (sweeps)
     handling_qualities: Mapping[str, tuple[HandlingQualities, ...]] = attrs.field(
         factory=dict)
+    # the estimator's state estimates of the model with delays along the identification data
+    # (filter error's gusts and disturbances; None from an estimator that gives none)
+    state_estimates: StateEstimates | None = None
 
     @property
     def name(self) -> str:
@@ -199,6 +203,8 @@ class CaseResult:
                                         else self.truth_delays.as_dict()),
             "handling_qualities": {source: [item.as_dict() for item in items]
                                    for source, items in self.handling_qualities.items()},
+            "state_estimates": (None if self.state_estimates is None
+                                else self.state_estimates.summary()),
             **comparison,
             # What differs between an uninterrupted and a resumed run of the same case, and
             # nothing else: compare result files without this key.
