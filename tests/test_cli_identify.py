@@ -1,6 +1,7 @@
 """``rotorid identify``: estimates from maneuver files against the truth; one-line errors."""
 
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -363,6 +364,11 @@ def test_filter_error_options_are_checked(case, tmp_path, capsys):
         "--states: estimator 'output-error' gives no state estimates; use --estimator "
         "filter-error")
     assert not (tmp_path / "s").exists()
+    before = {p: p.read_bytes() for p in Path(data).iterdir()}
+    refused = _error_line(base + ["--estimator", "filter-error", "--states", str(data)], capsys)
+    assert refused.startswith(f"rotorid identify: error: {data}{os.sep}doublet_")
+    assert refused.endswith(".csv exists already; give --force to overwrite it")
+    assert {p: p.read_bytes() for p in Path(data).iterdir()} == before
     assert _error_line(base + ["--gusts", "w"], capsys, ExitStatus.USAGE).endswith(
         "--gusts: filter error's noise model; add --estimator filter-error (the output-error "
         "estimator has no process noise)")

@@ -35,7 +35,8 @@ estimates x̂(n|n) of every maneuver (the states the outputs see, then the distu
 ``d_<state>`` and gusts ``g_<state>``: the turbulence as the identified model sees it) as
 ``DIR/<maneuver>.csv`` maneuver files (header ``content: state estimates``, ``state_units``,
 ``standard_deviation``) and ``DIR/<maneuver>.png`` figures
-(:mod:`rotorid.estimation.state_estimates`). The report goes to stdout; stderr gets one line per
+(:mod:`rotorid.estimation.state_estimates`); a file of those names already in DIR (a data
+directory given by mistake) stops the command before the fit, unless ``--force``. The report goes to stdout; stderr gets one line per
 accepted iteration (unless ``--quiet``; an observer plugin of the
 ``rotorid_estimation_iteration`` hook, so it works with any estimator that reports through
 it), the kinematic consistency fits and one line per warning: the sanity checks of the data
@@ -152,7 +153,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--quiet", action="store_true",
                         help="no progress lines on stderr (warnings stay)")
     parser.add_argument("--force", action="store_true",
-                        help="overwrite RESULT.json if it exists")
+                        help="overwrite RESULT.json (and --states' files) if it exists")
     parser.add_argument("--strict", action="store_true",
                         help="exit with status 4 when the fit does not converge (the estimate "
                              "is written all the same)")
@@ -387,6 +388,10 @@ def run(args) -> int:
             maneuvers = load_maneuvers(args.data, args.hold,
                                        None if by_reference else model.units.name, ingestion)
             maneuvers = _actuated(maneuvers, args)
+            if args.states is not None:
+                for name in maneuvers.names:
+                    for suffix in (".csv", ".png"):
+                        refuse_overwrite(Path(args.states) / f"{name}{suffix}", args.force)
             if not by_reference:
                 check_fit_data(maneuvers, options.get("outputs"), model)
             checked = check_before_fit(maneuvers, None if by_reference else model)
