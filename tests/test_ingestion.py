@@ -110,6 +110,21 @@ def test_decimation_removes_what_would_alias():
     assert "anti-aliased decimation by 20" in m.metadata["resampled"]
 
 
+def test_decimation_keeps_a_records_ends_and_its_trim():
+    """A 50 Hz record still carrying its trim (az about −1 g) with a slow motion, decimated to
+    0.16 s: the first and last kept samples stay on the record (no pull towards zero at the
+    ends), and the trim removed after it is the record's own first second's."""
+    time = np.arange(0.0, 15.0001, 0.02)
+    columns = _columns(time, lambda t, k: -32.17 + k + np.sin(0.4 * t) + 0.1 * t)
+    m = Maneuver.from_columns("trimmed-late", columns, ingestion={
+        "resample": "decimate", "sample_time": 0.16, "trim": "first-second"})
+    for channel in ("az", "q", "theta"):
+        recorded = np.interp(m.time, time, columns[channel])
+        trim = m.metadata["trim_removed"][channel]
+        assert trim == pytest.approx(np.mean(columns[channel][time <= 1.0]), abs=0.01)
+        assert np.max(np.abs(m.channel(channel) - (recorded - trim))) < 0.01, channel
+
+
 def test_a_time_gap_is_warned_about_once_with_its_length():
     time = np.concatenate([np.arange(0.0, 3.0, 0.02), np.arange(3.5, 6.0, 0.02)])
     with warnings.catch_warnings(record=True) as caught:

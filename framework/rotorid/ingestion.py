@@ -289,7 +289,7 @@ def _resample(columns: dict, ingestion: Ingestion, where: str) -> tuple[dict, st
                 f"{steps.min():.6g}–{steps.max():.6g} s, median {median:.6g} s)")
         return {k: (grid if k == "time" else np.interp(grid, time, v))
                 for k, v in columns.items()}, note
-    from scipy.signal import decimate
+    from scipy.signal import firwin, resample_poly
 
     factor = int(round(ingestion.sample_time / median))
     if factor < 2:
@@ -300,10 +300,15 @@ def _resample(columns: dict, ingestion: Ingestion, where: str) -> tuple[dict, st
     n = (fine.size - 1) // factor * factor + 1
     fine = fine[:n]
     resampled = {"time": fine[::factor]}
+    # the FIR of scipy.signal.decimate (Hamming, 20·factor + 1 taps), run with its delay
+    # compensated (zero phase) over the record extended by the straight line through its ends,
+    # not by zeros, which would pull the first and last samples of a record towards zero (and
+    # a trim offset with them)
+    window = firwin(20 * factor + 1, 1.0 / factor, window="hamming")
     for name, values in columns.items():
         if name != "time":
-            resampled[name] = decimate(np.interp(fine, time, values), factor, ftype="fir",
-                                       zero_phase=True)
+            resampled[name] = resample_poly(np.interp(fine, time, values), 1, factor,
+                                            window=window, padtype="line")
     note = (f"anti-aliased decimation by {factor} (zero-phase FIR low-pass, after linear "
             f"interpolation onto a {ingestion.sample_time / factor:.6g} s grid) to "
             f"{ingestion.sample_time:.6g} s (recorded median step {median:.6g} s)")
