@@ -81,8 +81,9 @@ def test_filtered_states_err_by_the_spread_the_filter_states(flight, every):
 
 
 def test_state_estimates_from_the_estimator_need_its_own_fit(flight):
-    """The estimator's state_estimates takes the estimate's values by name and refuses an
-    estimate without its noise model's parameters, naming them and what is needed."""
+    """The estimator's state_estimates gives the problem's at the estimate's values, and
+    refuses an estimate of other parameters (another noise model, another estimator), of
+    other records, or something that is no estimate, naming the difference and the fix."""
     model, data, _ = flight
     head = rotorid.ManeuverSet([data[0].head(20.0)])
     options = {"process_noise": tuple(PROCESS), "disturbances": tuple(DISTURBANCE),
@@ -94,9 +95,19 @@ def test_state_estimates_from_the_estimator_need_its_own_fit(flight):
     direct = _problem(model, head).state_estimates(estimate.values)
     np.testing.assert_allclose(estimates.values[0], direct.values[0])
     other = rotorid.create("estimators", "filter-error", process_noise=tuple(PROCESS))
-    with pytest.raises(EstimationError, match="the estimate has no .*same noise model"):
-        other.state_estimates(model, head, rotorid.create(
+    with pytest.raises(EstimationError, match=r"the estimate has D_q, G_v, T_q, Tg_v besides:"
+                                              r" .*same noise model"):
+        other.state_estimates(model, head, estimate)
+    with pytest.raises(EstimationError, match=r"the estimate lacks F_w, .*same noise model"):
+        estimator.state_estimates(model, head, rotorid.create(
             "estimators", "output-error", max_iterations=2).estimate(model, head))
+    longer = rotorid.ManeuverSet([data[0].head(30.0)])
+    with pytest.raises(EstimationError, match=r"fitted to 1001 innovations, these maneuvers "
+                                              r"give 1501: give the records as fitted"):
+        estimator.state_estimates(model, longer, estimate)
+    with pytest.raises(EstimationError, match="need the Estimate of a filter-error fit, got "
+                                              "dict"):
+        estimator.state_estimates(model, head, {"parameters": {}})
 
 
 def test_state_estimates_as_maneuver_files_and_their_figure(flight):

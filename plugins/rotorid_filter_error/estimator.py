@@ -607,26 +607,26 @@ class FilterErrorEstimator:
             structure, maneuvers, process_noise, settings, disturbances, gusts,
             self.initial_states, self.output_biases, self.update_every)
 
-    def state_estimates(self, structure: ModelStructure, maneuvers: ManeuverSet,
+    def state_estimates(self, structure, maneuvers: ManeuverSet,
                         estimate: Estimate) -> StateEstimates:
-        """The filter's estimates x̂(n|n) along ``maneuvers`` at ``estimate``, a fit of the
-        linear ``structure`` to them with this estimator's options
-        (:meth:`FilterErrorProblem.state_estimates`)."""
-        if not isinstance(structure, ModelStructure):
-            raise EstimationError("filter error's state estimates are for linear structures; "
-                                  "a nonlinear model's extended Kalman filter does not give "
-                                  "them")
-        problem = self._problem(structure, maneuvers)
-        missing = [n for n in problem.parameter_names if n not in estimate.parameter_names]
-        if missing:
-            raise EstimationError(
-                f"the estimate has no {', '.join(missing[:6])}{' …' if len(missing) > 6 else ''}"
-                f": state estimates need the filter-error fit of this structure to these "
-                f"maneuvers with the same noise model (process_noise, disturbances, gusts, "
-                f"initial_states, output_biases)")
-        values = np.array([estimate.value(n) for n in problem.parameter_names])
+        """The filter's estimates x̂(n|n) along ``maneuvers`` at ``estimate``, this
+        estimator's fit of ``structure`` (linear, or a nonlinear model of one's own) to them
+        with its options (:meth:`FilterErrorProblem.state_estimates`,
+        :meth:`.nonlinear.NonlinearFilterErrorProblem.state_estimates`). An estimate of
+        other parameters or of other records (another noise model, structure, sample time or
+        update rate) is refused, naming the difference."""
+        if not isinstance(estimate, Estimate):
+            raise EstimationError(f"state estimates need the Estimate of a filter-error fit, "
+                                  f"got {type(estimate).__name__}")
         with blas.single_threaded():
-            return problem.state_estimates(values)
+            if isinstance(structure, ModelStructure):
+                problem = self._problem(structure, maneuvers)
+            else:
+                from .nonlinear import nonlinear_problem
+
+                problem = nonlinear_problem(self, structure, maneuvers)
+            _check_estimate_of(problem, estimate)
+            return problem.state_estimates(estimate.values)
 
     def _wants_equation_error(self, structure: ModelStructure) -> bool:
         """Whether the derivatives start from equation error (``start`` option, or "auto"
@@ -728,6 +728,29 @@ class FilterErrorEstimator:
                 np.concatenate([upper, np.full(n_f + n_d, np.inf),
                                 np.full(n_d, _LONGEST_CORRELATION),
                                 np.full(parts.measurement.size, np.inf), free]))
+
+
+def _check_estimate_of(problem, estimate: Estimate) -> None:
+    """Refuse an ``estimate`` that is not a fit of ``problem``: other parameters (another
+    structure or noise model) or another number of innovations (other records, sample time
+    or update rate)."""
+    names = tuple(problem.parameter_names)
+    if tuple(estimate.parameter_names) != names:
+        missing = [n for n in names if n not in estimate.parameter_names]
+        extra = [n for n in estimate.parameter_names if n not in names]
+        parts = ([f"lacks {', '.join(missing[:6])}{' …' if len(missing) > 6 else ''}"]
+                 if missing else []) + (
+            [f"has {', '.join(extra[:6])}{' …' if len(extra) > 6 else ''} besides"]
+            if extra else []) or ["orders its parameters otherwise"]
+        raise EstimationError(
+            f"the estimate {' and '.join(parts)}: state estimates need the filter-error fit "
+            f"of this structure to these maneuvers with the same noise model (process_noise, "
+            f"disturbances, gusts, initial_states, output_biases)")
+    if estimate.n_samples != problem.n_samples:
+        raise EstimationError(
+            f"the estimate was fitted to {estimate.n_samples} innovations, these maneuvers "
+            f"give {problem.n_samples}: give the records as fitted (the same resampling, "
+            f"sample time and update_every)")
 
 
 def unmeasured_gusts(problem) -> tuple[str, ...]:

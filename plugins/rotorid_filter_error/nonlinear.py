@@ -27,6 +27,7 @@ from rotorid import blas
 from rotorid.errors import DataError, EstimationError
 from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.integrated import IntegratedModel
+from rotorid.estimation.state_estimates import StateEstimates
 from rotorid.model.nonlinear import NonlinearModel
 from rotorid.simulation.integrators import integrate
 from rotorid.units import rmse_reference_factors
@@ -81,6 +82,7 @@ class NonlinearFilterErrorProblem(InnovationLikelihood):
         self.process_noise = tuple(process_noise)
         self.noise_rows = states.indices(self.process_noise)
         self.lengths = tuple(r.inputs.shape[0] for r in self.records)
+        self.maneuver_names = maneuvers.names
         n, count = max(self.lengths), len(self.records)
         self.outputs = np.zeros((n, count, len(model.output_names)))
         self.mask = np.zeros((n, count), dtype=bool)
@@ -107,8 +109,9 @@ class NonlinearFilterErrorProblem(InnovationLikelihood):
         return batch[:, :k], batch[:, k:k + f], batch[:, k + f:]
 
     def _gains(self, theta: np.ndarray, start: np.ndarray, f: np.ndarray, r: np.ndarray):
-        """Gain K (B, n, p) and innovation covariance B (B, p, p) of the model linearised
-        about the first record's ``start`` states (B, n) and first input, per row."""
+        """The steady-state filter (gain K (B, n, p), innovation covariance B (B, p, p), a
+        priori covariance P (B, n, n)) of the model linearised about the first record's
+        ``start`` states (B, n) and first input, per row."""
         first = self.records[0]
         rows, n = start.shape
         h = _LINEARISATION_STEP * np.maximum(np.abs(start), 1.0)                 # (B, n)
@@ -131,34 +134,60 @@ class NonlinearFilterErrorProblem(InnovationLikelihood):
         transition = scipy.linalg.expm(a * self.dt)
         process = np.zeros((rows, n, n))
         process[:, self.noise_rows, self.noise_rows] = f**2
-        steady = steady_state_filter(transition, c, process, r)
-        return steady.gain, steady.innovation
+        return steady_state_filter(transition, c, process, r)
 
     def run(self, batch: np.ndarray):
         """Innovations (N, M, B, p) and their covariances (B, p, p) of B parameter vectors
         (batch (B, P)); padded samples are zero, a row that blew up is not finite."""
+        innovations, steady, _ = self._filter(batch)
+        return innovations, steady.innovation
+
+    def _filter(self, batch: np.ndarray, keep_states: bool = False):
+        """The filter run over every record for each row of ``batch`` (B, P): innovations
+        (N, M, B, p), the steady-state filter, and with ``keep_states`` the corrected states
+        x̂(n|n) (N, M, B, n) (else None)."""
         psi, f, r = self._parts(np.asarray(batch, dtype=float))
         theta, states = self.model.expand(psi, self.records)
-        gain, innovation = self._gains(theta, states[0], f, r)
+        steady = self._gains(theta, states[0], f, r)
         count, rows = len(self.records), batch.shape[0]
         members = list(range(count))
         inputs, t0, x, rows_theta = self.model.stacked(self.records, members, theta, states)
-        gains = np.tile(gain, (count, 1, 1))                                     # (M·B, n, p)
+        gains = np.tile(steady.gain, (count, 1, 1))                              # (M·B, n, p)
         measured = np.repeat(self.outputs, rows, axis=1)                         # (N, M·B, p)
         samples = inputs.shape[0]
         result = np.empty((samples, count * rows, len(self.output_names)))
+        kept = np.empty((samples,) + x.shape) if keep_states else None
         with np.errstate(all="ignore"):
             for k in range(samples):
                 predicted = self.model.model.outputs(t0 + k * self.dt, x, inputs[k],
                                                      rows_theta)
                 result[k] = measured[k] - predicted
+                corrected = x + np.einsum("bij,bj->bi", gains, result[k])
+                if keep_states:
+                    kept[k] = corrected
                 if k + 1 < samples:
-                    corrected = x + np.einsum("bij,bj->bi", gains, result[k])
                     x = integrate(self.model.model.derivatives, t0 + k * self.dt, self.dt,
                                   corrected, inputs[k:k + 2], rows_theta, self.hold,
                                   self.model.integration)[1]
         result = result.reshape(samples, count, rows, -1) * self.mask[:, :, None, None]
-        return result, innovation
+        if keep_states:
+            kept = kept.reshape(samples, count, rows, -1)
+        return result, steady, kept
+
+    def state_estimates(self, values) -> StateEstimates:
+        """The filter's estimates x̂(n|n) of the model's states at every sample of each
+        maneuver at ``values``, with the standard deviations of the steady-state filtered
+        covariance P − K B Kᵀ (of the linearisation the gain comes from)."""
+        _, steady, kept = self._filter(np.asarray(values, dtype=float)[None], keep_states=True)
+        gain = steady.gain[0]
+        covariance = steady.covariance[0] - gain @ steady.innovation[0] @ gain.T
+        states = self.model.signals.states
+        return StateEstimates(
+            states.names, [s.unit for s in states], self.maneuver_names,
+            [r.t0 + np.arange(n) * self.dt for r, n in zip(self.records, self.lengths)],
+            [kept[:n, b, 0] for b, n in enumerate(self.lengths)],
+            np.sqrt(np.clip(np.diag(covariance), 0.0, None)),
+            method="extended Kalman filter x̂(n|n), steady-state gain")
 
     # ------------------------------------------------------------------ the problem
     @property
@@ -214,16 +243,10 @@ _LINEAR_ONLY = {
 }
 
 
-def fit_nonlinear(estimator, model, maneuvers, start=None) -> Estimate:
-    """Filter error on a nonlinear model of one's own (a :class:`NonlinearModel` or its
-    :class:`IntegratedModel`) with the options of ``estimator`` (a
-    :class:`~.estimator.FilterErrorEstimator`): its parameters, F on ``process_noise``
-    (default: the states an output of the same name measures) and R.
-
-    F starts at ``process_noise_start`` or at a tenth of the measurement-noise size of the
-    output of the state's name; R at half the mean square first difference of each output,
-    then matched to the start innovations (as the linear estimator's).
-    """
+def nonlinear_problem(estimator, model, maneuvers) -> NonlinearFilterErrorProblem:
+    """The filter-error problem of a nonlinear model of one's own (a :class:`NonlinearModel`
+    or its :class:`IntegratedModel`) on ``maneuvers`` with the options of ``estimator``; F on
+    ``process_noise``, by default the states an output of the same name measures."""
     if isinstance(model, NonlinearModel):
         model = IntegratedModel(model)
     if not isinstance(model, IntegratedModel):
@@ -239,10 +262,24 @@ def fit_nonlinear(estimator, model, maneuvers, start=None) -> Estimate:
     states = model.signals.states.names
     process = (tuple(s for s in states if s in outputs) if estimator.process_noise is None
                else estimator.process_noise)
+    settings = Settings(estimator.max_iterations, estimator.cost_tolerance,
+                        estimator.step_tolerance, shorten_steps=False)
+    return NonlinearFilterErrorProblem(model, maneuvers, process, settings)
+
+
+def fit_nonlinear(estimator, model, maneuvers, start=None) -> Estimate:
+    """Filter error on a nonlinear model of one's own (a :class:`NonlinearModel` or its
+    :class:`IntegratedModel`) with the options of ``estimator`` (a
+    :class:`~.estimator.FilterErrorEstimator`): its parameters, F on ``process_noise``
+    (default: the states an output of the same name measures) and R.
+
+    F starts at ``process_noise_start`` or at a tenth of the measurement-noise size of the
+    output of the state's name; R at half the mean square first difference of each output,
+    then matched to the start innovations (as the linear estimator's).
+    """
     with blas.single_threaded():
-        settings = Settings(estimator.max_iterations, estimator.cost_tolerance,
-                            estimator.step_tolerance, shorten_steps=False)
-        problem = NonlinearFilterErrorProblem(model, maneuvers, process, settings)
+        problem = nonlinear_problem(estimator, model, maneuvers)
+        model, process = problem.model, problem.process_noise
         variance = measurement_noise_start(problem)
         values, given = _start_values(estimator, problem, variance, start)
         # R's floor from the data's own first differences, not from R matched to the start's
