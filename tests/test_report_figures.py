@@ -331,12 +331,12 @@ def test_a_case_with_state_estimates_draws_and_writes_them(hover, tmp_path):
 
 
 def test_the_states_figure_puts_the_noise_model_first_with_the_recorded_channel_behind(hover):
-    from rotorid.report.plots.states import plot_state_estimates, recorded_channels
+    from rotorid.report.plots.states import plot_state_estimates, recorded_states
 
     maneuver = hover.identification[0]
     estimates = _synthetic_state_estimates([maneuver])
     figure = plot_state_estimates(estimates, maneuver.name,
-                                  recorded_channels(maneuver, estimates.names))
+                                  recorded_states(maneuver, estimates.names))
     panels = [axis for axis in figure.axes if axis.get_visible()]
     assert [axis.get_ylabel() for axis in panels] == [
         "disturbance w [ft/s²]", "gust w [ft/s]", "q [deg/s]"]

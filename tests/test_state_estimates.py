@@ -1,12 +1,14 @@
 """Filter error's state estimates x̂(n|n) against the true states of a simulation whose noise
 model is the filter's own: their errors have the spread the filter states."""
 
+import types
+
 import numpy as np
 import pytest
 import rotorid
 from rotorid.errors import EstimationError
 from rotorid.estimation.state_estimates import StateEstimates
-from rotorid.report.plots.states import drawing_order, plot_state_estimates
+from rotorid.report.plots.states import drawing_order, plot_state_estimates, recorded_states
 from rotorid_filter_error.estimator import FilterErrorProblem
 from rotorid_output_error.levenberg_marquardt import Settings
 from test_filter_error import PROCESS, SMALL_TRUTH, VARIANCE, noisy_outputs, structure
@@ -113,7 +115,8 @@ def test_state_estimates_from_the_estimator_need_its_own_fit(flight):
 def test_state_estimates_as_maneuver_files_and_their_figure(flight):
     """As maneuver files: the record's inputs at the estimated instants, the estimates as
     channels, the units and error spreads in the header; the figure draws the noise model's
-    states first, one panel per state with its ±2σ band, and a known history behind."""
+    states first, one panel per state with its ±2σ band, and a known history behind (a true
+    gust so labelled; a measured output less its estimated bias)."""
     model, data, truth = flight
     estimates = _problem(model, data, 2).state_estimates(_true_values(model))
     written = estimates.as_maneuvers(data)[0]
@@ -128,7 +131,13 @@ def test_state_estimates_as_maneuver_files_and_their_figure(flight):
     assert len(panels) == len(estimates.names)
     assert panels[0].get_ylabel() == "disturbance q [deg/s²]"
     assert panels[1].get_ylabel() == "gust v [ft/s]"
-    assert len(panels[1].lines) == 2                    # the known gust, then the estimate
+    assert [line.get_label() for line in panels[1].lines] == ["true (recorded)", "estimate"]
+    biased = types.SimpleNamespace(parameter_names=("bias_steps_q", "bias_other_q"),
+                                   values=np.array([2.0, 5.0]))
+    behind = recorded_states(data[0], estimates.names, biased)
+    assert set(behind) == {"q", "theta", "p", "phi", "r"}     # the outputs named like states
+    np.testing.assert_array_equal(behind["q"][1], data[0].channel("q") - 2.0)
+    np.testing.assert_array_equal(behind["p"][1], data[0].channel("p"))
     with pytest.raises(EstimationError, match="no such maneuver"):
         estimates.as_maneuvers(rotorid.ManeuverSet([data[0].with_outputs(
             data[0].outputs, name="other")]))

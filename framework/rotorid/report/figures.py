@@ -18,7 +18,7 @@ from rotorid.progress import Countdown, counted
 from rotorid.report.plots.case import plot_rmse_path, plot_time_histories, save_figure
 from rotorid.report.plots.frequency import RELAXED_THRESHOLD, plot_bode, plot_error
 from rotorid.report.plots.profiles import plot_delay_profiles
-from rotorid.report.plots.states import NOISE_PREFIXES, plot_state_estimates, recorded_channels
+from rotorid.report.plots.states import NOISE_PREFIXES, plot_state_estimates, recorded_states
 from rotorid.verification.compare import envelopes_by_name
 from rotorid.verification.pairs import parse_pair
 
@@ -103,7 +103,8 @@ def _state_figures(result, figures_dir: Path, tally: FigureTally) -> list[Report
     written = []
     for maneuver in result.identification:
         figure = plot_state_estimates(
-            estimates, maneuver.name, recorded_channels(maneuver, estimates.names),
+            estimates, maneuver.name,
+            recorded_states(maneuver, estimates.names, result.estimates["with delays"]),
             title=f"{case_title(result)}: state estimates ({maneuver.name})")
         name = f"states_{file_stem(maneuver.name)}"
         tally.save(figure, figures_dir / name)

@@ -441,7 +441,7 @@ def _write_states(estimator, model, maneuvers, estimate, args) -> None:
     from rotorid.plugin.manager import create
     from rotorid.plugin.returns import returned
     from rotorid.report.plots.case import save_figure
-    from rotorid.report.plots.states import plot_state_estimates, recorded_channels
+    from rotorid.report.plots.states import plot_state_estimates, recorded_states
 
     estimates = returned(estimator.state_estimates(model, maneuvers, estimate), StateEstimates,
                          f"estimator {args.estimator!r}: state_estimates")
@@ -449,7 +449,7 @@ def _write_states(estimator, model, maneuvers, estimate, args) -> None:
     create("data-sources", "files", hold=maneuvers.hold).save(
         estimates.as_maneuvers(maneuvers), directory)
     for maneuver in maneuvers:
-        known = recorded_channels(maneuver, estimates.names)
+        known = recorded_states(maneuver, estimates.names, estimate)
         save_figure(plot_state_estimates(estimates, maneuver.name, known),
                     directory / maneuver.name, formats=("png",))
     print(f"state estimates of {len(estimates.maneuvers)} maneuver(s) "

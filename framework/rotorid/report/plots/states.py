@@ -2,7 +2,8 @@
 --states``): each state's estimate over time in its unit, in a band of ±2 standard deviations
 of its error as the estimator states it, the turbulence's states (disturbances ``d_<state>``,
 gusts ``g_<state>``) first; where the record holds a channel of a state's name (a measured
-rate, a generated record's true gust) it is drawn thin and grey behind the estimate.
+rate, less its estimated bias; a generated record's true gust) it is drawn thin and grey behind
+the estimate. The legend sits below the panels.
 """
 
 from __future__ import annotations
@@ -28,10 +29,16 @@ def _label(name: str, unit: str) -> str:
     return f"{OUTPUT_TITLES.get(name, name)} [{unit}]"
 
 
-def recorded_channels(maneuver, names) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """Name → (time, values) of each of ``names`` that ``maneuver`` records as a channel."""
+def recorded_states(maneuver, names, estimate=None
+                    ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Name → (time, values) of each of ``names`` that ``maneuver`` records as a channel, less
+    the output bias ``estimate`` (an Estimate) holds for it (``bias_<maneuver>_<name>``), so
+    that a record with an estimated offset is drawn where the filter sees it."""
     held = set(maneuver.channel_names) | set(maneuver.extra_channels)
-    return {name: (maneuver.time, maneuver.channel(name)) for name in names if name in held}
+    biases = {} if estimate is None else dict(zip(estimate.parameter_names, estimate.values))
+    return {name: (maneuver.time,
+                   maneuver.channel(name) - biases.get(f"bias_{maneuver.name}_{name}", 0.0))
+            for name in names if name in held}
 
 
 def drawing_order(names) -> list[int]:
@@ -47,7 +54,7 @@ def plot_state_estimates(estimates: StateEstimates, maneuver: str,
 
     Args:
         known: state name → (time (K,), values (K,)) of the record's channel of that name
-            (:func:`recorded_channels`), drawn thin and grey behind the estimate.
+            (:func:`recorded_states`), drawn thin and grey behind the estimate.
         title: the figure's title (default the maneuver's name).
     """
     from matplotlib.figure import Figure
@@ -63,7 +70,8 @@ def plot_state_estimates(estimates: StateEstimates, maneuver: str,
         name, sigma = estimates.names[column], estimates.standard_deviation[column]
         estimate = values[:, column]
         if name in known:
-            axis.plot(*known[name], label="recorded", **MEASURED_STYLE)
+            label = "true (recorded)" if name[:2] in NOISE_TITLES else "recorded"
+            axis.plot(*known[name], label=label, **MEASURED_STYLE)
         axis.fill_between(time, estimate - 2 * sigma, estimate + 2 * sigma, color="C0",
                           alpha=0.2, linewidth=0, label="±2σ")
         axis.plot(time, estimate, color="C0", linewidth=1.2, label="estimate", zorder=3)
@@ -78,7 +86,7 @@ def plot_state_estimates(estimates: StateEstimates, maneuver: str,
     for axis in axes[:len(order)]:
         for handle, label in zip(*axis.get_legend_handles_labels()):
             legend.setdefault(label, handle)
-    figure.legend(legend.values(), legend.keys(), loc="outside upper right", ncols=len(legend))
+    figure.legend(legend.values(), legend.keys(), loc="outside lower center", ncols=len(legend))
     figure.suptitle(title or f"{maneuver}: state estimates ({estimates.method})",
-                    fontsize="medium", x=0.01, ha="left")
+                    fontsize="medium")
     return figure
