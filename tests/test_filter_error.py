@@ -680,3 +680,13 @@ def test_a_start_from_output_error_avoids_the_poorer_optimum_of_a_free_process_n
     n = structure.n_parameters
     assert np.all(np.abs(started.values[:n] - output_error.values[:n])
                   <= output_error.cramer_rao[:n])
+
+
+def test_a_disturbance_the_data_do_not_hold_ends_at_its_floor_and_is_named():
+    """A yaw disturbance fitted to records without one: its size ends at its floor, and the
+    notes say so and to leave r out of the disturbances."""
+    estimate = estimator(process_noise=(), disturbances=("r",)).estimate(structure(),
+                                                                         noisy_data({}))
+    assert "D_r" in estimate.at_bound
+    [note] = [n for n in estimate.notes if n.startswith("D_r ended at the floor of its size")]
+    assert note.endswith("leave r out of the disturbances or gusts and refit")

@@ -60,7 +60,8 @@ def test_a_mode_settled_within_two_samples_is_named_with_the_derivatives_that_se
 
 def test_output_error_names_the_fast_mode_of_its_fit():
     """Fitted to data its own model simulated with Y_v = −80 1/s at 0.01 s, output error
-    recovers that mode and says so in its notes."""
+    recovers that mode and says so in its notes, pointing to filter error for turbulence;
+    filter error without a noise model points to gusts or disturbances instead."""
     import rotorid
     from rotorid.data import Maneuver, ManeuverSet
     from rotorid.simulation.simulator import simulate
@@ -79,7 +80,13 @@ def test_output_error_names_the_fast_mode_of_its_fit():
     estimate = rotorid.create("estimators", "output-error").estimate(structure, recorded)
     assert estimate.value("Y_v") == pytest.approx(-80.0, rel=0.05)
     assert any(n.startswith("modes faster than the records resolve") and "Y_v" in n
-               for n in estimate.notes)
+               and "(fit with filter error)" in n for n in estimate.notes)
+    # filter error without a noise model says what its own fit leaves out, not to use it
+    filtered = rotorid.create("estimators", "filter-error", process_noise=()).estimate(
+        structure, recorded)
+    [note] = [n for n in filtered.notes if n.startswith("modes faster than the records")]
+    assert "leaves out as output error does: give it gusts or disturbances" in note
+    assert "fit with filter error" not in note
 
 
 def test_smoothly_moving_inputs_under_the_zero_order_hold_are_named():

@@ -730,6 +730,14 @@ class FilterErrorEstimator:
                                 np.full(parts.measurement.size, np.inf), free]))
 
 
+#: The fast-mode note's turbulence cause, for a fit with and without a noise model.
+_UNDESCRIBED_TURBULENCE = ("turbulence the noise model does not describe (other gusts or "
+                           "disturbances)")
+_NO_NOISE_MODEL = ("turbulence in the records, which this fit's noise model (no process noise, "
+                   "disturbances or gusts) leaves out as output error does: give it gusts or "
+                   "disturbances")
+
+
 def _check_estimate_of(problem, estimate: Estimate) -> None:
     """Refuse an ``estimate`` that is not a fit of ``problem``: other parameters (another
     structure or noise model) or another number of innovations (other records, sample time
@@ -784,13 +792,23 @@ def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
                      f"{'it' if len(silent) == 1 else 'them'} (infinite bounds, not a lack of "
                      f"excitation); leave {states} out of the process noise and refit, or "
                      f"model the turbulence as gusts or disturbances instead")
+    faded = [n for n in at_bound if n.startswith(("D_", "G_"))]
+    if faded:
+        states = ", ".join(n.split("_", 1)[1] for n in faded)
+        their = "its" if len(faded) == 1 else "their"
+        notes.append(f"{', '.join(faded)} ended at the floor of {their} size: beside the rest "
+                     f"of the noise model the data show no such disturbance or gust on "
+                     f"{states}, and the bounds of its size and correlation time say nothing; "
+                     f"leave {states} out of the disturbances or gusts and refit")
     innovations = problem.per_maneuver(problem.innovations(values)[0])
     coloured = whiteness_note(innovations, problem.output_names, problem.sample_time * every)
     if coloured:
         notes.append(coloured)
     structure = getattr(problem, "structure", None)
     if isinstance(structure, ModelStructure):
-        fast = fast_modes_note(structure, values[:structure.n_parameters], problem.sample_time)
+        noisy = problem.process_noise or problem.disturbances or problem.gusts
+        fast = fast_modes_note(structure, values[:structure.n_parameters], problem.sample_time,
+                               _UNDESCRIBED_TURBULENCE if noisy else _NO_NOISE_MODEL)
         if fast:
             notes.append(fast)
     unmeasured = unmeasured_gusts(problem)

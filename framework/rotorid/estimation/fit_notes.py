@@ -94,13 +94,16 @@ def _setting_derivatives(structure, vector: np.ndarray, states: Sequence[str]) -
     return found
 
 
-def fast_modes_note(structure, values, sample_time: float) -> str | None:
+def fast_modes_note(structure, values, sample_time: float,
+                    turbulence: str = "turbulence in the records (fit with filter error)"
+                    ) -> str | None:
     """A note naming the modes of the fitted ``structure`` (a ModelStructure; ``values`` its
     parameter vector or a name → value mapping) that settle within two samples of
     ``sample_time`` s (|λ|·dt > :data:`FAST_MODE_STEP`), with the derivatives that set each;
     None when there is none. The records show such a mode's quasi-static gain only, so those
     derivatives are not determined one by one (a rigid body's velocity damping of 100 1/s
-    standing in for a motor's lag)."""
+    standing in for a motor's lag). ``turbulence`` names the turbulence among the causes,
+    with what the estimator that fitted can do about it."""
     fast = [m for m in modes(structure, values) if m.frequency * sample_time > FAST_MODE_STEP]
     if not fast:
         return None
@@ -113,9 +116,8 @@ def fast_modes_note(structure, values, sample_time: float) -> str | None:
             f"{sample_time:g} s): {listed}; the data determine such a mode's quasi-static gain, "
             f"not the derivatives that set it. Unless the aircraft has a mode that fast, it "
             f"stands in for what the fit could not otherwise follow: dynamics the structure "
-            f"lacks (actuator or motor lags, delays, rotor states: add them), turbulence in the "
-            f"records (fit with filter error), or a poor start (start elsewhere); else fix or "
-            f"remove those derivatives")
+            f"lacks (actuator or motor lags, delays, rotor states: add them), {turbulence}, "
+            f"or a poor start (start elsewhere); else fix or remove those derivatives")
 
 
 def smooth_inputs_note(maneuvers) -> str | None:
