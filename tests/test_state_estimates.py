@@ -65,6 +65,8 @@ def test_filtered_states_err_by_the_spread_the_filter_states(flight, every):
     assert estimates.names == (*model.states, "d_q", "g_v")
     assert estimates.units[-2:] == ("deg/s²", "ft/s")
     assert estimates.time[0] == pytest.approx(data[0].time[::every])
+    assert estimates.method == ("Kalman filter x̂(n|n), steady-state gain"
+                                + (", updated at every 2nd sample" if every == 2 else ""))
     settle = SETTLING // every
     for name, sigma in zip(estimates.names, estimates.standard_deviation):
         if name == "u":

@@ -20,6 +20,13 @@ def counted(n: int, noun: str) -> str:
     return f"{n} {noun}{'s' * (n != 1)}"
 
 
+def ordinal(number: int) -> str:
+    """``3`` → ``"3rd"``."""
+    suffix = "th" if 10 <= number % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(
+        number % 10, "th")
+    return f"{number}{suffix}"
+
+
 class Countdown:
     """Counts finished steps out of ``total`` and estimates the time left from the mean time
     of the steps finished since it was made.

@@ -41,6 +41,7 @@ import scipy.signal
 
 from rotorid.data import Maneuver, ManeuverSet
 from rotorid.errors import DataError, DataWarning
+from rotorid.progress import ordinal
 
 #: Order of the Butterworth low-pass (run twice: zero phase, 8th-order roll-off).
 FILTER_ORDER = 4
@@ -78,13 +79,6 @@ def noise_correlation(dt: float, factor: int, cutoff_hz: float) -> float:
     return float(integral(lagged, frequency) / integral(power, frequency))
 
 
-def _ordinal(number: int) -> str:
-    """``3`` → ``"3rd"``."""
-    suffix = "th" if 10 <= number % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(
-        number % 10, "th")
-    return f"{number}{suffix}"
-
-
 def _low_pass(values: np.ndarray, sections: np.ndarray) -> np.ndarray:
     """``values`` (N, k) or (N,) filtered along time, about its first sample."""
     start = values[:1]
@@ -117,13 +111,13 @@ def decimated_maneuver(maneuver: Maneuver, factor: int | None, cutoff_hz: float)
     correlation = noise_correlation(dt, factor, cutoff_hz)
     if correlation > NOISE_CORRELATION_LIMIT:
         better = white_noise_factor(dt, cutoff_hz)
-        fix = (f"keep every {_ordinal(better)} sample (rotorid.resampling.white_noise_factor: "
+        fix = (f"keep every {ordinal(better)} sample (rotorid.resampling.white_noise_factor: "
                f"Nyquist frequency {0.5 / (better * dt):.3g} Hz, correlation "
                f"{noise_correlation(dt, better, cutoff_hz):.2f})" if better != factor else
                f"raise the cutoff to the kept samples' Nyquist frequency {nyquist:.3g} Hz")
         warnings.warn(DataWarning(
             f"white measurement noise low-passed at {cutoff_hz:g} Hz and kept at every "
-            f"{_ordinal(factor)} sample is correlated {correlation:.2f} from one kept sample "
+            f"{ordinal(factor)} sample is correlated {correlation:.2f} from one kept sample "
             f"to the next; the estimators take it as white, so their Cramér-Rao bounds come "
             f"out too small: {fix}"), stacklevel=2)
     return _filtered(maneuver, dt, cutoff_hz, int(factor))

@@ -54,6 +54,7 @@ from rotorid.estimation.whiteness import whiteness_note
 from rotorid.model.parameter_units import rate_unit
 from rotorid.model.structure import ModelStructure
 from rotorid.plugin.manager import create, notify
+from rotorid.progress import ordinal
 from rotorid.simulation.discretisation import COMPLEX_STEP
 from rotorid.units import rmse_reference_factors
 from rotorid_output_error.levenberg_marquardt import Settings, run
@@ -407,7 +408,7 @@ class FilterErrorProblem(InnovationLikelihood):
             [f[:, columns] for f in self.records.split(filtered)],
             np.sqrt(np.clip(np.diag(covariance)[columns], 0.0, None)),
             method=f"Kalman filter x̂(n|n), steady-state gain"
-                   f"{f', updated at every {every}th sample' if every > 1 else ''}")
+                   f"{f', updated at every {ordinal(every)} sample' if every > 1 else ''}")
 
     def gauss_newton(self, values, b: np.ndarray, residuals):
         """Fisher information M (P, P) and gradient G (P,) of L at ``values`` (module
