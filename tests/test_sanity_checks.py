@@ -163,6 +163,26 @@ def test_an_input_that_never_moves_drops_its_derivatives_before_the_fit(model, c
     assert "drops X_lat, Y_lat, Z_lat, L_lat, M_lat, N_lat before the first fit" in message
 
 
+def test_a_model_of_ones_own_hears_only_of_the_unmoving_inputs_it_reads(model, clean):
+    """A model of one's own reading long and coll (its signals': a longitudinal structure's,
+    as a nonlinear model would declare them) is told of coll held still, not of lat and ped,
+    which it does not read; it is returned as None (nothing to drop)."""
+    structure, _ = model
+    longitudinal = ModelStructure(structure.condition, [], template="longitudinal")
+    own = type("OwnModel", (), {"signals": longitudinal.signals})()
+    held = [INPUT_CHANNELS.index(c) for c in ("lat", "coll", "ped")]
+    still = []
+    for m in clean:
+        inputs = m.inputs.copy()
+        inputs[:, held] = 0.0
+        still.append(attrs.evolve(m, inputs=inputs))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DataWarning)
+        assert check_before_fit(ManeuverSet(still), own) is None
+    unmoving = [str(w.message) for w in caught if "never moves" in str(w.message)]
+    assert len(unmoving) == 1 and unmoving[0].startswith("input 'coll' never moves")
+
+
 def test_a_clipped_rate_gyro_and_a_dropout_are_named_with_time_and_length(model, clean):
     first = clean[0]
     q = first.outputs[:, _column("q")].copy()

@@ -62,16 +62,18 @@ def unexcited_inputs(maneuvers: ManeuverSet) -> dict[str, float]:
             if is_constant(column)}
 
 
-def without_unexcited(structure: ModelStructure | None,
-                      maneuvers: ManeuverSet) -> ModelStructure | None:
+def without_unexcited(structure: ModelStructure | None, maneuvers: ManeuverSet,
+                      read: tuple[str, ...] | None = None) -> ModelStructure | None:
     """Warn about every input that never moves; return ``structure`` without the free
     derivatives of those inputs (they cannot be estimated), saying which were dropped.
-    ``None`` (a model of one's own) is returned as it is, after the warnings."""
+    ``None`` (a model of one's own) is returned as it is, after the warnings about the
+    inputs it reads (``read``; every input when None)."""
     for name, value in unexcited_inputs(maneuvers).items():
         held = f"input {name!r} never moves (constant {value:.6g} in every maneuver)"
         if structure is None:
-            _warn(f"{held}: its derivatives cannot be estimated; leave them out of the model "
-                  f"or add a maneuver that moves {name}")
+            if read is None or name in read:
+                _warn(f"{held}: the model's parameters of how it acts cannot be estimated; "
+                      f"leave them out of the model or add a maneuver that moves {name}")
             continue
         dropped = [d.name for d in structure.free_derivatives if d.variable == name]
         if dropped:
@@ -293,10 +295,15 @@ def check_data(maneuvers: ManeuverSet, condition: FlightCondition | None = None,
     check_kinematics(maneuvers, condition)
 
 
-def check_before_fit(maneuvers: ManeuverSet, structure: ModelStructure | None,
-                     condition: FlightCondition | None = None) -> ModelStructure | None:
-    """Every sanity check; returns ``structure`` without the derivatives of inputs that
-    never move (see :func:`without_unexcited`)."""
-    check_data(maneuvers, condition if structure is None else structure.condition,
-               getattr(structure, "signals", None))
-    return without_unexcited(structure, maneuvers)
+def check_before_fit(maneuvers: ManeuverSet, structure, condition: FlightCondition | None = None
+                     ) -> ModelStructure | None:
+    """Every sanity check; returns ``structure`` (a ModelStructure) without the derivatives of
+    inputs that never move (see :func:`without_unexcited`). For a model of one's own
+    (anything else, or None) the checks read the records as they are and name only the
+    unmoving inputs it reads (its ``signals``, where it has them); it is returned as None."""
+    if isinstance(structure, ModelStructure):
+        check_data(maneuvers, structure.condition, structure.signals)
+        return without_unexcited(structure, maneuvers)
+    check_data(maneuvers, condition)
+    signals = getattr(structure, "signals", None)
+    return without_unexcited(None, maneuvers, None if signals is None else signals.inputs.names)

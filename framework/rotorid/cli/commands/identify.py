@@ -394,7 +394,7 @@ def run(args) -> int:
                         refuse_overwrite(Path(args.states) / f"{name}{suffix}", args.force)
             if not by_reference:
                 check_fit_data(maneuvers, options.get("outputs"), model)
-            checked = check_before_fit(maneuvers, None if by_reference else model)
+            checked = check_before_fit(maneuvers, model)
         _print_warnings(found)
         if not by_reference:
             model = checked
