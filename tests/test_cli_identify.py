@@ -173,7 +173,8 @@ def test_a_misspelt_estimator_is_named_before_its_options_are_judged(case, tmp_p
     assert cli.main(["identify", str(model), str(tmp_path / "no-such-data"), "--out",
                      str(tmp_path / "x.json"), "--estimator", "filter-error",
                      "--disturbances", "q,beta0"]) == 2
-    assert "disturbances names beta0, not states of the structure" in capsys.readouterr().err
+    assert "error: --disturbances names beta0, not states of the structure" in (
+        capsys.readouterr().err)
 
 
 def test_max_iterations_limits_the_final_run(case, tmp_path, capsys):

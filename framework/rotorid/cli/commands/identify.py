@@ -374,7 +374,7 @@ def run(args) -> int:
             try:
                 estimator.check_structure(model)
             except EstimationError as error:
-                raise UsageError(str(error)) from None
+                raise UsageError(_as_flags(str(error))) from None
         with warnings.catch_warnings(record=True) as found, checks_report(shown=not args.quiet):
             warnings.simplefilter("always", RotoridWarning)
             ingestion = ingestion_settings(args)
@@ -432,6 +432,19 @@ def run(args) -> int:
     print(f"rotorid identify: warning: the fit did not converge ({_why(estimate)}); "
           f"--strict makes this an error", file=sys.stderr)
     return ExitStatus.OK
+
+
+#: Estimator options whose command-line flag a message about them should name.
+_FLAGGED_OPTIONS = ("process_noise", "disturbances", "gusts", "update_every")
+
+
+def _as_flags(message: str) -> str:
+    """An estimator's message about one of its options (``gusts names v, …``) as the command
+    line gives it (``--gusts names v, …``)."""
+    for option in _FLAGGED_OPTIONS:
+        if message.startswith(f"{option} "):
+            return f"--{option.replace('_', '-')}{message[len(option):]}"
+    return message
 
 
 def _write_states(estimator, model, maneuvers, estimate, args) -> None:
