@@ -86,6 +86,12 @@ def test_az_holding_one_g_is_named_and_not_reported_as_an_offset(model, clean):
     messages = _messages(_changed(clean, gravity), model[0])
     [message] = [m for m in messages if "'az'" in m]
     assert message.startswith("output 'az' holds 1 g (median -32.")
+    assert "can ignore this" not in message
+    # a model of one's own may read the total: told when to ignore it
+    own = type("OwnModel", (), {"signals": model[0].signals})()
+    [message] = [m for m in _messages(_changed(clean, gravity), own) if "'az'" in m]
+    assert message.endswith("a model of one's own that reads the total acceleration can "
+                            "ignore this")
     # a stated trim of −1 (g given where ft/s² was meant) already taken off: the suggestion
     # is the whole trim, not what is left
     stated = ManeuverSet([attrs.evolve(m, metadata={**m.metadata, "trim_removed": {"az": -1.0},

@@ -105,8 +105,9 @@ def _largest_offset(maneuvers: ManeuverSet, records) -> tuple[int, tuple] | None
     return (len(offsets), max(offsets)) if offsets else None
 
 
-def _check_gravity(maneuvers: ManeuverSet) -> bool:
-    """Warn when ``az`` includes 1 g; return whether it did."""
+def _check_gravity(maneuvers: ManeuverSet, own_model: bool = False) -> bool:
+    """Warn when ``az`` includes 1 g; return whether it did. For a model of one's own
+    (``own_model``), which may read totals, the warning says when to ignore it."""
     system = unit_system(maneuvers.units)
     if "az" not in maneuvers.output_names:
         return False
@@ -120,7 +121,9 @@ def _check_gravity(maneuvers: ManeuverSet) -> bool:
              f"already removed" if removed else f"--trim az={median:.4g}")
     _warn(f"output 'az' holds 1 g (median {median:.4g} {unit}, g = {system.g:.4g} {unit}): "
           f"outputs are perturbations from trim; remove the trim (rotorid identify --trim "
-          f"first-second, or {shown})")
+          f"first-second, or {shown})"
+          + ("; a model of one's own that reads the total acceleration can ignore this"
+             if own_model else ""))
     return True
 
 
@@ -281,12 +284,13 @@ def checks_report(shown: bool):
 
 
 def check_data(maneuvers: ManeuverSet, condition: FlightCondition | None = None,
-               signals: ModelSignals | None = None) -> None:
+               signals: ModelSignals | None = None, own_model: bool = False) -> None:
     """Issue a :class:`~rotorid.errors.DataWarning` for each finding about the outputs of
     ``maneuvers`` (everything but unexcited inputs, see :func:`without_unexcited`).
     ``condition`` is the trim the kinematic check linearises about (default: level hover);
-    ``signals`` the model's, whose units the messages give for channels of its own."""
-    one_g = _check_gravity(maneuvers)
+    ``signals`` the model's, whose units the messages give for channels of its own;
+    ``own_model`` for a model of one's own, which may read totals."""
+    one_g = _check_gravity(maneuvers, own_model)
     _check_offsets(maneuvers, ("az",) if one_g else (), signals)
     _check_input_offsets(maneuvers, signals)
     _check_rate_scale(maneuvers)
@@ -304,6 +308,6 @@ def check_before_fit(maneuvers: ManeuverSet, structure, condition: FlightConditi
     if isinstance(structure, ModelStructure):
         check_data(maneuvers, structure.condition, structure.signals)
         return without_unexcited(structure, maneuvers)
-    check_data(maneuvers, condition)
+    check_data(maneuvers, condition, own_model=True)
     signals = getattr(structure, "signals", None)
     return without_unexcited(None, maneuvers, None if signals is None else signals.inputs.names)
