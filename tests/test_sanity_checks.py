@@ -151,20 +151,27 @@ def test_one_gyro_read_in_the_wrong_unit_is_found_by_its_attitude(model, clean):
     assert phi.driver == "q, p, r" and phi.scale == pytest.approx(1.0, abs=0.02)
 
 
-def test_an_input_that_never_moves_drops_its_derivatives_before_the_fit(model, clean):
-    structure, _ = model
-    column = INPUT_CHANNELS.index("lat")
+def _checked_with_inputs_held(clean, held, model):
+    """check_before_fit on ``clean`` with the ``held`` inputs at 0 throughout: what it
+    returns, and the warnings' messages."""
+    columns = [INPUT_CHANNELS.index(c) for c in held]
     still = []
     for m in clean:
         inputs = m.inputs.copy()
-        inputs[:, column] = 0.0
+        inputs[:, columns] = 0.0
         still.append(attrs.evolve(m, inputs=inputs))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", DataWarning)
-        reduced = check_before_fit(ManeuverSet(still), structure)
+        checked = check_before_fit(ManeuverSet(still), model)
+    return checked, [str(w.message) for w in caught]
+
+
+def test_an_input_that_never_moves_drops_its_derivatives_before_the_fit(model, clean):
+    structure, _ = model
+    reduced, messages = _checked_with_inputs_held(clean, ("lat",), structure)
     dropped = sorted(set(structure.names) - set(reduced.names))
     assert dropped == sorted(f"{letter}_lat" for letter in "XYZLMN")
-    [message] = [str(w.message) for w in caught if "'lat'" in str(w.message)]
+    [message] = [m for m in messages if "'lat'" in m]
     assert message.startswith("input 'lat' never moves (constant 0 in every maneuver)")
     assert "drops X_lat, Y_lat, Z_lat, L_lat, M_lat, N_lat before the first fit" in message
 
@@ -176,16 +183,9 @@ def test_a_model_of_ones_own_hears_only_of_the_unmoving_inputs_it_reads(model, c
     structure, _ = model
     longitudinal = ModelStructure(structure.condition, [], template="longitudinal")
     own = type("OwnModel", (), {"signals": longitudinal.signals})()
-    held = [INPUT_CHANNELS.index(c) for c in ("lat", "coll", "ped")]
-    still = []
-    for m in clean:
-        inputs = m.inputs.copy()
-        inputs[:, held] = 0.0
-        still.append(attrs.evolve(m, inputs=inputs))
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", DataWarning)
-        assert check_before_fit(ManeuverSet(still), own) is None
-    unmoving = [str(w.message) for w in caught if "never moves" in str(w.message)]
+    checked, messages = _checked_with_inputs_held(clean, ("lat", "coll", "ped"), own)
+    assert checked is None
+    unmoving = [m for m in messages if "never moves" in m]
     assert len(unmoving) == 1 and unmoving[0].startswith("input 'coll' never moves")
 
 
