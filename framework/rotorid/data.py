@@ -33,6 +33,9 @@ from rotorid.units import CHANNEL_KINDS, unit_system
 INPUT_CHANNELS = CONTROLS
 OUTPUT_CHANNELS = OUTPUTS
 ALL_CHANNELS = ("time",) + INPUT_CHANNELS + OUTPUT_CHANNELS
+#: The gusts a record may carry as extra channels: the air's velocity (u, v, w) and rotation
+#: (p, q, r) in body axes, named as filter error names its gust states (``g_<state>``).
+GUST_CHANNELS = ("g_u", "g_v", "g_w", "g_p", "g_q", "g_r")
 HOLDS = ("zoh", "foh")
 #: Relative tolerance on sample-interval uniformity.
 UNIFORM_TOLERANCE = 1e-6

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import attrs
 import numpy as np
-from rotorid.data import ALL_CHANNELS, Maneuver
+from rotorid.data import ALL_CHANNELS, GUST_CHANNELS, Maneuver
 from rotorid.errors import DataError, DataFileError, RotoridError
 from rotorid.ingestion import Ingestion
 from rotorid.model.structure import STATES
@@ -30,12 +30,11 @@ VELOCITIES = ("u", "v", "w")
 #: Optional rotor columns: coning and tip-path-plane tilts, kept as extra channels (a hybrid
 #: model measuring its rotor states reads them, docs/hybrid.md).
 ROTOR_ANGLES = ("beta0", "beta1c", "beta1s")
-#: Optional gust columns: the air's velocity and rotation a generated record flew through
-#: (``rotorid generate --turbulence``), kept as extra channels; filter error's gust
-#: estimates of the same names are drawn against them (``rotorid identify --states``).
-GUSTS = ("g_u", "g_v", "g_w", "g_p", "g_q", "g_r")
-#: Columns beyond the fixed layout that a file may hold without a model naming them.
-OPTIONAL_COLUMNS = VELOCITIES + ROTOR_ANGLES + GUSTS
+#: Columns beyond the fixed layout that a file may hold without a model naming them; the
+#: gusts a generated record flew through (``rotorid generate --turbulence``) among them, which
+#: filter error's gust estimates of the same names are drawn against (``rotorid identify
+#: --states``).
+OPTIONAL_COLUMNS = VELOCITIES + ROTOR_ANGLES + GUST_CHANNELS
 #: Header keys that are not metadata.
 RESERVED = ("name", "units", "initial_state", "state_names", "channel_units")
 #: Allowed metadata keys (also the ``# key: value`` syntax of CSV files).

@@ -26,7 +26,7 @@ from collections.abc import Mapping
 
 import attrs
 import numpy as np
-from rotorid.data import Maneuver, ManeuverSet
+from rotorid.data import GUST_CHANNELS, Maneuver, ManeuverSet
 from rotorid.errors import DataError
 from rotorid.units import FLIGHT_TEST, KNOT, channel_scale
 from rotorid_signals.signals import Multistep, Sweep
@@ -42,10 +42,9 @@ from .sensors import (
 from .turbulence import Turbulence, gust_generator, turbulence_setting
 
 KINDS = ("3211", "2311", "sweep")
-#: The true gusts a turbulent record carries as extra channels (the air's velocity, ft/s, and
-#: rotation, deg/s, at the sample instants, no sensor noise), in :data:`.turbulence.COMPONENTS`
-#: order, and their factors from SI.
-GUST_CHANNELS = ("g_u", "g_v", "g_w", "g_p", "g_q", "g_r")
+#: Factors from SI of the true gusts a turbulent record carries as extra channels
+#: (:data:`rotorid.data.GUST_CHANNELS`, in :data:`.turbulence.COMPONENTS` order: the air's
+#: velocity, ft/s, and rotation, deg/s, at the sample instants, no sensor noise).
 GUST_SCALE = channel_scale(GUST_CHANNELS, FLIGHT_TEST)
 #: Flight conditions by name: airspeed in kt.
 CONDITIONS = {"hover": 0.0, "forward": 70.0}

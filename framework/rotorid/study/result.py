@@ -10,8 +10,8 @@ import numpy as np
 from rotorid.data import ManeuverSet
 from rotorid.estimation.estimate import Estimate
 from rotorid.estimation.profiles import DelayProfile
-from rotorid.estimation.state_estimates import StateEstimates
 from rotorid.estimation.reduction import ReductionPath
+from rotorid.estimation.state_estimates import StateEstimates
 from rotorid.model.structure import FlightCondition, ModelStructure
 from rotorid.notebook import case_result_html, case_result_summary
 from rotorid.study.case import FlightCase

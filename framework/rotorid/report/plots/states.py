@@ -15,16 +15,16 @@ import numpy as np
 from rotorid.estimation.state_estimates import StateEstimates
 from rotorid.report.plots.case import MEASURED_STYLE, OUTPUT_TITLES
 
-#: Prefixes of the noise model's states, drawn first.
-NOISE_PREFIXES = ("g_", "d_")
-#: What a noise state's prefix says, for the panel titles.
+#: What the prefix of a noise model's state says, for the panel titles.
 NOISE_TITLES = {"g_": "gust", "d_": "disturbance"}
+#: Prefixes of the noise model's states, drawn first.
+NOISE_PREFIXES = tuple(NOISE_TITLES)
 
 
 def _label(name: str, unit: str) -> str:
     """``gust w [ft/s]``, ``θ [deg]``: a state as the panel names it."""
     prefix = name[:2]
-    if prefix in NOISE_TITLES:
+    if prefix in NOISE_PREFIXES:
         return f"{NOISE_TITLES[prefix]} {OUTPUT_TITLES.get(name[2:], name[2:])} [{unit}]"
     return f"{OUTPUT_TITLES.get(name, name)} [{unit}]"
 
@@ -70,7 +70,7 @@ def plot_state_estimates(estimates: StateEstimates, maneuver: str,
         name, sigma = estimates.names[column], estimates.standard_deviation[column]
         estimate = values[:, column]
         if name in known:
-            label = "true (recorded)" if name[:2] in NOISE_TITLES else "recorded"
+            label = "true (recorded)" if name[:2] in NOISE_PREFIXES else "recorded"
             axis.plot(*known[name], label=label, **MEASURED_STYLE)
         axis.fill_between(time, estimate - 2 * sigma, estimate + 2 * sigma, color="C0",
                           alpha=0.2, linewidth=0, label="±2σ")
