@@ -8,7 +8,10 @@ The Padfield hover matrices live once, in ``rotorid_helisim.linear_plant`` (``HO
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import io
+import json
+import os
 from pathlib import Path
 
 import attrs
@@ -61,11 +64,24 @@ class QuickStudy:
 
 @pytest.fixture(scope="session")
 def quick_study(tmp_path_factory) -> QuickStudy:
-    """The README's main command for both built-in cases, run once per session (about 40 s of
-    each core). Tests read its files and must not write into ``out``; a test that runs on from
-    these results copies the case directory first."""
-    out = tmp_path_factory.mktemp("quick-study") / "results"
-    printed = io.StringIO()
-    with contextlib.redirect_stdout(printed):
-        status = main(["study", "all", "--quick", "--out", str(out)])
-    return QuickStudy(status, printed.getvalue(), out)
+    """The README's main command for both built-in cases, run once per test session (about
+    40 s of each core). Tests read its files and must not write into ``out``; a test that runs
+    on from these results copies the case directory first.
+
+    Under pytest-xdist (``-n``) the workers share one run: the first to need it runs it while
+    holding a lock in the session's common temporary directory, the others wait for it and
+    read its status and printed text from ``run.json``."""
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent                       # the directory every worker's temp lies in
+    shared, record = root / "quick-study", root / "quick-study" / "run.json"
+    shared.mkdir(exist_ok=True)
+    with open(root / "quick-study.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not record.exists():
+            printed = io.StringIO()
+            with contextlib.redirect_stdout(printed):
+                status = main(["study", "all", "--quick", "--out", str(shared / "results")])
+            record.write_text(json.dumps({"status": status, "printed": printed.getvalue()}))
+        run = json.loads(record.read_text())
+    return QuickStudy(run["status"], run["printed"], shared / "results")

@@ -48,7 +48,7 @@ def test_readme_commands_install_into_a_fresh_venv_and_run():
     for command in (test, main):
         assert "\n" not in command
         assert command.startswith("python3 -m venv .venv && .venv/bin/pip install -q -e ")
-    assert test.endswith("&& .venv/bin/python -m pytest -q") and "'.[test]'" in test
+    assert test.endswith("&& .venv/bin/python -m pytest -q -n auto") and "'.[test]'" in test
     assert main.endswith("&& .venv/bin/rotorid study hover --quick --out results")
 
 
