@@ -74,7 +74,8 @@ def quick_study(tmp_path_factory) -> QuickStudy:
     root = tmp_path_factory.getbasetemp()
     if os.environ.get("PYTEST_XDIST_WORKER"):
         root = root.parent                       # the directory every worker's temp lies in
-    shared, record = root / "quick-study", root / "quick-study" / "run.json"
+    shared = root / "quick-study"
+    record = shared / "run.json"
     shared.mkdir(exist_ok=True)
     with open(root / "quick-study.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
