@@ -330,7 +330,7 @@ def test_filter_error_noise_model_options(case, tmp_path, capsys):
     status = cli.main(["identify", str(model), str(data), "--out", str(out),
                        "--estimator", "filter-error", "--process-noise", "none",
                        "--gusts", "w", "--disturbances", "r", "--update-every", "1",
-                       "--states", str(states)])
+                       "--longest-correlation", "Tg_w=100,T_r=50", "--states", str(states)])
     captured = capsys.readouterr()
     assert status == 0, captured.err
     written = sorted(p.name for p in states.iterdir())
@@ -347,8 +347,11 @@ def test_filter_error_noise_model_options(case, tmp_path, capsys):
     record = json.loads(out.read_text(encoding="utf-8"))
     names = set(record["parameters"])
     assert {"G_w", "Tg_w", "D_r", "T_r"} <= names
-    assert {k: record["estimator_options"][k] for k in ("gusts", "disturbances")} == {
-        "gusts": ["w"], "disturbances": ["r"]}
+    assert {k: record["estimator_options"][k] for k in ("gusts", "disturbances",
+                                                        "longest_correlation")} == {
+        "gusts": ["w"], "disturbances": ["r"], "longest_correlation": {"Tg_w": 100, "T_r": 50}}
+    assert record["parameters"]["Tg_w"]["value"] <= 100 and record["parameters"]["T_r"][
+        "value"] <= 50
     assert not any(n.startswith("F_") for n in names)
     assert "[gust-free start] iteration" in captured.err
     for name in ("M_q", "L_p", "Z_w", "Z_coll", "N_r"):
@@ -386,4 +389,19 @@ def test_filter_error_options_are_checked(case, tmp_path, capsys):
     assert "vz" in _error_line(
         base + ["--estimator", "filter-error", "--disturbances", "vz"], capsys,
         ExitStatus.USAGE)
+    assert _error_line(base + ["--estimator", "filter-error", "--gusts", "w",
+                               "--longest-correlation", "T_w=3"], capsys,
+                       ExitStatus.USAGE).endswith(
+        "--longest-correlation names T_w, not a correlation time of this noise model; its "
+        "correlation times are Tg_w")
+    with pytest.raises(SystemExit) as stopped:
+        cli.main(base + ["--estimator", "filter-error", "--longest-correlation", "T_w"])
+    assert stopped.value.code == ExitStatus.USAGE
+    assert capsys.readouterr().err.strip() == (
+        "rotorid identify: error: argument --longest-correlation: NAME=SECONDS pairs of "
+        "correlation times such as T_w=3,Tg_u=10; got 'T_w'; see rotorid identify --help")
+    assert _error_line(base + ["--longest-correlation", "T_w=3"], capsys,
+                       ExitStatus.USAGE).endswith(
+        "--longest-correlation: filter error's noise model; add --estimator filter-error (the "
+        "output-error estimator has no process noise)")
     assert not (tmp_path / "r.json").exists()

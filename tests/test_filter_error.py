@@ -690,3 +690,60 @@ def test_a_disturbance_the_data_do_not_hold_ends_at_its_floor_and_is_named():
     assert "D_r" in estimate.at_bound
     [note] = [n for n in estimate.notes if n.startswith("D_r ended at the floor of its size")]
     assert note.endswith("leave r out of the disturbances or gusts and refit")
+
+
+def test_a_correlation_time_limit_holds_a_slow_disturbance_and_is_named():
+    """A 20 s heave disturbance over the 12 s doublet records: free, its correlation time
+    goes well beyond 2 s; with ``longest_correlation = {"T_w": 2}`` it starts (from 5 s) and
+    ends at 2 s, flagged at its bound and named in the notes."""
+    data = noisy_data({}, disturbances={"w": (0.5, 20.0)})
+    options = dict(process_noise=(), disturbances=("w",), max_iterations=30)
+    start = {"D_w": 0.5, "T_w": 5.0}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
+        free = estimator(**options).estimate(structure(), data, start=start)
+        held = estimator(longest_correlation={"T_w": 2}, **options).estimate(
+            structure(), data, start=start)
+    assert free.value("T_w") > 4.0
+    assert held["T_w"].start == 2.0 and held.value("T_w") == pytest.approx(2.0)
+    assert "T_w" in held.at_bound and "T_w" not in free.at_bound
+    assert any(n.startswith("T_w (2 s) ended at the longest correlation time allowed")
+               for n in held.notes)
+
+
+def test_correlation_time_limits_are_checked():
+    """A limit is a positive time on a correlation time of the noise model, above the
+    shortest the fit allows."""
+    data = noisy_data({})
+    with pytest.raises(EstimationError, match="longest_correlation names 'D_w', which is no "
+                                              "correlation time"):
+        estimator(longest_correlation={"D_w": 3.0})
+    with pytest.raises(EstimationError, match="longest_correlation gives T_w the limit -1; a "
+                                              "limit is a positive time in s"):
+        estimator(longest_correlation={"T_w": -1})
+    with pytest.raises(EstimationError, match="longest_correlation maps correlation times"):
+        estimator(longest_correlation=3.0)
+    with pytest.raises(EstimationError, match="longest_correlation names T_q, not a "
+                                              "correlation time of this noise model; its "
+                                              "correlation times are T_w, Tg_v"):
+        estimator(disturbances=("w",), gusts=("v",),
+                  longest_correlation={"T_q": 3.0}).check_structure(structure())
+    with pytest.raises(EstimationError, match="it has no disturbances or gusts"):
+        estimator(longest_correlation={"T_w": 3.0}).check_structure(structure())
+    with pytest.raises(EstimationError, match=r"holds T_w \(0.01 s, shortest 0.02 s\) at or "
+                                              r"below the shortest"):
+        estimator(process_noise=(), disturbances=("w",),
+                  longest_correlation={"T_w": 0.01}).estimate(structure(), data)
+
+
+def test_a_gust_limit_also_holds_the_gust_free_first_fit():
+    """From equation error a w gust's fit starts with a w acceleration in its place, whose
+    ``T_w`` takes the gust's limit ``Tg_w`` (the first fit's noise model has no ``Tg_w``);
+    the gust fit keeps ``Tg_w`` within it."""
+    data = noisy_data({}, gusts={"w": (5.0, 6.0)})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
+        result = estimator(process_noise=(), gusts=("w",), longest_correlation={"Tg_w": 0.5},
+                           max_iterations=5).estimate(structure(), data)
+    assert any(n.startswith("start values from a fit with accelerations") for n in result.notes)
+    assert result.value("Tg_w") <= 0.5

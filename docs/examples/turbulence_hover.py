@@ -25,6 +25,7 @@ repository root::
                                              [--structure hybrid|six-dof]
                                              [--heave-disturbance] [--sigma SU SV SW]
                                              [--actuator-lag S] [--turbulent-only]
+                                             [--longest-correlation NAME=S ...]
                                              [--amplitude AXIS=PERCENT ...]
 
 ``--quick`` shortens the records to 60 %. ``--cutoff HZ`` fits both estimators to the records
@@ -57,7 +58,9 @@ projection on the recorded multistep of its maneuver's axis (:func:`two_stage_in
 removes the stabilising loops' answer to the turbulence from the inputs (a diagnostic of
 closed-loop bias). ``--amplitude coll=12 ...`` flies the multisteps of the named axes at those
 amplitudes (% of travel, still air and turbulence alike; the built-in ones are long 5, lat 3,
-coll 6, ped 6): inputs sized for the turbulence. docs/estimation.md, "Hover in moderate
+coll 6, ped 6): inputs sized for the turbulence. ``--longest-correlation T_w=3`` limits
+filter error's correlation times named (its ``longest_correlation``; with
+``--heave-disturbance``, T_w is the heave disturbance's). docs/estimation.md, "Hover in moderate
 turbulence", gives what each setting measured.
 """
 
@@ -258,6 +261,9 @@ def main(argv=None) -> dict:
     parser.add_argument("--turbulent-only", action="store_true",
                         help="fit the turbulent records only (the still-air ones still give "
                              "the hybrid its start)")
+    parser.add_argument("--longest-correlation", nargs="+", metavar="NAME=S", default=(),
+                        help="filter error's longest correlation times, e.g. T_w=3 (its "
+                             "longest_correlation option)")
     args = parser.parse_args(argv)
     if args.update_every and args.cutoff is None:
         parser.error("--update-every needs --cutoff")
@@ -270,6 +276,12 @@ def main(argv=None) -> dict:
     except ValueError:
         parser.error(f"--amplitude takes AXIS=PERCENT items (long, lat, coll, ped), got "
                      f"{' '.join(args.amplitude)}")
+    try:
+        longest = {name: float(limit) for name, limit in
+                   (item.split("=") for item in args.longest_correlation)}
+    except ValueError:
+        parser.error(f"--longest-correlation takes NAME=S items (T_w=3), got "
+                     f"{' '.join(args.longest_correlation)}")
     turbulence = args.turbulence if args.sigma is None else {
         "preset": args.turbulence, "sigma": list(args.sigma), "span": NO_ROTATION_SPAN}
     if args.truth == "hybrid":
@@ -297,6 +309,8 @@ def main(argv=None) -> dict:
     if args.heave_disturbance:
         filter_options.update(gusts=("u", "v"), disturbances=("q", "p", "r", "w"))
         starts = {name: value for name, value in starts.items() if not name.endswith("_w")}
+    if longest:
+        filter_options["longest_correlation"] = longest
     if args.cutoff is not None:
         still, turbulent = (decimated(data, args.decimate, args.cutoff)
                             for data in (still, turbulent))

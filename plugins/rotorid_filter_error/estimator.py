@@ -59,6 +59,12 @@ from rotorid.simulation.discretisation import COMPLEX_STEP
 from rotorid.units import rmse_reference_factors
 from rotorid_output_error.levenberg_marquardt import Settings, run
 
+from .correlation_limits import (
+    check_limited,
+    correlation_limits,
+    correlation_names,
+    longest_correlations,
+)
 from .kalman import Records, innovation_blocks
 from .likelihood import InnovationLikelihood, covariance_terms
 from .maneuver_parameters import (
@@ -93,8 +99,6 @@ GUST_FREE_STAGE = "gust-free start"
 #: Lower bound of a disturbance's size relative to its start: at zero its driving variance
 #: D²(1 − a²) has zero gradient in D, so a fit that reached zero could never leave it.
 _SIZE_FLOOR = 1e-4
-#: Longest correlation time of a disturbance, s (a random walk for the record lengths flown).
-_LONGEST_CORRELATION = 1000.0
 #: Shortest correlation time of a gust, in measurement updates (samples unless ``update_every``):
 #: the outputs reading a gust's derivative terms (the accelerometers) see it directly, so a gust
 #: of a few updates' correlation is their measurement noise; with one sample allowed the linear
@@ -162,6 +166,18 @@ def gust_states(structure: ModelStructure, names: tuple[str, ...]) -> tuple[str,
                                   f"{', '.join(delayed)} read; a gust acts without delay, so "
                                   f"remove their delays or leave {state} out")
     return states
+
+
+def _accelerations_limits(limits: Mapping[str, float], accelerated: tuple[str, ...]
+                          ) -> dict[str, float]:
+    """``limits`` for the gust-free first fit (:meth:`FilterErrorEstimator._gust_free_start`):
+    each ``accelerated`` gust's limit becomes its acceleration's ``T_<state>`` (the smaller
+    where a disturbance on that state has one too); other gusts' limits go with the gusts."""
+    kept = {name: limit for name, limit in limits.items() if not name.startswith("Tg_")}
+    for state in accelerated:
+        if f"Tg_{state}" in limits:
+            kept[f"T_{state}"] = min(limits[f"Tg_{state}"], kept.get(f"T_{state}", np.inf))
+    return kept
 
 
 def _noise_held(problem: "FilterErrorProblem", values: np.ndarray, bounds):
@@ -490,6 +506,12 @@ class FilterErrorEstimator:
             themselves), with stationary standard deviation ``G_<state>`` (state units) and
             correlation time ``Tg_<state>`` (s), both estimated; G starts at
             :func:`gust_start`, Tg at 1 s.
+        longest_correlation: optional ``T_<state>`` / ``Tg_<state>`` → the longest that
+            correlation time may become, s (default 1000 s, no limit in practice): a
+            correlation time near the record's length makes the disturbance a drift the
+            derivatives can explain as well, and the two trade
+            (:mod:`.correlation_limits`; a fifth of the shortest record is the documented
+            rule). A start above its limit starts at the limit.
         initial_states: estimate each maneuver's initial filter state (``x0_<maneuver>_<state>``,
             module :mod:`.maneuver_parameters`): ``True`` for every state the outputs see and
             every disturbance (``d_<state>``) and gust (``g_<state>``), or the names of some;
@@ -527,6 +549,8 @@ class FilterErrorEstimator:
     disturbances: tuple[str, ...] = attrs.field(default=(),
                                                 converter=_state_names("disturbances"))
     gusts: tuple[str, ...] = attrs.field(default=(), converter=_state_names("gusts"))
+    longest_correlation: Mapping[str, float] = attrs.field(factory=dict,
+                                                           converter=correlation_limits)
     initial_states: bool | tuple[str, ...] = attrs.field(default=False,
                                                          converter=initial_state_option)
     output_biases: bool = False
@@ -544,11 +568,13 @@ class FilterErrorEstimator:
 
     def _noise_states(self, structure: ModelStructure):
         """The states of the process noise, the disturbances and the gusts in ``structure``
-        (:func:`process_noise_states`, :func:`gust_states`), each option checked."""
-        return (process_noise_states(structure, self.process_noise),
-                process_noise_states(structure, self.disturbances, "disturbances",
-                                     accelerations=True),
-                gust_states(structure, self.gusts))
+        (:func:`process_noise_states`, :func:`gust_states`), each option checked, the
+        correlation-time limits too."""
+        disturbances = process_noise_states(structure, self.disturbances, "disturbances",
+                                            accelerations=True)
+        gusts = gust_states(structure, self.gusts)
+        check_limited(self.longest_correlation, disturbances, gusts)
+        return process_noise_states(structure, self.process_noise), disturbances, gusts
 
     def estimate(self, structure: ModelStructure, maneuvers: ManeuverSet, *,
                  start=None) -> Estimate:
@@ -667,7 +693,8 @@ class FilterErrorEstimator:
             initial = tuple(f"d_{n[2:]}" if n[2:] in accelerated else n for n in initial
                             if not n.startswith("g_") or n[2:] in accelerated)
         first = attrs.evolve(self, gusts=(), initial_states=initial, disturbances=(
-            self.disturbances + tuple(s for s in accelerated if s not in self.disturbances)))
+            self.disturbances + tuple(s for s in accelerated if s not in self.disturbances)),
+            longest_correlation=_accelerations_limits(self.longest_correlation, accelerated))
         gust_names = tuple(f"_g_{s}" for s in problem.gusts)
         kept = {n: v for n, v in (start if isinstance(start, Mapping) else {}).items()
                 if not n.startswith(("G_", "Tg_")) and not n.endswith(gust_names)}
@@ -710,6 +737,10 @@ class FilterErrorEstimator:
                                  problem.maneuver_parameters.start(problem.records.x0,
                                                                    problem.kept_indices)])
         values, given = with_start(values, start, names)
+        correlation = [names.index(n) for n in correlation_names(problem.disturbances,
+                                                                 problem.gusts)]
+        values[correlation] = [min(values[i], self.longest_correlation.get(names[i], np.inf))
+                               for i in correlation]
         return values, (note if start is None else None), given
 
     def _bounds(self, problem, values):
@@ -727,7 +758,9 @@ class FilterErrorEstimator:
         return (np.concatenate([lower, np.zeros(n_f), _SIZE_FLOOR * parts.disturbance, shortest,
                                 VARIANCE_FLOOR * variance, -free]),
                 np.concatenate([upper, np.full(n_f + n_d, np.inf),
-                                np.full(n_d, _LONGEST_CORRELATION),
+                                longest_correlations(self.longest_correlation,
+                                                     problem.disturbances, problem.gusts,
+                                                     shortest),
                                 np.full(parts.measurement.size, np.inf), free]))
 
 
@@ -801,6 +834,13 @@ def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
                      f"of the noise model the data show no such disturbance or gust on "
                      f"{states}, and the bounds of its size and correlation time say nothing; "
                      f"leave {states} out of the disturbances or gusts and refit")
+    drifting = [f"{n} ({v:.3g} s)" for n, v, hi in zip(problem.parameter_names, values, upper)
+                if n.startswith(("T_", "Tg_")) and v >= hi]
+    if drifting:
+        notes.append(f"{', '.join(drifting)} ended at the longest correlation time allowed "
+                     f"(longest_correlation, or 1000 s): the fit would make the disturbance "
+                     f"slower still, a drift within the records that the derivatives can "
+                     f"explain as well; every estimate and bound is the one at that limit")
     innovations = problem.per_maneuver(problem.innovations(values)[0])
     coloured = whiteness_note(innovations, problem.output_names, problem.sample_time * every)
     if coloured:

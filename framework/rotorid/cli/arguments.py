@@ -69,17 +69,27 @@ def trim(text: str) -> str | dict[str, float]:
     in the data's units)."""
     if text == "first-second":
         return text
+    return _named_numbers(text, "trim is 'first-second' or CHANNEL=VALUE pairs such as "
+                                "theta=5.0,az=-32.17")
+
+
+def correlation_limits(text: str) -> dict[str, float]:
+    """Filter error's longest correlation times: ``NAME=SECONDS,…`` (``T_w=3,Tg_u=10``)."""
+    return _named_numbers(text, "NAME=SECONDS pairs of correlation times such as "
+                                "T_w=3,Tg_u=10")
+
+
+def _named_numbers(text: str, rule: str) -> dict[str, float]:
+    """``NAME=VALUE,…`` as a mapping (plain decimals); ``rule`` says the form in the error."""
     values = {}
     for item in text.split(","):
-        channel, equals, value = item.partition("=")
+        name, equals, value = item.partition("=")
         try:
-            values[channel.strip()] = parse_number(value)
+            values[name.strip()] = parse_number(value)
         except ValueError:
             equals = ""
-        if not equals or not channel.strip():
-            raise argparse.ArgumentTypeError(
-                f"trim is 'first-second' or CHANNEL=VALUE pairs such as theta=5.0,az=-32.17; "
-                f"got {item!r}")
+        if not equals or not name.strip():
+            raise argparse.ArgumentTypeError(f"{rule}; got {item!r}")
     return values
 
 

@@ -11,7 +11,7 @@ Usage::
                      [--resample linear|decimate] [--sample-time S]
                      [--actuator-lag S [--actuator-inputs long,lat]]
                      [--process-noise w,q|none] [--disturbances p,q,r] [--gusts u,v,w]
-                     [--update-every N] [--states DIR] [--pairs q/long,p/lat]
+                     [--longest-correlation T_w=3,...] [--update-every N] [--states DIR] [--pairs q/long,p/lat]
                      [--band LOW,HIGH] [--quiet] [--strict] [--force]
 
 ``MODEL.toml`` is a model file (:mod:`rotorid.model.modelfile`); its initial values are the start
@@ -28,8 +28,9 @@ are converted to the model's unit system, after the trim removal and resampling 
 sweeps alike). The trim removal and resampling are recorded too (``ingestion``), and
 ``rotorid verify`` reads the sweeps with them; so are the estimator options the command line
 set (``estimator_options``: the noise model, outputs, start …), to repeat the fit.
-``--process-noise``, ``--disturbances``, ``--gusts`` and ``--update-every`` set the ``filter-error`` estimator's noise model
-(docs/estimation.md, "Filter error"); with another estimator they are a usage error that
+``--process-noise``, ``--disturbances``, ``--gusts``, ``--longest-correlation`` and
+``--update-every`` set the ``filter-error`` estimator's noise model (docs/estimation.md,
+"Filter error"); with another estimator they are a usage error that
 says to add ``--estimator filter-error``. ``--states DIR`` writes the filter's state
 estimates x̂(n|n) of every maneuver (the states the outputs see, then the disturbances
 ``d_<state>`` and gusts ``g_<state>``: the turbulence as the identified model sees it) as
@@ -58,8 +59,9 @@ import sys
 import warnings
 from pathlib import Path
 
-from rotorid.cli.arguments import (add_ingestion_arguments, ingestion_settings, names,
-                                   output_directory, output_file, seconds)
+from rotorid.cli.arguments import (add_ingestion_arguments, correlation_limits,
+                                   ingestion_settings, names, output_directory, output_file,
+                                   seconds)
 from rotorid.plugin.hookspecs import hookimpl
 from rotorid.progress import counted
 
@@ -137,6 +139,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--gusts", default=None, metavar="u,v,w",
                         help="filter error: velocities that get a Gauss-Markov gust acting "
                              "through their derivatives")
+    parser.add_argument("--longest-correlation", type=correlation_limits, default=None,
+                        metavar="T_w=3,...",
+                        help="filter error: the longest a disturbance's (T_<state>) or gust's "
+                             "(Tg_<state>) correlation time may become, s (a fifth of the "
+                             "shortest record: docs/estimation.md)")
     parser.add_argument("--update-every", type=int, default=None, metavar="N",
                         help="filter error: a measurement update at every N-th sample only "
                              "(for records low-passed to the model's band)")
@@ -209,7 +216,8 @@ def _check_outputs(chosen, outputs, model) -> None:
 
 
 #: The options of filter error's noise model and update rate (another estimator has none).
-FILTER_ERROR_FLAGS = ("process_noise", "disturbances", "gusts", "update_every")
+FILTER_ERROR_FLAGS = ("process_noise", "disturbances", "gusts", "longest_correlation",
+                      "update_every")
 
 
 def _options(args) -> dict:
@@ -260,6 +268,8 @@ def _options(args) -> dict:
         value = getattr(args, flag)
         if value is not None:
             options[flag] = _states(value, flag)
+    if args.longest_correlation is not None:
+        options["longest_correlation"] = args.longest_correlation
     if args.update_every is not None:
         if args.update_every > 1 and args.resample == "decimate":
             raise UsageError("give --resample decimate or --update-every, not both: the "
@@ -434,14 +444,10 @@ def run(args) -> int:
     return ExitStatus.OK
 
 
-#: Estimator options whose command-line flag a message about them should name.
-_FLAGGED_OPTIONS = ("process_noise", "disturbances", "gusts", "update_every")
-
-
 def _as_flags(message: str) -> str:
     """An estimator's message about one of its options (``gusts names v, …``) as the command
     line gives it (``--gusts names v, …``)."""
-    for option in _FLAGGED_OPTIONS:
+    for option in FILTER_ERROR_FLAGS:
         if message.startswith(f"{option} "):
             return f"--{option.replace('_', '-')}{message[len(option):]}"
     return message
