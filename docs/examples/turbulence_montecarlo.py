@@ -22,11 +22,12 @@ fit on a shared 2-core machine, 30 runs of it hours. Run from the repository roo
 
     python docs/examples/turbulence_montecarlo.py [--runs 30] [--turbulence moderate]
         [--truth nonlinear] [--duration-scale 1.0] [--cutoff HZ [--decimate N]]
-        [--executor process] [--out montecarlo-turbulence]
+        [--longest-correlation T_w=3,...] [--executor process] [--out montecarlo-turbulence]
 
 ``--cutoff HZ`` fits records low-passed at HZ and kept at every N-th sample
 (:func:`rotorid.resampling.decimated`; N by default the largest whose Nyquist frequency is
-at least HZ, which keeps the sensor noise white).
+at least HZ, which keeps the sensor noise white). ``--longest-correlation`` limits filter
+error's correlation times named (its ``longest_correlation`` option).
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ import attrs
 import numpy as np
 import rotorid
 from rotorid import FlightCondition, ManeuverSet, ModelStructure
+from rotorid.cli.arguments import correlation_limits
 from rotorid.resampling import decimated
 from rotorid.study.montecarlo import PreparedRealisations, monte_carlo
 from rotorid.study.truth import truth_derivatives
@@ -98,6 +100,9 @@ def main(argv=None) -> dict:
     parser.add_argument("--initial-states", nargs="*", default=(),
                         help="filter states whose initial values filter error estimates, "
                              "e.g. d_u d_w d_q")
+    parser.add_argument("--longest-correlation", type=correlation_limits, default={},
+                        metavar="T_w=3,...", help="filter error's longest correlation times "
+                                                  "(its longest_correlation option)")
     parser.add_argument("--executor", default=None, choices=(None, "process"))
     parser.add_argument("--out", type=Path, default=Path("montecarlo-turbulence"))
     args = parser.parse_args(argv)
@@ -119,6 +124,8 @@ def main(argv=None) -> dict:
         for name, options in ESTIMATORS.items():
             if name == "filter-error" and args.initial_states:
                 options = {**options, "initial_states": tuple(args.initial_states)}
+            if name == "filter-error" and args.longest_correlation:
+                options = {**options, "longest_correlation": args.longest_correlation}
             result = monte_carlo(structure, data, range(args.runs), estimator=name,
                                  estimator_options=options, truth=truth,
                                  executor=args.executor,
