@@ -160,6 +160,9 @@ def test_options_and_starts_a_nonlinear_model_cannot_take_are_named():
     with pytest.raises(EstimationError, match="does not take disturbances, output_biases: "
                                               "model a coloured disturbance as states"):
         estimator(disturbances=("q",), output_biases=True).estimate(model, maneuvers)
+    with pytest.raises(EstimationError, match="does not take longest_correlation: give the "
+                                              "model's own correlation-time parameter"):
+        estimator(longest_correlation={"T_q": 3.0}).estimate(model, maneuvers)
     with pytest.raises(EstimationError, match=r"no output is named alpha, so F_alpha has no "
                                               r"default start; give process_noise_start"):
         estimator(process_noise=("alpha", "q")).estimate(model, maneuvers)

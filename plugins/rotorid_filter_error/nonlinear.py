@@ -238,6 +238,8 @@ class NonlinearFilterErrorProblem(InnovationLikelihood):
 _LINEAR_ONLY = {
     "disturbances": "model a coloured disturbance as states of the model",
     "gusts": "model gusts as states of the model",
+    "longest_correlation": "give the model's own correlation-time parameter an upper bound "
+                           "(its Parameter's upper)",
     "initial_states": "estimate initial states through the model's InitialConditions",
     "output_biases": "add bias parameters to the model's outputs",
 }
