@@ -833,7 +833,10 @@ def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
         notes.append(f"{', '.join(faded)} ended at the floor of {their} size: beside the rest "
                      f"of the noise model the data show no such disturbance or gust on "
                      f"{states}, and the bounds of its size and correlation time say nothing; "
-                     f"leave {states} out of the disturbances or gusts and refit")
+                     f"or the fit stopped where the measurement noise took it over, a poorer "
+                     f"optimum: refit from a start at the size the turbulence is expected to "
+                     f"have (start = {{'{faded[0]}': …}}) and compare the costs; if that is no "
+                     f"likelier, leave {states} out of the disturbances or gusts and refit")
     drifting = [f"{n} ({v:.3g} s)" for n, v, hi in zip(problem.parameter_names, values, upper)
                 if n.startswith(("T_", "Tg_")) and v >= hi]
     if drifting:
