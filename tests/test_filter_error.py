@@ -747,3 +747,17 @@ def test_a_gust_limit_also_holds_the_gust_free_first_fit():
                            max_iterations=5).estimate(structure(), data)
     assert any(n.startswith("start values from a fit with accelerations") for n in result.notes)
     assert result.value("Tg_w") <= 0.5
+
+
+def test_a_correlation_time_ending_at_its_shortest_is_named():
+    """A heave disturbance of 1 ms correlation (white at 50 Hz): its correlation time ends at
+    one sample, and the notes say the disturbance became noise and to refit from the expected
+    size and compare the costs."""
+    data = noisy_data({}, disturbances={"w": (1.0, 0.001)})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
+        result = estimator(process_noise=(), disturbances=("w",), max_iterations=30).estimate(
+            structure(), data)
+    assert result.value("T_w") == pytest.approx(0.02) and "T_w" in result.at_bound
+    [note] = [n for n in result.notes if n.startswith("T_w (0.02 s) ended at the shortest")]
+    assert note.endswith("compare the costs")

@@ -837,6 +837,13 @@ def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
                      f"optimum: refit from a start at the size the turbulence is expected to "
                      f"have (start = {{'{faded[0]}': …}}) and compare the costs; if that is no "
                      f"likelier, leave {states} out of the disturbances or gusts and refit")
+    whitened = [f"{n} ({v:.3g} s)" for n, v, lo in zip(problem.parameter_names, values, lower)
+                if n.startswith(("T_", "Tg_")) and v <= lo]
+    if whitened:
+        notes.append(f"{', '.join(whitened)} ended at the shortest correlation time allowed: "
+                     f"the disturbance became noise that the measurement noise can take over, "
+                     f"often a poorer optimum; refit from a start at the size and correlation "
+                     f"time the turbulence is expected to have and compare the costs")
     drifting = [f"{n} ({v:.3g} s)" for n, v, hi in zip(problem.parameter_names, values, upper)
                 if n.startswith(("T_", "Tg_")) and v >= hi]
     if drifting:
