@@ -12,6 +12,7 @@ from rotorid.errors import DataError, DataWarning
 from rotorid.resampling import (
     decimated,
     decimated_maneuver,
+    low_passed,
     noise_correlation,
     white_noise_factor,
 )
@@ -47,15 +48,21 @@ def test_a_tone_in_the_band_keeps_amplitude_and_phase_and_one_above_it_goes():
     assert np.all(record.outputs[:, 0] == 0.0)           # an untouched channel stays exact
 
 
-def test_a_set_keeps_its_hold_names_and_metadata():
+def test_a_set_keeps_its_hold_names_and_metadata_and_says_how_it_was_filtered():
+    """The metadata gains ``low_passed`` (each filtering after the earlier ones); the given
+    set is left as it was."""
     time, low, _ = _tones(seconds=4.0)
     inputs = np.column_stack([low, 0 * low, 0 * low, 0 * low])
     maneuvers = ManeuverSet([Maneuver("a", time, inputs, np.zeros((time.size, 8)),
                                       metadata={"kind": "3211"})], hold="foh")
     out = decimated(maneuvers, factor=2, cutoff_hz=5.0)
     assert out.hold == "foh" and out.names == ("a",)
-    assert out[0].metadata == {"kind": "3211"} and out[0].time.size == (time.size + 1) // 2
-    assert maneuvers[0].time.size == time.size       # the given set is left as it was
+    assert out[0].metadata == {"kind": "3211",
+                               "low_passed": "zero-phase low-pass at 5 Hz, every 2nd sample kept"}
+    assert out[0].time.size == (time.size + 1) // 2
+    assert low_passed(out, 2.0)[0].metadata["low_passed"] == (
+        "zero-phase low-pass at 5 Hz, every 2nd sample kept; then zero-phase low-pass at 2 Hz")
+    assert maneuvers[0].time.size == time.size and maneuvers[0].metadata == {"kind": "3211"}
 
 
 @pytest.mark.parametrize("factor, cutoff, message", [

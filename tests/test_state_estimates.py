@@ -145,6 +145,21 @@ def test_state_estimates_as_maneuver_files_and_their_figure(flight):
             data[0].outputs, name="other")]))
 
 
+def test_state_estimate_files_of_low_passed_records_say_so(flight, tmp_path):
+    """Estimates along records low-passed for the filter (rotorid.resampling.low_passed)
+    carry the filtering in their files' header."""
+    from rotorid.resampling import low_passed
+    from rotorid_files.formats import read_maneuver
+
+    model, data, _ = flight
+    estimates = _problem(model, data, 2).state_estimates(_true_values(model))
+    rotorid.create("data-sources", "files").save(
+        estimates.as_maneuvers(low_passed(data, 5.0)), tmp_path)
+    written = read_maneuver(tmp_path / "steps.csv")
+    assert written.metadata["low_passed"] == "zero-phase low-pass at 5 Hz"
+    assert written.metadata["content"] == "state estimates"
+
+
 def test_state_estimates_check_their_shapes():
     with pytest.raises(EstimationError, match=r"values of shape \(3, 1\), expected \(4, 1\)"):
         StateEstimates(["w"], ["ft/s"], ["m"], [np.arange(4.0)], [np.zeros((3, 1))], [0.1])

@@ -94,8 +94,10 @@ def decimated_maneuver(maneuver: Maneuver, factor: int | None, cutoff_hz: float)
             :func:`white_noise_factor`.
         cutoff_hz: the low-pass's −3 dB frequency per pass (Hz), at most the new Nyquist
             frequency 1/(2·factor·dt).
-    Inputs, outputs and extra channels are filtered alike; time, units, names, metadata and
-    the initial state are kept (the initial state is the first sample's, which stays).
+    Inputs, outputs and extra channels are filtered alike; time, units, names and the initial
+    state are kept (the initial state is the first sample's, which stays), and the metadata
+    gains ``low_passed``, the filtering in words (after any earlier one, so that files written
+    from the record, such as filter error's state estimates, say which band they hold).
     """
     time = maneuver.time
     dt = float(np.mean(np.diff(time)))
@@ -133,11 +135,16 @@ def _filtered(maneuver: Maneuver, dt: float, cutoff_hz: float, factor: int) -> M
         raise DataError(f"maneuver {maneuver.name!r}: {time.size} samples are too few to "
                         f"filter (more than {padding} needed)")
     kept = slice(None, None, factor)
+    done = (f"zero-phase low-pass at {cutoff_hz:g} Hz"
+            + (f", every {ordinal(factor)} sample kept" if factor > 1 else ""))
+    earlier = maneuver.metadata.get("low_passed")
     return attrs.evolve(
         maneuver, time=time[kept], inputs=_low_pass(maneuver.inputs, sections)[kept],
         outputs=_low_pass(maneuver.outputs, sections)[kept],
         extra_channels={name: _low_pass(values, sections)[kept]
-                        for name, values in maneuver.extra_channels.items()})
+                        for name, values in maneuver.extra_channels.items()},
+        metadata={**maneuver.metadata,
+                  "low_passed": done if earlier is None else f"{earlier}; then {done}"})
 
 
 def decimated(maneuvers: ManeuverSet, factor: int | None, cutoff_hz: float) -> ManeuverSet:
