@@ -69,10 +69,9 @@ def check_limited(limits: Mapping[str, float], disturbances: tuple[str, ...],
 
 def longest_correlations(limits: Mapping[str, float], disturbances: tuple[str, ...],
                          gusts: tuple[str, ...], shortest: np.ndarray) -> np.ndarray:
-    """The upper bound of each correlation time (``correlation_names`` order), s: its limit,
-    or :data:`UNLIMITED_CORRELATION`; a limit not above its ``shortest`` allowed value
-    (same order, s) is refused."""
-    check_limited(limits, disturbances, gusts)
+    """The upper bound of each correlation time (``correlation_names`` order), s: its limit
+    (``limits`` checked by :func:`check_limited`), or :data:`UNLIMITED_CORRELATION`; a limit
+    not above its ``shortest`` allowed value (same order, s) is refused."""
     names = correlation_names(disturbances, gusts)
     longest = np.array([limits.get(name, UNLIMITED_CORRELATION) for name in names])
     short = [f"{name} ({limit:g} s, shortest {low:g} s)"

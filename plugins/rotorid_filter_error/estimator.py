@@ -60,6 +60,7 @@ from rotorid.units import rmse_reference_factors
 from rotorid_output_error.levenberg_marquardt import Settings, run
 
 from .correlation_limits import (
+    UNLIMITED_CORRELATION,
     check_limited,
     correlation_limits,
     correlation_names,
@@ -279,8 +280,7 @@ class FilterErrorProblem(InnovationLikelihood):
                                 + tuple(f"F_{s}" for s in process_noise)
                                 + tuple(f"D_{s}" for s in disturbances)
                                 + tuple(f"G_{s}" for s in gusts)
-                                + tuple(f"T_{s}" for s in disturbances)
-                                + tuple(f"Tg_{s}" for s in gusts)
+                                + correlation_names(disturbances, gusts)
                                 + tuple(f"R_{o}" for o in structure.outputs))
         self.n_global = len(self.parameter_names)
         available = filter_state_names(tuple(kept), disturbances, gusts)
@@ -848,7 +848,7 @@ def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
                 if n.startswith(("T_", "Tg_")) and v >= hi]
     if drifting:
         notes.append(f"{', '.join(drifting)} ended at the longest correlation time allowed "
-                     f"(longest_correlation, or 1000 s): the fit would make the disturbance "
+                     f"(longest_correlation, or {UNLIMITED_CORRELATION:g} s): the fit would make the disturbance "
                      f"slower still, a drift within the records that the derivatives can "
                      f"explain as well; every estimate and bound is the one at that limit")
     innovations = problem.per_maneuver(problem.innovations(values)[0])

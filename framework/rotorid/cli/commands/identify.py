@@ -11,8 +11,8 @@ Usage::
                      [--resample linear|decimate] [--sample-time S]
                      [--actuator-lag S [--actuator-inputs long,lat]]
                      [--process-noise w,q|none] [--disturbances p,q,r] [--gusts u,v,w]
-                     [--longest-correlation T_w=3,...] [--update-every N] [--states DIR] [--pairs q/long,p/lat]
-                     [--band LOW,HIGH] [--quiet] [--strict] [--force]
+                     [--longest-correlation T_w=3,...] [--update-every N] [--states DIR]
+                     [--pairs q/long,p/lat] [--band LOW,HIGH] [--quiet] [--strict] [--force]
 
 ``MODEL.toml`` is a model file (:mod:`rotorid.model.modelfile`); its initial values are the start
 values (all zero: the estimator chooses its own start, see docs/estimation.md). MODEL may
