@@ -848,9 +848,10 @@ def filter_error_estimate(problem, result, start, bounds, note) -> Estimate:
                 if n.startswith(("T_", "Tg_")) and v >= hi]
     if drifting:
         notes.append(f"{', '.join(drifting)} ended at the longest correlation time allowed "
-                     f"(longest_correlation, or {UNLIMITED_CORRELATION:g} s): the fit would make the disturbance "
-                     f"slower still, a drift within the records that the derivatives can "
-                     f"explain as well; every estimate and bound is the one at that limit")
+                     f"(longest_correlation, or {UNLIMITED_CORRELATION:g} s): the fit would "
+                     f"make the disturbance slower still, a drift within the records that the "
+                     f"derivatives can explain as well; every estimate and bound is the one at "
+                     f"that limit")
     innovations = problem.per_maneuver(problem.innovations(values)[0])
     coloured = whiteness_note(innovations, problem.output_names, problem.sample_time * every)
     if coloured:
